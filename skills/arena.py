@@ -1,0 +1,62 @@
+"""The workspace layout shared by the planner and the simulated world.
+
+The arm stands just behind the arena's back wall (x = ``x_min``) and scans the chair
+area in front of it; the humanoid starts at the far end, facing the arm. Every number
+is in metres or radians, world frame, z up.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+from skills.geometry import SE2Pose
+
+
+class Box2D(NamedTuple):
+    """An axis-aligned rectangular obstacle footprint, with its height (metres)."""
+
+    x_min: float
+    x_max: float
+    y_min: float
+    y_max: float
+    height: float = 1.0
+
+
+class Arena(NamedTuple):
+    """The rectangle the humanoid may walk in, the chair area and fixed obstacles.
+
+    Attributes:
+        x_min, x_max, y_min, y_max: walls of the planning arena (metres).
+        chair_area: where the chair's centre is placed for scanning (0.5 x 0.5 m).
+        arm_base_xy: the scanning arm's base position.
+        obstacles: other fixed footprints the humanoid must avoid (the arm's base).
+        humanoid_start: where the humanoid waits with the bear.
+    """
+
+    x_min: float
+    x_max: float
+    y_min: float
+    y_max: float
+    chair_area: Box2D
+    arm_base_xy: tuple[float, float]
+    obstacles: tuple[Box2D, ...]
+    humanoid_start: SE2Pose
+
+    def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
+        """True when (x, y) is inside the walls by at least ``margin`` metres."""
+        return (
+            self.x_min + margin <= x <= self.x_max - margin
+            and self.y_min + margin <= y <= self.y_max - margin
+        )
+
+
+DEFAULT_ARENA = Arena(
+    x_min=0.15,
+    x_max=2.2,
+    y_min=-0.75,
+    y_max=0.75,
+    chair_area=Box2D(0.35, 0.85, -0.25, 0.25),
+    arm_base_xy=(0.0, 0.0),
+    obstacles=(Box2D(-0.15, 0.15, -0.15, 0.15, height=0.9),),
+    humanoid_start=SE2Pose(1.9, 0.0, 3.141592653589793),
+)

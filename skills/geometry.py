@@ -1,0 +1,105 @@
+"""Poses and frames shared by every skill.
+
+Conventions:
+    * The world frame is z up, metres, radians. Yaw is measured from +x about +z.
+    * ``T_a_b`` is a 4x4 homogeneous transform that maps points expressed in frame
+      ``b`` into frame ``a``: ``p_a = T_a_b @ p_b``.
+    * A sitting pose g = (p, γ) (the paper, "Problem Formulation") is the position of
+      the sitter's pelvis and the yaw of the direction the sitter faces.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+
+def wrap_angle(angle_rad: float) -> float:
+    """Wraps an angle to [-π, π)."""
+    return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def rot_z(yaw_rad: float) -> np.ndarray:
+    """3x3 rotation about +z by ``yaw_rad``."""
+    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def make_transform(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
+    """Builds a 4x4 transform from a 3x3 rotation and a translation (metres)."""
+    transform = np.eye(4)
+    transform[:3, :3] = rotation
+    transform[:3, 3] = translation
+    return transform
+
+
+def yaw_transform(yaw_rad: float, translation: np.ndarray | None = None) -> np.ndarray:
+    """4x4 transform of a rotation about +z followed by a translation."""
+    return make_transform(rot_z(yaw_rad), np.zeros(3) if translation is None else translation)
+
+
+def yaw_of(transform: np.ndarray) -> float:
+    """Yaw (radians) of the rotation part of a transform, assuming it is about +z."""
+    return math.atan2(transform[1, 0], transform[0, 0])
+
+
+def transform_points(transform: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Applies a 4x4 transform to an (N, 3) array of points."""
+    return points @ transform[:3, :3].T + transform[:3, 3]
+
+
+class SE2Pose(NamedTuple):
+    """A planar pose in the world frame.
+
+    Attributes:
+        x: metres.
+        y: metres.
+        theta: heading in radians, from +x about +z.
+    """
+
+    x: float
+    y: float
+    theta: float
+
+    def as_transform(self) -> np.ndarray:
+        """``T_world_body`` with the body on the floor (z = 0)."""
+        return yaw_transform(self.theta, np.array([self.x, self.y, 0.0]))
+
+    def transformed(self, T_world_new_old: np.ndarray) -> SE2Pose:
+        """The pose after a rigid motion ``T_world_new_old`` about the world's z axis."""
+        moved = T_world_new_old @ self.as_transform()
+        return SE2Pose(float(moved[0, 3]), float(moved[1, 3]), wrap_angle(yaw_of(moved)))
+
+    def distance_to(self, other: SE2Pose) -> float:
+        """Euclidean distance in metres between the two positions."""
+        return math.hypot(self.x - other.x, self.y - other.y)
+
+
+class SittingPose(NamedTuple):
+    """The imagined sitting pose g = (p, γ) in the world frame.
+
+    Attributes:
+        position: (3,) pelvis position p in metres.
+        yaw: sitting direction γ in radians, from +x about +z (the way the sitter faces).
+    """
+
+    position: np.ndarray
+    yaw: float
+
+    def transformed(self, T_world_new_old: np.ndarray) -> SittingPose:
+        """The pose carried along by a rigid motion of the chair."""
+        position = transform_points(T_world_new_old, self.position[None, :])[0]
+        return SittingPose(position, wrap_angle(self.yaw + yaw_of(T_world_new_old)))
+
+    def direction(self) -> np.ndarray:
+        """Unit (2,) vector of the sitting direction in the xy-plane."""
+        return np.array([math.cos(self.yaw), math.sin(self.yaw)])
+
+    def to_json(self) -> dict:
+        """A JSON-friendly dict: position in metres, yaw in degrees."""
+        return {
+            "position_m": [round(float(v), 4) for v in self.position],
+            "yaw_deg": round(math.degrees(self.yaw), 2),
+        }

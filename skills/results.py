@@ -1,0 +1,229 @@
+"""Typed results that cross from skills into the mission tree.
+
+Each stage's skill returns one of these; behaviours put them on the blackboard and the
+executive writes their ``summary()`` into the run record. Units: metres, radians,
+seconds; frames are named in the attribute docs.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+import trimesh
+
+from skills.geometry import SE2Pose, SittingPose
+
+
+class ChairScan(NamedTuple):
+    """The reconstructed chair.
+
+    Attributes:
+        chair_mesh: triangle mesh of the chair in the world frame, z up, floor removed.
+        chair_points: (N, 3) point cloud of the chair in the world frame.
+        views: number of RGB-D views fused.
+        seconds: wall time per step (for example ``capture``, ``tsdf``, ``floor``).
+    """
+
+    chair_mesh: trimesh.Trimesh
+    chair_points: np.ndarray
+    views: int
+    seconds: dict[str, float]
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "views": self.views,
+            "points": len(self.chair_points),
+            "faces": len(self.chair_mesh.faces),
+            "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
+        }
+
+
+class DropOutcome(NamedTuple):
+    """One simulated drop of the sitting agent (the chair frame after g_obb).
+
+    Attributes:
+        rotation_index: i of the chair rotation α_i = iπ/4.
+        offset_m: drop offset along x from the OBB centre.
+        position: (3,) final pelvis position in the chair frame.
+        yaw: final pelvis yaw in the chair frame (radians).
+        joint_score: J, the weighted joint-angle distance to the key configuration.
+        link_score: L, the weighted link-rotation distance to the key configuration.
+        sitting_height_m: H.
+        upper_contacts: contact points of upper-body links with the chair.
+        lower_contacts: contact points of lower-body links with the chair.
+        correct: every threshold of the sitting affordance model holds.
+    """
+
+    rotation_index: int
+    offset_m: float
+    position: np.ndarray
+    yaw: float
+    joint_score: float
+    link_score: float
+    sitting_height_m: float
+    upper_contacts: int
+    lower_contacts: int
+    correct: bool
+
+
+class ImaginationResult(NamedTuple):
+    """The sitting pose found by physical simulation, or why none was found.
+
+    Attributes:
+        found: a correct sitting exists.
+        sitting_pose: g in the frame of the mesh given (None when not found).
+        n_correct: correct sittings of the chosen rotation.
+        n_drops: drops simulated in total (24 or 56).
+        drops: every drop's outcome.
+        seconds: wall time per step (``prepare``, ``simulate``, ``total``).
+        reason: why no sitting pose was found (empty when found).
+    """
+
+    found: bool
+    sitting_pose: SittingPose | None
+    n_correct: int
+    n_drops: int
+    drops: tuple[DropOutcome, ...]
+    seconds: dict[str, float]
+    reason: str = ""
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "found": self.found,
+            "sitting_pose": self.sitting_pose.to_json() if self.sitting_pose else None,
+            "n_correct": self.n_correct,
+            "n_drops": self.n_drops,
+            "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
+            "reason": self.reason,
+        }
+
+
+class AccessibilityResult(NamedTuple):
+    """Whether the humanoid can reach a pose from which it can seat the bear.
+
+    Attributes:
+        accessible: a valid SE(2) goal and a collision-free path to it exist.
+        se2_goal: where the humanoid should stand, facing opposite the sitting direction.
+        sitting_pose: g, possibly moved along the ray toward the humanoid (arm reach).
+        path: waypoints from the humanoid's pose to ``se2_goal`` (empty when none).
+        reason: why it is not accessible (empty when it is).
+        seconds: planning wall time.
+    """
+
+    accessible: bool
+    se2_goal: SE2Pose | None
+    sitting_pose: SittingPose
+    path: tuple[SE2Pose, ...]
+    reason: str = ""
+    seconds: float = 0.0
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "accessible": self.accessible,
+            "se2_goal": _se2_json(self.se2_goal),
+            "waypoints": len(self.path),
+            "reason": self.reason,
+            "seconds": round(self.seconds, 3),
+        }
+
+
+class Instruction(NamedTuple):
+    """A request to the helper to rotate the chair.
+
+    Attributes:
+        sentence: the words spoken.
+        clockwise: direction as seen from above (world z up).
+        angle_deg: a multiple of 30 in 0..180.
+    """
+
+    sentence: str
+    clockwise: bool
+    angle_deg: int
+
+
+class ChairRotation(NamedTuple):
+    """The chair's measured motion after the helper acted (g_rot).
+
+    Attributes:
+        T_world_new_old: 4x4 rigid motion mapping the old chair pose onto the new one.
+        yaw_rad: its rotation about +z.
+        fitness: ICP inlier ratio (0..1).
+        inlier_rmse_m: ICP inlier RMSE in metres.
+        chair_points: (N, 3) the chair as now seen, world frame: the next reference.
+    """
+
+    T_world_new_old: np.ndarray
+    yaw_rad: float
+    fitness: float
+    inlier_rmse_m: float
+    chair_points: np.ndarray
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "yaw_deg": round(math.degrees(self.yaw_rad), 2),
+            "translation_m": [round(float(v), 4) for v in self.T_world_new_old[:3, 3]],
+            "fitness": round(self.fitness, 3),
+            "inlier_rmse_m": round(self.inlier_rmse_m, 4),
+        }
+
+
+class WalkResult(NamedTuple):
+    """The end of a walk along a path.
+
+    Attributes:
+        reached: the final errors are within tolerance.
+        position_error_m: distance from the final tracked pose to the goal.
+        yaw_error_rad: absolute heading error at the end.
+        seconds: walking time on the robot's clock.
+        reason: why the goal was not reached (empty when reached).
+    """
+
+    reached: bool
+    position_error_m: float
+    yaw_error_rad: float
+    seconds: float
+    reason: str = ""
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "reached": self.reached,
+            "position_error_m": round(self.position_error_m, 4),
+            "yaw_error_deg": round(math.degrees(self.yaw_error_rad), 2),
+            "seconds": round(self.seconds, 2),
+            "reason": self.reason,
+        }
+
+
+class SeatingPlan(NamedTuple):
+    """The whole-body motion that places the bear at the sitting pose.
+
+    Attributes:
+        joint_names: the J humanoid joints driven (both sides, mirrored).
+        times_s: K knot times from the start of the motion.
+        positions_rad: (K, J) joint angles; the last row is q_goal.
+        retract_positions_rad: (M, J) the motion after release: hands back, body upright.
+        retract_times_s: M knot times of the retract motion.
+        seconds: solve wall time per problem (``goal``, ``trajectory``).
+    """
+
+    joint_names: tuple[str, ...]
+    times_s: np.ndarray
+    positions_rad: np.ndarray
+    retract_times_s: np.ndarray
+    retract_positions_rad: np.ndarray
+    seconds: dict[str, float]
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "knots": len(self.times_s),
+            "duration_s": round(float(self.times_s[-1]), 2) if len(self.times_s) else 0.0,
+            "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
+        }
+
+
+def _se2_json(pose: SE2Pose | None) -> dict[str, float] | None:
+    if pose is None:
+        return None
+    return {"x_m": round(pose.x, 4), "y_m": round(pose.y, 4), "theta_deg": round(math.degrees(pose.theta), 2)}
