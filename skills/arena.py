@@ -60,3 +60,24 @@ DEFAULT_ARENA = Arena(
     obstacles=(Box2D(-0.15, 0.15, -0.15, 0.15, height=0.9),),
     humanoid_start=SE2Pose(1.9, 0.0, 3.141592653589793),
 )
+
+
+class TagSpec(NamedTuple):
+    """The ArUco tag on top of the humanoid's head, by which the arm camera tracks it.
+
+    Attributes:
+        dictionary: the cv2.aruco predefined dictionary name.
+        marker_id: the tag's id in that dictionary.
+        side_m: printed side length of the black square, metres.
+        height_m: height of the tag's centre above the floor when standing, metres.
+    The tag lies flat, its x axis along the humanoid's forward direction, its centre
+    on the humanoid's vertical axis.
+    """
+
+    dictionary: str
+    marker_id: int
+    side_m: float
+    height_m: float
+
+
+HUMANOID_TAG = TagSpec(dictionary="DICT_4X4_50", marker_id=7, side_m=0.08, height_m=0.58)
