@@ -1,0 +1,196 @@
+"""Chair meshes: loading, hashing, convex decomposition and a chair made of boxes.
+
+Every mesh here is z up, in metres. Convex decomposition (V-HACD, built into pybullet)
+is slow compared with everything that uses it, so its pieces are cached on disk by the
+mesh's digest: a second run on the same chair skips it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+import threading
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+SUPPORTED_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
+
+_decomposition_lock = threading.Lock()
+
+
+class MeshLoadError(ValueError):
+    """A mesh file is missing, empty, unreadable or not a surface mesh."""
+
+
+def cache_dir() -> Path:
+    """The on-disk cache: ``$BEARCHAIR_CACHE`` or ``~/.cache/bearchair``."""
+    root = Path(os.environ.get("BEARCHAIR_CACHE", Path.home() / ".cache" / "bearchair"))
+    root.mkdir(parents=True, exist_ok=True)
+    return root
+
+
+def load_mesh(path: str | os.PathLike) -> trimesh.Trimesh:
+    """Loads a triangle mesh, merging every part of a scene into one mesh.
+
+    Args:
+        path: an OBJ, PLY, STL, OFF or GLB/glTF file.
+
+    Returns:
+        The mesh as stored (no re-centring, no unit change).
+
+    Raises:
+        MeshLoadError: with one line saying what is wrong with the file.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise MeshLoadError(f"{path}: no such file")
+    if path.is_dir():
+        raise MeshLoadError(f"{path}: is a directory, not a mesh file")
+    if path.suffix.lower() not in SUPPORTED_SUFFIXES:
+        raise MeshLoadError(
+            f"{path}: unsupported format '{path.suffix}' (use {', '.join(SUPPORTED_SUFFIXES)})"
+        )
+    if path.stat().st_size == 0:
+        raise MeshLoadError(f"{path}: empty file")
+    try:
+        loaded = trimesh.load(path, force="mesh", process=False)
+    except Exception as error:  # noqa: BLE001 - trimesh raises many kinds on bad input
+        raise MeshLoadError(f"{path}: not a readable mesh ({error})") from error
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        raise MeshLoadError(f"{path}: contains no triangles")
+    if not np.all(np.isfinite(loaded.vertices)):
+        raise MeshLoadError(f"{path}: has non-finite vertex coordinates")
+    return loaded
+
+
+def mesh_digest(mesh: trimesh.Trimesh) -> str:
+    """A stable hex digest of a mesh's geometry (vertices rounded to 0.1 mm, and faces)."""
+    digest = hashlib.sha1()
+    digest.update(np.round(np.asarray(mesh.vertices, dtype=np.float64), 4).tobytes())
+    digest.update(np.asarray(mesh.faces, dtype=np.int64).tobytes())
+    return digest.hexdigest()
+
+
+def convex_pieces(mesh: trimesh.Trimesh, max_vertices_per_piece: int = 64) -> list[trimesh.Trimesh]:
+    """Splits a (possibly open, non-manifold) mesh into convex pieces with V-HACD.
+
+    The pieces are cached as OBJ files under ``cache_dir()/convex`` by digest.
+
+    Args:
+        mesh: the surface to decompose, in any frame; pieces come back in that frame.
+        max_vertices_per_piece: V-HACD's hull vertex limit.
+
+    Returns:
+        Convex meshes whose union approximates the mesh's volume.
+    """
+    digest = mesh_digest(mesh)
+    cached = cache_dir() / "convex" / f"{digest}-{max_vertices_per_piece}.obj"
+    with _decomposition_lock:
+        if not cached.exists():
+            _run_vhacd(mesh, cached, max_vertices_per_piece)
+    decomposed = trimesh.load(cached, force="mesh", process=False)
+    pieces = [piece.convex_hull for piece in decomposed.split(only_watertight=False)]
+    return [piece for piece in pieces if len(piece.vertices) >= 4 and piece.volume > 1e-9]
+
+
+def _run_vhacd(mesh: trimesh.Trimesh, output: Path, max_vertices_per_piece: int) -> None:
+    import pybullet
+
+    output.parent.mkdir(parents=True, exist_ok=True)
+    client = pybullet.connect(pybullet.DIRECT)
+    try:
+        with tempfile.TemporaryDirectory() as scratch:
+            source = Path(scratch) / "in.obj"
+            mesh.export(source)
+            partial = Path(scratch) / "out.obj"
+            # V-HACD prints its progress to stdout; send it to a log file instead.
+            with _stdout_to(Path(scratch) / "stdout.txt"):
+                pybullet.vhacd(
+                    str(source),
+                    str(partial),
+                    str(Path(scratch) / "vhacd.log"),
+                    resolution=100000,
+                    maxNumVerticesPerCH=max_vertices_per_piece,
+                    physicsClientId=client,
+                )
+            if not partial.exists() or partial.stat().st_size == 0:
+                raise RuntimeError("V-HACD produced no convex pieces")
+            os.replace(partial, output)
+    finally:
+        pybullet.disconnect(client)
+
+
+class _stdout_to:
+    """Redirects the process's file descriptor 1 (C libraries write there) to a file."""
+
+    def __init__(self, path: Path) -> None:
+        self._path = path
+
+    def __enter__(self) -> None:
+        import sys
+
+        sys.stdout.flush()
+        self._saved = os.dup(1)
+        self._file = open(self._path, "wb")  # noqa: SIM115 - closed in __exit__
+        os.dup2(self._file.fileno(), 1)
+
+    def __exit__(self, *exc: object) -> None:
+        os.dup2(self._saved, 1)
+        os.close(self._saved)
+        self._file.close()
+
+
+def box_chair_mesh(
+    seat_height_m: float = 0.24,
+    seat_width_m: float = 0.32,
+    seat_depth_m: float = 0.28,
+    seat_thickness_m: float = 0.03,
+    overall_height_m: float = 0.535,
+    backrest_thickness_m: float = 0.03,
+    leg_side_m: float = 0.03,
+) -> trimesh.Trimesh:
+    """A child-sized chair made of boxes: four legs, a seat and a backrest.
+
+    The sitting direction is +x (the backrest stands at -x); the chair is centred in
+    x and y with its lowest point at z = 0, like the calibration meshes.
+
+    Returns:
+        One mesh (the boxes' union as separate shells, not boolean-merged).
+    """
+    half_depth, half_width = seat_depth_m / 2.0, seat_width_m / 2.0
+    seat_top = seat_height_m
+    parts = [
+        _box(
+            (seat_depth_m, seat_width_m, seat_thickness_m),
+            (0.0, 0.0, seat_top - seat_thickness_m / 2.0),
+        ),
+        _box(
+            (backrest_thickness_m, seat_width_m, overall_height_m - seat_top),
+            (
+                -half_depth + backrest_thickness_m / 2.0,
+                0.0,
+                seat_top + (overall_height_m - seat_top) / 2.0,
+            ),
+        ),
+    ]
+    leg_height = seat_top - seat_thickness_m
+    for sx in (-1.0, 1.0):
+        for sy in (-1.0, 1.0):
+            parts.append(
+                _box(
+                    (leg_side_m, leg_side_m, leg_height),
+                    (
+                        sx * (half_depth - leg_side_m / 2.0),
+                        sy * (half_width - leg_side_m / 2.0),
+                        leg_height / 2.0,
+                    ),
+                )
+            )
+    return trimesh.util.concatenate(parts)
+
+
+def _box(extents: tuple[float, float, float], centre: tuple[float, float, float]) -> trimesh.Trimesh:
+    return trimesh.creation.box(extents=extents, transform=trimesh.transformations.translation_matrix(centre))
