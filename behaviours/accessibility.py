@@ -1,0 +1,63 @@
+"""CheckAccessibility: an SE(2) goal, a seat pre-plan and a path to the goal."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+from py_trees.common import Status
+
+from behaviours import keys
+from behaviours.skill_behaviour import SkillBehaviour
+from behaviours.tracking import tracked_humanoid_pose
+from skills.geometry import SE2Pose
+from skills.results import AccessibilityResult
+
+
+class CheckAccessibility(SkillBehaviour):
+    """SUCCESS when the humanoid can reach a valid pose to seat the bear, else FAILURE.
+
+    Blackboard:
+        reads ``/mission/seed``, ``/mission/arena``, ``/chair/mesh``, ``/sitting/pose``;
+        writes ``/accessibility/result``, ``/accessibility/se2_goal``, ``/sitting/pose``,
+        ``/humanoid/pose``.
+    """
+
+    activity = "checking accessibility"
+
+    def __init__(self, name: str = "CheckAccessibility"):
+        super().__init__(
+            name,
+            reads=(keys.SEED, keys.ARENA, keys.CHAIR_MESH),
+            writes=(keys.ACCESSIBILITY, keys.SE2_GOAL, keys.SITTING_POSE, keys.HUMANOID_POSE),
+        )
+
+    def prepare(self) -> Callable[[], tuple[SE2Pose, AccessibilityResult]]:
+        skills, robot = self.need()
+        chair_mesh = self.blackboard.get(keys.CHAIR_MESH)
+        sitting_pose = self.blackboard.get(keys.SITTING_POSE)
+        arena = self.blackboard.get(keys.ARENA)
+        seed = self.blackboard.get(keys.SEED)
+
+        def job() -> tuple[SE2Pose, AccessibilityResult]:
+            humanoid_pose = tracked_humanoid_pose(skills, robot)
+            result = skills.check_accessibility(
+                chair_mesh, sitting_pose, humanoid_pose, arena, seed=seed
+            )
+            return humanoid_pose, result
+
+        return job
+
+    def conclude(self, outcome: tuple[SE2Pose, AccessibilityResult]) -> Status:
+        humanoid_pose, result = outcome
+        self.blackboard.set(keys.HUMANOID_POSE, humanoid_pose, overwrite=True)
+        self.blackboard.set(keys.ACCESSIBILITY, result, overwrite=True)
+        if not result.accessible or result.se2_goal is None:
+            return self.fail(f"not accessible: {result.reason}")
+        self.blackboard.set(keys.SE2_GOAL, result.se2_goal, overwrite=True)
+        self.blackboard.set(keys.SITTING_POSE, result.sitting_pose, overwrite=True)
+        goal = result.se2_goal
+        return self.succeed(
+            f"path of {len(result.path)} waypoints to ({goal.x:.2f}, {goal.y:.2f}) m, "
+            f"{math.degrees(goal.theta):.0f} deg in {result.seconds:.2f} s"
+        )

@@ -1,0 +1,140 @@
+"""The human-assistance loop's leaves: instruct, wait, measure, and give up.
+
+The loop itself (at most :data:`behaviours.keys.MAX_ROTATIONS` rotations) is composed in
+``trees/mission.py``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import py_trees
+from py_trees.common import Access, Status
+
+from behaviours import keys
+from behaviours.skill_behaviour import SkillBehaviour
+from behaviours.tracking import tracked_humanoid_pose
+from skills.results import ChairRotation, Instruction
+
+
+class InstructHelper(SkillBehaviour):
+    """Asks the helper to rotate the chair so that it faces the humanoid.
+
+    Blackboard:
+        reads ``/sitting/pose``; writes ``/assistance/instructions``,
+        ``/assistance/rotations``, ``/humanoid/pose``.
+    """
+
+    activity = "instructing the helper"
+
+    def __init__(self, name: str = "InstructHelper"):
+        super().__init__(
+            name,
+            reads=(keys.SITTING_POSE,),
+            writes=(keys.INSTRUCTIONS, keys.ROTATIONS, keys.HUMANOID_POSE),
+        )
+
+    def prepare(self) -> Callable[[], Instruction]:
+        skills, robot = self.need()
+        sitting_pose = self.blackboard.get(keys.SITTING_POSE)
+
+        def job() -> Instruction:
+            humanoid_pose = tracked_humanoid_pose(skills, robot)
+            instruction = skills.compose_instruction(sitting_pose, humanoid_pose)
+            robot.speaker.say(instruction.sentence)
+            return instruction
+
+        return job
+
+    def conclude(self, instruction: Instruction) -> Status:
+        said = [*self._optional(keys.INSTRUCTIONS, []), instruction.sentence]
+        self.blackboard.set(keys.INSTRUCTIONS, said, overwrite=True)
+        self.blackboard.set(keys.ROTATIONS, self._optional(keys.ROTATIONS, 0) + 1, overwrite=True)
+        return self.succeed(f'said "{instruction.sentence}"')
+
+
+class WaitUntilChairStill(SkillBehaviour):
+    """Watches the chair with the arm's camera until the helper has stopped turning it."""
+
+    activity = "waiting for the chair to stop moving"
+
+    def __init__(self, name: str = "WaitUntilChairStill"):
+        super().__init__(name)
+
+    def prepare(self) -> Callable[[], float]:
+        skills, robot = self.need()
+        return lambda: skills.wait_until_chair_still(
+            robot.arm, robot.clock, cancel=self.cancel_event
+        )
+
+    def conclude(self, waited_s: float) -> Status:
+        return self.succeed(f"chair still after {waited_s:.1f} s")
+
+
+class MeasureChairRotation(SkillBehaviour):
+    """Measures g_rot by ICP and carries the chair and the sitting pose along with it.
+
+    Blackboard:
+        reads ``/chair/points``, ``/chair/mesh``, ``/sitting/pose``;
+        writes them back moved by g_rot, and appends to ``/assistance/measured``.
+    """
+
+    activity = "measuring the chair's rotation"
+
+    def __init__(self, name: str = "MeasureChairRotation"):
+        super().__init__(
+            name,
+            writes=(keys.CHAIR_POINTS, keys.CHAIR_MESH, keys.SITTING_POSE, keys.MEASURED_ROTATIONS),
+        )
+
+    def prepare(self) -> Callable[[], ChairRotation]:
+        skills, robot = self.need()
+        reference_points = self.blackboard.get(keys.CHAIR_POINTS)
+        return lambda: skills.measure_chair_rotation(robot.arm, reference_points)
+
+    def conclude(self, rotation: ChairRotation) -> Status:
+        T_world_new_old = rotation.T_world_new_old
+        chair_mesh = self.blackboard.get(keys.CHAIR_MESH).copy()
+        chair_mesh.apply_transform(T_world_new_old)
+        sitting_pose = self.blackboard.get(keys.SITTING_POSE).transformed(T_world_new_old)
+        self.blackboard.set(keys.CHAIR_MESH, chair_mesh, overwrite=True)
+        self.blackboard.set(keys.CHAIR_POINTS, rotation.chair_points, overwrite=True)
+        self.blackboard.set(keys.SITTING_POSE, sitting_pose, overwrite=True)
+        measured = [*self._optional(keys.MEASURED_ROTATIONS, []), rotation]
+        self.blackboard.set(keys.MEASURED_ROTATIONS, measured, overwrite=True)
+        return self.succeed(
+            f"chair turned {math.degrees(rotation.yaw_rad):+.1f} deg "
+            f"(ICP fitness {rotation.fitness:.2f}, rmse {rotation.inlier_rmse_m * 100:.1f} cm)"
+        )
+
+
+class GiveUp(py_trees.behaviour.Behaviour):
+    """Fails with the reason the chair could not be made accessible.
+
+    It sits last in the assistance selector, so it is ticked only when every rotation
+    allowed has been asked for and the chair is still not accessible.
+    """
+
+    def __init__(self, name: str = "GiveUp"):
+        super().__init__(name=name)
+        self.blackboard = self.attach_blackboard_client(name=name)
+        for key in (keys.ROTATIONS, keys.FAILURES):
+            self.blackboard.register_key(key=key, access=Access.WRITE)
+
+    def update(self) -> Status:
+        rotations = (
+            self.blackboard.get(keys.ROTATIONS) if self.blackboard.exists(keys.ROTATIONS) else 0
+        )
+        failures = (
+            self.blackboard.get(keys.FAILURES) if self.blackboard.exists(keys.FAILURES) else []
+        )
+        last = failures[-1] if failures else "no reason recorded"
+        self.feedback_message = (
+            f"chair not accessible after {rotations} rotation(s) "
+            f"(at most {keys.MAX_ROTATIONS}); last failure: {last}"
+        )
+        self.blackboard.set(
+            keys.FAILURES, [*failures, f"{self.name}: {self.feedback_message}"], overwrite=True
+        )
+        return Status.FAILURE

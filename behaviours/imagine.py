@@ -1,0 +1,46 @@
+"""ImagineSitting: find how to sit on the scanned chair by physical simulation."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+from py_trees.common import Status
+
+from behaviours import keys
+from behaviours.skill_behaviour import SkillBehaviour
+from skills.results import ImaginationResult
+
+
+class ImagineSitting(SkillBehaviour):
+    """Drops a virtual child onto the chair mesh and keeps the best sitting pose g.
+
+    Blackboard:
+        reads ``/mission/seed``, ``/chair/mesh``;
+        writes ``/sitting/imagination``, ``/sitting/pose``.
+    """
+
+    activity = "imagining sitting"
+
+    def __init__(self, name: str = "ImagineSitting"):
+        super().__init__(
+            name, reads=(keys.SEED, keys.CHAIR_MESH), writes=(keys.IMAGINATION, keys.SITTING_POSE)
+        )
+
+    def prepare(self) -> Callable[[], ImaginationResult]:
+        skills, _ = self.need()
+        chair_mesh = self.blackboard.get(keys.CHAIR_MESH)
+        seed = self.blackboard.get(keys.SEED)
+        return lambda: skills.imagine_sitting(chair_mesh, seed=seed, cancel=self.cancel_event)
+
+    def conclude(self, result: ImaginationResult) -> Status:
+        self.blackboard.set(keys.IMAGINATION, result, overwrite=True)
+        if not result.found or result.sitting_pose is None:
+            return self.fail(f"no sitting pose: {result.reason or 'no correct sitting'}")
+        pose = result.sitting_pose
+        self.blackboard.set(keys.SITTING_POSE, pose, overwrite=True)
+        x, y, z = pose.position
+        return self.succeed(
+            f"sit at ({x:.3f}, {y:.3f}, {z:.3f}) m facing {math.degrees(pose.yaw):.0f} deg "
+            f"({result.n_correct} correct of {result.n_drops} drops)"
+        )

@@ -1,0 +1,84 @@
+"""SeatBear and ReleaseAndStand: the whole-body motion, the release, and the verdict."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from py_trees.common import Status
+
+from behaviours import keys
+from behaviours.skill_behaviour import SkillBehaviour
+from behaviours.tracking import tracked_humanoid_pose
+from hardware.interfaces import SeatingJudgement
+from skills.results import SeatingPlan
+
+
+class SeatBear(SkillBehaviour):
+    """Plans the seating motion from where the humanoid stands now, then plays it.
+
+    Blackboard:
+        reads ``/chair/mesh``, ``/sitting/pose``; writes ``/seat/plan``.
+    """
+
+    activity = "seating the bear"
+
+    def __init__(self, name: str = "SeatBear"):
+        super().__init__(
+            name, reads=(keys.CHAIR_MESH, keys.SITTING_POSE), writes=(keys.SEATING_PLAN,)
+        )
+
+    def prepare(self) -> Callable[[], SeatingPlan]:
+        skills, robot = self.need()
+        chair_mesh = self.blackboard.get(keys.CHAIR_MESH)
+        sitting_pose = self.blackboard.get(keys.SITTING_POSE)
+
+        def job() -> SeatingPlan:
+            humanoid_pose = tracked_humanoid_pose(skills, robot)
+            plan = skills.plan_seating(chair_mesh, sitting_pose, humanoid_pose)
+            skills.execute_seating(robot.humanoid, plan, cancel=self.cancel_event)
+            return plan
+
+        return job
+
+    def conclude(self, plan: SeatingPlan) -> Status:
+        self.blackboard.set(keys.SEATING_PLAN, plan, overwrite=True)
+        solve_s = sum(plan.seconds.values())
+        return self.succeed(
+            f"bear placed: {len(plan.times_s)} knots over {float(plan.times_s[-1]):.1f} s "
+            f"(planned in {solve_s:.2f} s)"
+        )
+
+
+class ReleaseAndStand(SkillBehaviour):
+    """Opens the hands, retracts them, stands up; in simulation, judges the seating.
+
+    Blackboard:
+        reads ``/seat/plan``, ``/sitting/pose``; writes ``/seat/judgement``.
+    """
+
+    activity = "releasing the bear and standing up"
+
+    def __init__(self, name: str = "ReleaseAndStand"):
+        super().__init__(
+            name, reads=(keys.SEATING_PLAN, keys.SITTING_POSE), writes=(keys.JUDGEMENT,)
+        )
+
+    def prepare(self) -> Callable[[], SeatingJudgement | None]:
+        skills, robot = self.need()
+        plan = self.blackboard.get(keys.SEATING_PLAN)
+        sitting_yaw = self.blackboard.get(keys.SITTING_POSE).yaw
+
+        def job() -> SeatingJudgement | None:
+            skills.release_and_stand(robot.humanoid, plan, cancel=self.cancel_event)
+            return None if robot.judge is None else robot.judge.judge(sitting_yaw)
+
+        return job
+
+    def conclude(self, judgement: SeatingJudgement | None) -> Status:
+        if judgement is None:
+            return self.succeed("released and standing (no physical judge on real robots)")
+        self.blackboard.set(keys.JUDGEMENT, judgement, overwrite=True)
+        numbers = f"tilt {judgement.torso_tilt_deg:.0f} deg, facing error {judgement.facing_error_deg:.0f} deg"
+        if not judgement.seated:
+            return self.fail(f"bear not seated: {judgement.reason} ({numbers})")
+        return self.succeed(f"bear seated ({numbers})")
