@@ -1,0 +1,362 @@
+"""Where the NAO should stand to seat the bear, and an SE(2) path to get there.
+
+The paper, section "System Pipeline": the SE(2) goal s_goal faces opposite the sitting
+direction γ and lies on the horizontal ray from p along γ, first at ``l_init`` from p,
+pushed along the ray until the NAO's ellipsoid is clear of the chair; if the NAO is then
+beyond its arms' reach of p, p slides along the ray toward the NAO while staying on the
+seat. The seat motion is pre-planned at s_goal to check it is valid; then OMPL's
+RRTConnect plans an SE(2) path from the humanoid to s_goal within the arena, checked with
+FCL (:mod:`skills.planning.collision`). With u = (cos γ, sin γ) and distance l along
+the ray:
+
+.. math::
+
+    s_{goal} = (p_{xy} + l\\,u,\\; γ + π).
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import math
+import time
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+import trimesh
+from ompl import base as ob
+from ompl import geometric as og
+from ompl import util as ou
+
+from skills.arena import Arena
+from skills.geometry import SE2Pose, SittingPose, wrap_angle
+from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
+from skills.planning.reach import check_reach, max_forward_reach
+from skills.results import AccessibilityResult
+
+logger = logging.getLogger(__name__)
+
+L_INIT_M = 0.25
+"""Initial distance of the NAO from p along the sitting direction, metres."""
+PUSH_STEP_M = 0.01
+MAX_PUSH_M = 1.0
+SEAT_STEP_M = 0.01
+SEAT_HEIGHT_TOLERANCE_M = 0.03
+"""How much the seat's height may change under p as it slides and still count as the seat."""
+PLANNING_TIME_S = 1.0
+CHECK_RESOLUTION_M = 0.01
+"""Spacing of validity checks along motions, metres (OMPL's resolution is relative)."""
+WAYPOINT_SPACING_M = 0.1
+
+SeatingValidator = Callable[[trimesh.Trimesh, SittingPose, SE2Pose], str]
+"""Returns why seating the bear from s_goal is infeasible, or "" when it is feasible."""
+
+
+class AccessibilityError(ValueError):
+    """Bad input to the accessibility check (not an inaccessible chair)."""
+
+
+class GoalPlacement(NamedTuple):
+    """The SE(2) goal on the sitting ray.
+
+    Attributes:
+        se2_goal: where the NAO stands (None when no collision-free spot on the ray).
+        sitting_pose: g, possibly slid toward the NAO to be within its arms' reach.
+        standoff_m: distance from the (slid) p to the NAO along the ray.
+        reason: why there is no goal (empty when there is).
+    """
+
+    se2_goal: SE2Pose | None
+    sitting_pose: SittingPose
+    standoff_m: float
+    reason: str = ""
+
+
+def goal_on_ray(sitting_pose: SittingPose, distance_m: float) -> SE2Pose:
+    """The NAO pose ``distance_m`` from p along the sitting direction, facing back at p."""
+    direction = sitting_pose.direction()
+    x, y = np.asarray(sitting_pose.position[:2], dtype=float) + distance_m * direction
+    return SE2Pose(float(x), float(y), wrap_angle(sitting_pose.yaw + math.pi))
+
+
+def seat_support_heights(chair_mesh: trimesh.Trimesh, xy: np.ndarray, z_from: float) -> np.ndarray:
+    """Height of the first chair surface straight below each point, NaN where there is none.
+
+    Args:
+        chair_mesh: the chair, world frame.
+        xy: (N, 2) query points, metres.
+        z_from: height the vertical rays start from, metres.
+    """
+    # A vertical ray hits a triangle where the point lies inside its xy projection; the hit
+    # height is the barycentric blend of the corner heights.
+    triangles = np.asarray(chair_mesh.triangles, dtype=float)
+    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    ab, ac = (b - a)[:, :2], (c - a)[:, :2]
+    det = ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0]
+    usable = np.abs(det) > 1e-12
+    a, b, c, ab, ac, det = a[usable], b[usable], c[usable], ab[usable], ac[usable], det[usable]
+    heights = np.full(len(xy), np.nan)
+    for i, point in enumerate(np.asarray(xy, dtype=float)):
+        ap = point - a[:, :2]
+        v = (ap[:, 0] * ac[:, 1] - ap[:, 1] * ac[:, 0]) / det
+        w = (ab[:, 0] * ap[:, 1] - ab[:, 1] * ap[:, 0]) / det
+        inside = (v >= 0.0) & (w >= 0.0) & (v + w <= 1.0)
+        z = (1.0 - v - w) * a[:, 2] + v * b[:, 2] + w * c[:, 2]
+        below = z[inside & (z <= z_from)]
+        if len(below):
+            heights[i] = below.max()
+    return heights
+
+
+def place_se2_goal(
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    checker: NaoCollisionChecker,
+    *,
+    l_init_m: float = L_INIT_M,
+) -> GoalPlacement:
+    """Finds s_goal on the sitting ray and slides p within the NAO's reach (see module doc).
+
+    Args:
+        chair_mesh: the chair, world frame (for the seat under p).
+        sitting_pose: g = (p, γ), world frame.
+        checker: the NAO-versus-scene collision checker (its chair is used here).
+        l_init_m: first distance tried from p, metres.
+    """
+    distance = l_init_m
+    while checker.collides_with_chair(goal_on_ray(sitting_pose, distance)):
+        distance += PUSH_STEP_M
+        if distance > l_init_m + MAX_PUSH_M:
+            return GoalPlacement(
+                None, sitting_pose, distance, "no spot on the sitting ray clear of the chair"
+            )
+    se2_goal = goal_on_ray(sitting_pose, distance)
+
+    reach_m = max_forward_reach(float(sitting_pose.position[2]))
+    if distance <= reach_m or reach_m == 0.0:
+        return GoalPlacement(se2_goal, sitting_pose, distance)
+
+    # Slide p toward the NAO, but only as far as the seat continues under it.
+    direction = sitting_pose.direction()
+    slides = np.arange(0.0, distance - reach_m + SEAT_STEP_M, SEAT_STEP_M)
+    slides = np.minimum(slides, distance - reach_m)
+    p = np.asarray(sitting_pose.position, dtype=float)
+    heights = seat_support_heights(
+        chair_mesh, p[:2] + slides[:, None] * direction, float(p[2]) + 0.02
+    )
+    if np.isnan(heights[0]):
+        logger.warning("no seat found under the sitting position; p is not moved")
+        return GoalPlacement(se2_goal, sitting_pose, distance)
+    on_seat = np.abs(heights - heights[0]) <= SEAT_HEIGHT_TOLERANCE_M
+    last = len(slides) - 1 if on_seat.all() else int(np.argmin(on_seat)) - 1
+    slide = float(slides[last])
+    moved = p.copy()
+    moved[:2] += slide * direction
+    moved[2] += heights[last] - heights[0]
+    return GoalPlacement(se2_goal, SittingPose(moved, sitting_pose.yaw), distance - slide)
+
+
+def reach_validator(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
+) -> str:
+    """Fallback validity check: the NAO's arms reach p from s_goal (:mod:`reach`)."""
+    del chair_mesh
+    offset = np.asarray(sitting_pose.position[:2], dtype=float) - (se2_goal.x, se2_goal.y)
+    forward = float(offset @ (math.cos(se2_goal.theta), math.sin(se2_goal.theta)))
+    return check_reach(forward, float(sitting_pose.position[2])).reason
+
+
+def default_seating_validator() -> SeatingValidator:
+    """The whole-body pre-plan when ``skills.planning.wholebody`` provides it, else reach."""
+    try:
+        module = importlib.import_module("skills.planning.wholebody")
+    except ModuleNotFoundError as error:
+        if error.name and "skills.planning.wholebody".startswith(error.name):
+            return reach_validator
+        raise
+    preplan = getattr(module, "preplan_seating", None)
+    if preplan is None:
+        return reach_validator
+    infeasible = getattr(module, "InfeasibleSeating", ValueError)
+
+    def wholebody_validator(
+        chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
+    ) -> str:
+        try:
+            preplan(chair_mesh, sitting_pose, se2_goal)
+        except infeasible as error:
+            return f"seating pre-plan infeasible: {error}"
+        return ""
+
+    return wholebody_validator
+
+
+class PlannedPath(NamedTuple):
+    """An SE(2) path, or why there is none.
+
+    Attributes:
+        waypoints: start to goal, every ``WAYPOINT_SPACING_M`` or so (empty when none).
+        seconds: OMPL solve plus simplification wall time.
+        reason: why no path was found (empty when found).
+    """
+
+    waypoints: tuple[SE2Pose, ...]
+    seconds: float
+    reason: str = ""
+
+
+def _seed_ompl(seed: int) -> None:
+    # OMPL complains (harmlessly) when reseeded after its first RNG was made; the reseed
+    # still makes every later planner's sampler sequence a function of ``seed``.
+    level = ou.getLogLevel()
+    ou.setLogLevel(ou.LogLevel.LOG_NONE)
+    try:
+        ou.RNG.setSeed(int(seed) % (2**31 - 1) + 1)
+    finally:
+        ou.setLogLevel(level)
+
+
+def goal_blocked_reason(checker: NaoCollisionChecker, goal: SE2Pose) -> str:
+    """Why the NAO cannot stand at ``goal`` (outside the arena, or touching something), or ""."""
+    if not checker.arena.contains(goal.x, goal.y):
+        return "s_goal is outside the planning arena"
+    blocker = checker.blocked_by(goal)
+    return f"s_goal is blocked by the {blocker}" if blocker else ""
+
+
+def plan_se2_path(
+    checker: NaoCollisionChecker,
+    start: SE2Pose,
+    goal: SE2Pose,
+    *,
+    seed: int,
+    time_budget_s: float = PLANNING_TIME_S,
+) -> PlannedPath:
+    """RRTConnect in SE(2) over the arena, then shortcut simplification.
+
+    Args:
+        checker: validity of a NAO pose (arena bounds, walls, obstacles, chair).
+        start: the humanoid's pose now.
+        goal: s_goal.
+        seed: OMPL's random seed (same seed, same path).
+        time_budget_s: planning time limit, seconds.
+    """
+    arena = checker.arena
+    reason = goal_blocked_reason(checker, goal)
+    if reason:
+        return PlannedPath((), 0.0, reason)
+    if not arena.contains(start.x, start.y):
+        return PlannedPath((), 0.0, "the humanoid is outside the planning arena")
+    blocker = checker.blocked_by(start)
+    if blocker:
+        return PlannedPath((), 0.0, f"the humanoid's own pose touches the {blocker}")
+
+    log_level = ou.getLogLevel()
+    ou.setLogLevel(ou.LogLevel.LOG_ERROR)  # this build defaults to DEBUG chatter on stderr
+    try:
+        return _run_rrt_connect(checker, start, goal, seed=seed, time_budget_s=time_budget_s)
+    finally:
+        ou.setLogLevel(log_level)
+
+
+def _run_rrt_connect(
+    checker: NaoCollisionChecker, start: SE2Pose, goal: SE2Pose, *, seed: int, time_budget_s: float
+) -> PlannedPath:
+    arena = checker.arena
+    _seed_ompl(seed)
+    space = ob.SE2StateSpace()
+    bounds = ob.RealVectorBounds(2)
+    bounds.setLow(0, arena.x_min)
+    bounds.setHigh(0, arena.x_max)
+    bounds.setLow(1, arena.y_min)
+    bounds.setHigh(1, arena.y_max)
+    space.setBounds(bounds)
+    setup = og.SimpleSetup(space)
+    setup.setStateValidityChecker(lambda s: checker.is_free(s.getX(), s.getY(), s.getYaw()))
+    information = setup.getSpaceInformation()
+    information.setStateValidityCheckingResolution(CHECK_RESOLUTION_M / space.getMaximumExtent())
+    start_state, goal_state = space.allocState(), space.allocState()
+    for state, pose in ((start_state, start), (goal_state, goal)):
+        state.setX(pose.x)
+        state.setY(pose.y)
+        state.setYaw(wrap_angle(pose.theta))  # SO(2) bounds are [-π, π)
+    setup.setStartAndGoalStates(start_state, goal_state)
+    setup.setPlanner(og.RRTConnect(information))
+
+    began = time.perf_counter()
+    setup.solve(time_budget_s)
+    if not setup.haveExactSolutionPath():
+        return PlannedPath((), time.perf_counter() - began, "no collision-free path to s_goal")
+    setup.simplifySolution()
+    path = setup.getSolutionPath()
+    path.interpolate(max(2, math.ceil(path.length() / WAYPOINT_SPACING_M) + 1))
+    seconds = time.perf_counter() - began
+    waypoints = tuple(
+        SE2Pose(float(s.getX()), float(s.getY()), wrap_angle(float(s.getYaw())))
+        for s in (path.getState(i) for i in range(path.getStateCount()))
+    )
+    # The ends are exactly the requested poses (OMPL may copy them with rounding).
+    return PlannedPath((start, *waypoints[1:-1], goal), seconds)
+
+
+def check_accessibility(
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    humanoid_pose: SE2Pose,
+    arena: Arena,
+    *,
+    seed: int,
+    seating_validator: SeatingValidator | None = None,
+    time_budget_s: float = PLANNING_TIME_S,
+) -> AccessibilityResult:
+    """Finds s_goal for a sitting pose, checks it and plans the humanoid's path there.
+
+    Args:
+        chair_mesh: the chair, world frame, z up.
+        sitting_pose: g = (p, γ), world frame.
+        humanoid_pose: where the humanoid is now.
+        arena: walls and fixed obstacles.
+        seed: OMPL's random seed.
+        seating_validator: checks seating from s_goal; default: the whole-body pre-plan
+            when available, else the arm-reach check.
+        time_budget_s: RRTConnect's time limit, seconds.
+
+    Returns:
+        accessible with the path, or not with the reason; ``seconds`` is the OMPL time.
+
+    Raises:
+        AccessibilityError: an empty chair mesh or a non-finite pose.
+    """
+    if chair_mesh is None or len(chair_mesh.faces) == 0:
+        raise AccessibilityError("the chair mesh has no triangles")
+    if not (np.all(np.isfinite(sitting_pose.position)) and math.isfinite(sitting_pose.yaw)):
+        raise AccessibilityError("the sitting pose is not finite")
+    if not all(math.isfinite(v) for v in humanoid_pose):
+        raise AccessibilityError("the humanoid's pose is not finite")
+
+    checker = NaoCollisionChecker(arena, chair_convex_pieces(chair_mesh))
+    placement = place_se2_goal(chair_mesh, sitting_pose, checker)
+    if placement.se2_goal is None:
+        return AccessibilityResult(False, None, placement.sitting_pose, (), placement.reason)
+    se2_goal, sitting_pose = placement.se2_goal, placement.sitting_pose
+
+    reason = goal_blocked_reason(checker, se2_goal)
+    if reason:
+        return AccessibilityResult(False, se2_goal, sitting_pose, (), reason)
+    validator = seating_validator or default_seating_validator()
+    reason = validator(chair_mesh, sitting_pose, se2_goal)
+    if reason:
+        return AccessibilityResult(False, se2_goal, sitting_pose, (), reason)
+
+    planned = plan_se2_path(
+        checker, humanoid_pose, se2_goal, seed=seed, time_budget_s=time_budget_s
+    )
+    return AccessibilityResult(
+        not planned.reason,
+        se2_goal,
+        sitting_pose,
+        planned.waypoints,
+        planned.reason,
+        planned.seconds,
+    )
