@@ -185,5 +185,5 @@ class Robot:
         """Stops every actuator; safe to call more than once."""
         try:
             self.humanoid.stop()
-        except Exception:  # noqa: BLE001 - stopping must never raise during shutdown
+        except Exception:
             pass

@@ -57,7 +57,7 @@ def load_mesh(path: str | os.PathLike) -> trimesh.Trimesh:
         raise MeshLoadError(f"{path}: empty file")
     try:
         loaded = trimesh.load(path, force="mesh", process=False)
-    except Exception as error:  # noqa: BLE001 - trimesh raises many kinds on bad input
+    except Exception as error:
         raise MeshLoadError(f"{path}: not a readable mesh ({error})") from error
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise MeshLoadError(f"{path}: contains no triangles")
@@ -134,7 +134,7 @@ class _stdout_to:
 
         sys.stdout.flush()
         self._saved = os.dup(1)
-        self._file = open(self._path, "wb")  # noqa: SIM115 - closed in __exit__
+        self._file = open(self._path, "wb")
         os.dup2(self._file.fileno(), 1)
 
     def __exit__(self, *exc: object) -> None:
@@ -192,5 +192,9 @@ def box_chair_mesh(
     return trimesh.util.concatenate(parts)
 
 
-def _box(extents: tuple[float, float, float], centre: tuple[float, float, float]) -> trimesh.Trimesh:
-    return trimesh.creation.box(extents=extents, transform=trimesh.transformations.translation_matrix(centre))
+def _box(
+    extents: tuple[float, float, float], centre: tuple[float, float, float]
+) -> trimesh.Trimesh:
+    return trimesh.creation.box(
+        extents=extents, transform=trimesh.transformations.translation_matrix(centre)
+    )

@@ -226,4 +226,8 @@ class SeatingPlan(NamedTuple):
 def _se2_json(pose: SE2Pose | None) -> dict[str, float] | None:
     if pose is None:
         return None
-    return {"x_m": round(pose.x, 4), "y_m": round(pose.y, 4), "theta_deg": round(math.degrees(pose.theta), 2)}
+    return {
+        "x_m": round(pose.x, 4),
+        "y_m": round(pose.y, 4),
+        "theta_deg": round(math.degrees(pose.theta), 2),
+    }

@@ -127,7 +127,9 @@ def resolve_skill(name: str) -> Callable[..., Any]:
         module = importlib.import_module(module_name)
     except ModuleNotFoundError as error:
         if error.name and module_name.startswith(error.name):
-            raise SkillNotReady(f"skill '{name}' is not implemented: no module {module_name}") from error
+            raise SkillNotReady(
+                f"skill '{name}' is not implemented: no module {module_name}"
+            ) from error
         raise
     function = getattr(module, function_name, None)
     if function is None:

@@ -1,0 +1,66 @@
+"""What one mission run is asked to do."""
+
+from __future__ import annotations
+
+import json
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+from skills.arena import DEFAULT_ARENA, Arena
+
+logger = logging.getLogger(__name__)
+
+Placement = Literal["accessible", "inaccessible"]
+HelperMode = Literal["obeys", "disobeys", "ignores"]
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """One run of the mission.
+
+    Attributes:
+        chair_path: the chair mesh; None for the chair made of boxes the project ships.
+        placement: how the simulated chair is placed relative to the humanoid.
+        helper: how the simulated helper reacts to instructions.
+        seed: seeds everything random, in the world and in the skills.
+        gui: show the pybullet GUI.
+        out_dir: where the run record goes.
+        mute: print instructions instead of speaking them.
+        timeout_s: wall time after which the mission is stopped as failed.
+        arena: the workspace layout.
+    """
+
+    chair_path: Path | None = None
+    placement: Placement = "accessible"
+    helper: HelperMode = "obeys"
+    seed: int = 0
+    gui: bool = False
+    out_dir: Path = Path("runs/latest")
+    mute: bool = False
+    timeout_s: float = 900.0
+    arena: Arena = field(default=DEFAULT_ARENA)
+
+    def chair_name(self) -> str:
+        return self.chair_path.name if self.chair_path else "box-chair (built in)"
+
+
+def front_yaw_from_manifest(chair_path: Path) -> float | None:
+    """The chair's sitting direction (degrees) from a ``manifest.json`` beside it, if any.
+
+    Only the simulated world uses this, to place the chair accessibly or not; the
+    mission itself never sees it.
+    """
+    manifest = chair_path.parent / "manifest.json"
+    if not manifest.is_file():
+        return None
+    try:
+        entries = json.loads(manifest.read_text()).get("meshes", [])
+    except (OSError, json.JSONDecodeError, AttributeError) as error:
+        logger.warning("ignoring unreadable %s: %s", manifest, error)
+        return None
+    for entry in entries:
+        if entry.get("file") == chair_path.name:
+            return entry.get("front_yaw_deg")
+    return None

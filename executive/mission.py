@@ -1,0 +1,132 @@
+"""One mission run in the simulated world, from configuration to run record."""
+
+from __future__ import annotations
+
+import logging
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TextIO
+
+from executive.config import RunConfig, front_yaw_from_manifest
+from executive.record import RunRecorder
+from executive.runner import MissionRunner, summarise
+from skills.meshes import load_mesh
+from skills.toolbox import DefaultSkills, MissionSkills
+from trees.mission import create_tree
+
+logger = logging.getLogger(__name__)
+
+
+class StageProgress:
+    """Prints a line whenever a stage starts or ends (long stages are the norm here)."""
+
+    def __init__(self, stream: TextIO = sys.stderr) -> None:
+        self._stream = stream
+        self._seen: dict[str, str] = {}
+
+    def __call__(self, runner: MissionRunner) -> None:
+        for stage in runner.stages:
+            if self._seen.get(stage.name) == stage.status or stage.status == "INVALID":
+                continue
+            self._seen[stage.name] = stage.status
+            if stage.status == "RUNNING":
+                line = f"[{runner.elapsed():7.1f} s] {stage.name} ..."
+            else:
+                line = f"[{runner.elapsed():7.1f} s] {stage.name}: {stage.status} ({stage.seconds:.1f} s) {stage.feedback}"
+            print(line, file=self._stream, flush=True)
+
+
+def run_in_simulation(
+    config: RunConfig,
+    skills: MissionSkills | None = None,
+    on_tick: Callable[[MissionRunner], None] | None = None,
+) -> dict[str, Any]:
+    """Builds the simulated world and the tree, runs the mission, writes the run record.
+
+    Returns:
+        The summary written to ``summary.json``.
+
+    Raises:
+        skills.meshes.MeshLoadError: the chair file is unusable (checked before anything runs).
+    """
+    from hardware.sim.world import SimConfig, SimWorld
+
+    front_yaw_deg = 0.0  # the built-in box chair faces +x
+    if config.chair_path is not None:
+        load_mesh(config.chair_path)  # fail fast, with one line, on a bad file
+        front_yaw_deg = front_yaw_from_manifest(config.chair_path)
+    from hardware.speech import TextToSpeech
+
+    voice = TextToSpeech(mute=config.mute)
+    root = create_tree()
+    recorder = RunRecorder(config.out_dir, root)
+    run_info = {
+        "chair": config.chair_name(),
+        "placement": config.placement,
+        "helper": config.helper,
+        "seed": config.seed,
+        "backend": "sim",
+        "started_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    }
+    sim_config = SimConfig(
+        chair_path=config.chair_path,
+        placement=config.placement,
+        helper=config.helper,
+        seed=config.seed,
+        gui=config.gui,
+        front_yaw_deg=front_yaw_deg,
+        arena=config.arena,
+        voice=voice,
+    )
+    world = SimWorld(sim_config)
+    try:
+        runner = MissionRunner(
+            root,
+            skills or DefaultSkills(),
+            world.robot,
+            seed=config.seed,
+            arena=config.arena,
+            recorder=recorder,
+            timeout_s=config.timeout_s,
+            on_tick=on_tick,
+        )
+        outcome = runner.run()
+        summary = summarise(outcome, run_info)
+        try:
+            world.render_png(config.out_dir / "final_scene.png")
+            summary["picture"] = "final_scene.png"
+        except Exception as error:
+            logger.warning("could not render the final scene: %s", error)
+        recorder.write_summary(summary)
+        return summary
+    finally:
+        recorder.close()
+        world.close()
+
+
+def format_summary(summary: dict[str, Any]) -> str:
+    """The per-stage table printed at the end of ``bearchair run``."""
+    lines = [
+        f"chair {summary['chair']} | placement {summary['placement']} | helper {summary['helper']} "
+        f"| seed {summary['seed']}",
+        f"{'stage':<20} {'status':<8} {'seconds':>8}  outputs",
+    ]
+    for stage in summary["stages"]:
+        lines.append(
+            f"{stage['name']:<20} {stage['status']:<8} {stage['seconds']:>8.2f}  {stage['message']}"
+        )
+    for sentence in summary["instructions"]:
+        lines.append(f'said: "{sentence}"')
+    outcome = summary["outcome"].upper()
+    if summary["outcome"] == "success":
+        lines.append(f"outcome: {outcome} in {summary['wall_seconds']:.1f} s")
+    else:
+        lines.append(f"outcome: {outcome} at {summary['failed_stage']}: {summary['reason']}")
+    return "\n".join(lines)
+
+
+def default_out_dir(config: RunConfig) -> Path:
+    """``runs/<date>-<time>-seed<N>``: a new directory per run."""
+    return Path("runs") / f"{time.strftime('%Y%m%d-%H%M%S')}-seed{config.seed}"

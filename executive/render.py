@@ -1,0 +1,64 @@
+"""Rendering the mission tree: text for terminals, dot/SVG/PNG for people."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import py_trees
+
+TEXT_FORMATS = ("ascii", "unicode")
+GRAPH_FORMATS = ("dot", "svg", "png")
+
+
+class RenderError(RuntimeError):
+    """The tree could not be rendered in the format asked for."""
+
+
+def render_text(root: py_trees.behaviour.Behaviour, fmt: str, with_blackboard: bool) -> str:
+    """The tree as ASCII or Unicode art, optionally with every blackboard key and its users."""
+    art = (py_trees.display.ascii_tree if fmt == "ascii" else py_trees.display.unicode_tree)(root)
+    if not with_blackboard:
+        return art
+    lines = [art.rstrip(), "", "Blackboard keys (R read, W write):"]
+    for key, users in sorted(blackboard_users(root).items()):
+        lines.append(f"  {key:<28} " + ", ".join(f"{name} ({mode})" for name, mode in users))
+    return "\n".join(lines)
+
+
+def blackboard_users(root: py_trees.behaviour.Behaviour) -> dict[str, list[tuple[str, str]]]:
+    """For each blackboard key, the behaviours registered on it and how (R or W)."""
+    users: dict[str, list[tuple[str, str]]] = {}
+    for node in root.iterate():
+        for client in node.blackboards:
+            for key in sorted(client.read):
+                users.setdefault(key, []).append((node.name, "R"))
+            for key in sorted(client.write):
+                users.setdefault(key, []).append((node.name, "W"))
+    return users
+
+
+def render_graph(
+    root: py_trees.behaviour.Behaviour, fmt: str, out: Path, with_blackboard: bool
+) -> Path:
+    """Writes the tree as a dot, SVG or PNG file at ``out`` (Graphviz's ``dot`` for images)."""
+    if fmt in ("svg", "png") and shutil.which("dot") is None:
+        raise RenderError("Graphviz's 'dot' is not installed (apt-get install graphviz)")
+    # py_trees prints every file it writes; the caller reports the one that matters.
+    with tempfile.TemporaryDirectory() as scratch, contextlib.redirect_stdout(io.StringIO()):
+        written = py_trees.display.render_dot_tree(
+            root,
+            name="mission",
+            target_directory=scratch,
+            with_blackboard_variables=with_blackboard,
+        )
+        source = written.get(fmt)
+        if source is None or not os.path.exists(source):
+            raise RenderError(f"py_trees did not produce a {fmt} file")
+        out.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(source, out)
+    return out

@@ -1,0 +1,212 @@
+"""Every mission leaf with stubbed skills: success, failure, RUNNING across ticks,
+interruption, and an exception in the skill (per-tick assertions, py_trees style)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import py_trees
+import pytest
+from py_trees.common import Status
+
+from behaviours import keys
+from behaviours.accessibility import CheckAccessibility
+from behaviours.assistance import InstructHelper, MeasureChairRotation, WaitUntilChairStill
+from behaviours.imagine import ImagineSitting
+from behaviours.scan import ScanChair
+from behaviours.seat import ReleaseAndStand, SeatBear
+from behaviours.walk import WalkToChair
+from hardware.fakes import FakeJudge, fake_robot
+from hardware.interfaces import SeatingJudgement
+from skills.arena import DEFAULT_ARENA
+from skills.fakes import ScriptedSkills, default_results
+from skills.results import AccessibilityResult, ImaginationResult, WalkResult
+from skills.toolbox import SkillNotReady
+
+DEFAULTS = default_results()
+
+# leaf class, the skill it calls, a result that makes it fail (None: cannot fail by result)
+LEAVES = [
+    (ScanChair, "scan_chair", None),
+    (
+        ImagineSitting,
+        "imagine_sitting",
+        ImaginationResult(False, None, 0, 56, (), {}, "no correct sitting"),
+    ),
+    (
+        CheckAccessibility,
+        "check_accessibility",
+        AccessibilityResult(
+            False, None, DEFAULTS["imagine_sitting"].sitting_pose, (), "goal outside the arena"
+        ),
+    ),
+    (InstructHelper, "compose_instruction", None),
+    (WaitUntilChairStill, "wait_until_chair_still", None),
+    (MeasureChairRotation, "measure_chair_rotation", None),
+    (WalkToChair, "walk_path", WalkResult(False, 0.2, 0.3, 60.0, "timed out")),
+    (SeatBear, "plan_seating", None),
+    (ReleaseAndStand, "release_and_stand", None),
+]
+
+
+def fill_blackboard() -> None:
+    """Everything a leaf may read, as earlier stages would have left it."""
+    writer = py_trees.blackboard.Client(name="test")
+    values = {
+        keys.SEED: 7,
+        keys.ARENA: DEFAULT_ARENA,
+        keys.CHAIR_MESH: DEFAULTS["scan_chair"].chair_mesh,
+        keys.CHAIR_POINTS: DEFAULTS["scan_chair"].chair_points,
+        keys.SITTING_POSE: DEFAULTS["imagine_sitting"].sitting_pose,
+        keys.ACCESSIBILITY: DEFAULTS["check_accessibility"],
+        keys.SEATING_PLAN: DEFAULTS["plan_seating"],
+    }
+    for key, value in values.items():
+        writer.register_key(key=key, access=py_trees.common.Access.WRITE)
+        writer.set(key, value)
+
+
+def tick_until_done(leaf: py_trees.behaviour.Behaviour, max_ticks: int = 400) -> list[Status]:
+    statuses = []
+    for _ in range(max_ticks):
+        leaf.tick_once()
+        statuses.append(leaf.status)
+        if leaf.status != Status.RUNNING:
+            return statuses
+        time.sleep(0.005)
+    raise AssertionError(f"{leaf.name} still RUNNING after {max_ticks} ticks")
+
+
+def make(leaf_class, skills, judge=None):
+    fill_blackboard()
+    leaf = leaf_class()
+    leaf.setup(skills=skills, robot=fake_robot(judge=judge))
+    return leaf
+
+
+@pytest.mark.parametrize(("leaf_class", "skill", "_"), LEAVES)
+def test_leaf_succeeds_with_its_skill_result(leaf_class, skill, _):
+    skills = ScriptedSkills()
+    leaf = make(leaf_class, skills)
+    statuses = tick_until_done(leaf)
+    assert statuses[-1] == Status.SUCCESS, leaf.feedback_message
+    assert len(skills.calls[skill]) == 1
+    assert leaf.feedback_message
+
+
+@pytest.mark.parametrize(
+    ("leaf_class", "skill", "failing"), [leaf for leaf in LEAVES if leaf[2] is not None]
+)
+def test_leaf_fails_on_a_negative_result_and_says_why(leaf_class, skill, failing):
+    leaf = make(leaf_class, ScriptedSkills({skill: failing}))
+    assert tick_until_done(leaf)[-1] == Status.FAILURE
+    assert failing.reason in leaf.feedback_message
+    failures = py_trees.blackboard.Blackboard.get(keys.FAILURES)
+    assert failures[-1].startswith(leaf.name)
+
+
+@pytest.mark.parametrize(("leaf_class", "skill", "_"), LEAVES)
+def test_leaf_is_running_while_its_skill_works(leaf_class, skill, _):
+    leaf = make(leaf_class, ScriptedSkills(delays_s={skill: 0.3}))
+    leaf.tick_once()
+    assert leaf.status == Status.RUNNING
+    started = time.monotonic()
+    leaf.tick_once()
+    assert time.monotonic() - started < 0.1, "update() must poll, not wait for the skill"
+    assert leaf.status == Status.RUNNING
+    assert "(" in leaf.feedback_message  # elapsed time is shown
+    assert tick_until_done(leaf)[-1] == Status.SUCCESS
+
+
+@pytest.mark.parametrize(("leaf_class", "skill", "_"), LEAVES)
+def test_interrupting_a_leaf_cancels_its_skill(leaf_class, skill, _):
+    skills = ScriptedSkills(delays_s={skill: 5.0})
+    leaf = make(leaf_class, skills)
+    leaf.tick_once()
+    time.sleep(0.05)
+    assert leaf.status == Status.RUNNING
+    leaf.stop(Status.INVALID)
+    assert leaf.status == Status.INVALID
+    assert leaf.feedback_message == "cancelled"
+    deadline = time.monotonic() + 2.0
+    while skill not in skills.cancelled and time.monotonic() < deadline:
+        time.sleep(0.01)
+    if "cancel" in skills.calls[skill][0][1]:
+        assert skill in skills.cancelled, "the skill did not see the cancel event"
+
+
+@pytest.mark.parametrize(("leaf_class", "skill", "_"), LEAVES)
+def test_an_exception_in_the_skill_fails_the_leaf_with_the_error(leaf_class, skill, _):
+    leaf = make(leaf_class, ScriptedSkills({skill: RuntimeError("camera unplugged")}))
+    assert tick_until_done(leaf)[-1] == Status.FAILURE
+    assert "camera unplugged" in leaf.feedback_message
+
+
+def test_a_missing_skill_fails_at_its_leaf_naming_it():
+    leaf = make(
+        ImagineSitting,
+        ScriptedSkills(
+            {"imagine_sitting": SkillNotReady("skill 'imagine_sitting' is not implemented")}
+        ),
+    )
+    assert tick_until_done(leaf)[-1] == Status.FAILURE
+    assert "imagine_sitting" in leaf.feedback_message
+
+
+def test_a_missing_blackboard_input_fails_without_calling_the_skill():
+    skills = ScriptedSkills()
+    leaf = ImagineSitting()
+    leaf.setup(skills=skills, robot=fake_robot())
+    assert tick_until_done(leaf)[-1] == Status.FAILURE
+    assert "/mission/seed" in leaf.feedback_message or "/chair/mesh" in leaf.feedback_message
+    assert not skills.calls["imagine_sitting"]
+
+
+def test_leaf_without_injected_skills_fails_clearly():
+    fill_blackboard()
+    leaf = ScanChair()
+    leaf.setup()
+    assert tick_until_done(leaf)[-1] == Status.FAILURE
+    assert "skills" in leaf.feedback_message
+
+
+def test_measure_rotation_carries_the_sitting_pose_with_the_chair():
+    leaf = make(MeasureChairRotation, ScriptedSkills())
+    before = DEFAULTS["imagine_sitting"].sitting_pose
+    assert tick_until_done(leaf)[-1] == Status.SUCCESS
+    after = py_trees.blackboard.Blackboard.get(keys.SITTING_POSE)
+    # the stub turns the chair -90 deg about the world's z axis through the origin
+    np.testing.assert_allclose(after.position, [0.0, -0.6, 0.28], atol=1e-9)
+    assert after.yaw == pytest.approx(before.yaw - np.pi / 2)
+    mesh_after = py_trees.blackboard.Blackboard.get(keys.CHAIR_MESH)
+    np.testing.assert_allclose(mesh_after.bounds.mean(axis=0)[:2], [0.0, -0.6], atol=1e-9)
+
+
+def test_instruct_helper_speaks_and_counts():
+    skills = ScriptedSkills()
+    fill_blackboard()
+    robot = fake_robot()
+    leaf = InstructHelper()
+    leaf.setup(skills=skills, robot=robot)
+    tick_until_done(leaf)
+    leaf.stop(Status.INVALID)
+    tick_until_done(leaf)
+    sentence = DEFAULTS["compose_instruction"].sentence
+    assert robot.speaker.said == [sentence, sentence]
+    assert py_trees.blackboard.Blackboard.get(keys.ROTATIONS) == 2
+    assert py_trees.blackboard.Blackboard.get(keys.INSTRUCTIONS) == [sentence, sentence]
+
+
+def test_release_fails_when_the_judge_says_not_seated():
+    judge = FakeJudge(SeatingJudgement(False, False, 80.0, 10.0, "bear on the floor"))
+    leaf = make(ReleaseAndStand, ScriptedSkills(), judge=judge)
+    assert tick_until_done(leaf)[-1] == Status.FAILURE
+    assert "bear on the floor" in leaf.feedback_message
+    assert py_trees.blackboard.Blackboard.get(keys.JUDGEMENT).torso_tilt_deg == 80.0
+
+
+def test_release_succeeds_when_seated():
+    leaf = make(ReleaseAndStand, ScriptedSkills(), judge=FakeJudge())
+    assert tick_until_done(leaf)[-1] == Status.SUCCESS
+    assert "seated" in leaf.feedback_message

@@ -1,0 +1,178 @@
+"""The mission tree end to end with stubbed skills: the stage order, the assistance loop
+(0 to 3 rotations, then failure), failure naming the leaf, and the run record."""
+
+from __future__ import annotations
+
+import json
+
+import py_trees
+import pytest
+from py_trees.common import Status
+
+from behaviours import keys
+from executive.inspect_run import RecordedRun, RunRecordError
+from executive.record import RunRecorder
+from executive.runner import MissionRunner, summarise
+from hardware.fakes import FakeJudge, fake_robot
+from skills.arena import DEFAULT_ARENA
+from skills.fakes import ScriptedSkills, default_results
+from skills.results import AccessibilityResult
+from skills.toolbox import SkillNotReady
+from trees.mission import STAGES, create_tree
+
+DEFAULTS = default_results()
+ACCESSIBLE = DEFAULTS["check_accessibility"]
+BLOCKED = AccessibilityResult(False, None, ACCESSIBLE.sitting_pose, (), "s_goal outside the arena")
+
+
+def run(skills: ScriptedSkills, out_dir=None, robot=None) -> tuple[dict, MissionRunner]:
+    root = create_tree()
+    recorder = RunRecorder(out_dir, root) if out_dir else None
+    runner = MissionRunner(
+        root,
+        skills,
+        robot or fake_robot(judge=FakeJudge()),
+        seed=3,
+        arena=DEFAULT_ARENA,
+        recorder=recorder,
+        tick_period_s=0.002,
+        timeout_s=60,
+    )
+    outcome = runner.run()
+    summary = summarise(outcome, {"chair": "stub"})
+    if recorder:
+        recorder.write_summary(summary)
+        recorder.close()
+    return summary, runner
+
+
+def test_the_tree_has_the_mission_stages_in_order():
+    root = create_tree()
+    assert isinstance(root, py_trees.composites.Sequence) and root.memory
+    assert tuple(child.name for child in root.children) == STAGES
+
+
+def test_every_leaf_is_a_named_behaviour_with_no_hardware_before_setup():
+    for node in create_tree().iterate():
+        assert node.name
+        if not node.children and hasattr(node, "robot"):
+            assert node.robot is None and node.skills is None
+
+
+def test_accessible_mission_succeeds_without_instructions():
+    summary, _ = run(ScriptedSkills())
+    assert summary["outcome"] == "success", summary["reason"]
+    assert summary["failed_stage"] is None
+    assert [s["status"] for s in summary["stages"]] == ["SUCCESS"] * len(STAGES)
+    assert summary["rotations"] == 0 and summary["instructions"] == []
+    assert summary["judgement"]["seated"] is True
+    assert summary["sitting_pose"]["yaw_deg"] == 0.0
+
+
+@pytest.mark.parametrize("rotations_needed", [1, 2, 3])
+def test_assistance_loop_asks_until_accessible(rotations_needed):
+    checks = [BLOCKED] * rotations_needed + [ACCESSIBLE]
+    skills = ScriptedSkills({"check_accessibility": checks})
+    summary, _ = run(skills)
+    assert summary["outcome"] == "success", summary["reason"]
+    assert summary["rotations"] == rotations_needed
+    assert len(summary["instructions"]) == rotations_needed
+    assert len(skills.calls["measure_chair_rotation"]) == rotations_needed
+    assert len(skills.calls["check_accessibility"]) == rotations_needed + 1
+    assert len(skills.calls["walk_path"]) == 1
+
+
+def test_assistance_loop_gives_up_after_the_third_rotation():
+    skills = ScriptedSkills({"check_accessibility": BLOCKED})
+    summary, _ = run(skills)
+    assert summary["outcome"] == "failure"
+    assert summary["failed_stage"] == "MakeChairAccessible"
+    assert summary["rotations"] == 3
+    assert len(skills.calls["compose_instruction"]) == 3
+    assert "after 3 rotation(s)" in summary["reason"]
+    assert "s_goal outside the arena" in summary["reason"]
+    assert not skills.calls["walk_path"]
+    statuses = {s["name"]: s["status"] for s in summary["stages"]}
+    assert statuses["WalkToChair"] == "INVALID"
+
+
+def test_missing_skill_fails_at_its_stage_and_names_it():
+    error = SkillNotReady(
+        "skill 'imagine_sitting' is not implemented: no module skills.imagination"
+    )
+    summary, _ = run(ScriptedSkills({"imagine_sitting": error}))
+    assert summary["outcome"] == "failure"
+    assert summary["failed_stage"] == "ImagineSitting"
+    assert "imagine_sitting" in summary["reason"]
+    assert summary["reason"].startswith("ImagineSitting:")
+
+
+def test_a_skill_exception_never_crashes_the_executive():
+    summary, _ = run(ScriptedSkills({"walk_path": ZeroDivisionError("division by zero")}))
+    assert summary["outcome"] == "failure"
+    assert summary["failed_stage"] == "WalkToChair"
+    assert "ZeroDivisionError" in summary["reason"]
+
+
+def test_timeout_stops_the_tree_and_cancels_the_running_skill():
+    skills = ScriptedSkills(delays_s={"imagine_sitting": 30.0})
+    root = create_tree()
+    runner = MissionRunner(
+        root, skills, fake_robot(), seed=0, arena=DEFAULT_ARENA, tick_period_s=0.01, timeout_s=0.3
+    )
+    outcome = runner.run()
+    summary = summarise(outcome, {})
+    assert summary["outcome"] == "failure"
+    assert summary["failed_stage"] == "ImagineSitting"
+    assert "timed out" in summary["reason"]
+    assert outcome.status == Status.FAILURE
+
+
+def test_run_record_and_inspect_replay(tmp_path):
+    checks = [BLOCKED, ACCESSIBLE]
+    summary, runner = run(
+        ScriptedSkills({"check_accessibility": checks}, delays_s={"scan_chair": 0.05}),
+        out_dir=tmp_path,
+    )
+    written = json.loads((tmp_path / "summary.json").read_text())
+    for key in (
+        "outcome",
+        "failed_stage",
+        "reason",
+        "stages",
+        "sitting_pose",
+        "instructions",
+        "rotations",
+        "judgement",
+    ):
+        assert key in written
+    assert written["outcome"] == "success"
+    assert all({"name", "status", "seconds"} <= set(stage) for stage in written["stages"])
+
+    recorded = RecordedRun(tmp_path)
+    assert recorded.last_tick == runner.tree.count
+    first = recorded.tree_text(recorded.ticks[0]["tick"])
+    assert "ScanChair [*]" in first  # running on the first tick
+    last = recorded.tree_text(None)
+    assert "ReleaseAndStand [✓]" in last
+    assert "/assistance/rotations: 1" in recorded.blackboard_text(None)
+    changes = [(name, new) for _, _, name, _, new in recorded.timeline()]
+    assert ("InstructHelper", "SUCCESS") in changes
+    assert changes.index(("ScanChair", "SUCCESS")) < changes.index(("ImagineSitting", "SUCCESS"))
+    with pytest.raises(RunRecordError):
+        recorded.at(recorded.last_tick + 10)
+
+
+def test_inspect_rejects_a_directory_that_is_not_a_run(tmp_path):
+    with pytest.raises(RunRecordError, match="not a run record"):
+        RecordedRun(tmp_path)
+
+
+def test_blackboard_keys_are_documented():
+    documented = keys.__doc__
+    for node in create_tree().iterate():
+        for client in node.blackboards:
+            for key in client.read | client.write:
+                assert key in documented, (
+                    f"{key} used by {node.name} is not documented in behaviours.keys"
+                )
