@@ -51,12 +51,12 @@ def run_in_simulation(
     Raises:
         skills.meshes.MeshLoadError: the chair file is unusable (checked before anything runs).
     """
-    from hardware.sim.world import SimConfig, SimWorld
-
     front_yaw_deg = 0.0  # the built-in box chair faces +x
     if config.chair_path is not None:
         load_mesh(config.chair_path)  # fail fast, with one line, on a bad file
         front_yaw_deg = front_yaw_from_manifest(config.chair_path)
+
+    from hardware.sim.world import SimConfig, SimWorld
     from hardware.speech import TextToSpeech
 
     voice = TextToSpeech(mute=config.mute)

@@ -1,0 +1,108 @@
+"""The ``bearchair`` command line: rendering, inspecting, and clear one-line errors."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from executive.cli import main
+from executive.record import RunRecorder
+from executive.runner import MissionRunner, summarise
+from hardware.fakes import FakeJudge, fake_robot
+from skills.arena import DEFAULT_ARENA
+from skills.fakes import ScriptedSkills
+from trees.mission import STAGES, create_tree
+
+
+def test_tree_unicode_shows_every_stage(capsys):
+    assert main(["tree", "--format", "unicode"]) == 0
+    out = capsys.readouterr().out
+    for stage in STAGES:
+        assert stage in out
+
+
+def test_tree_blackboard_lists_keys_and_users(capsys):
+    assert main(["tree", "--format", "ascii", "--blackboard"]) == 0
+    out = capsys.readouterr().out
+    assert "/sitting/pose" in out and "ImagineSitting (W)" in out
+
+
+@pytest.mark.skipif(shutil.which("dot") is None, reason="Graphviz not installed")
+def test_tree_svg_is_written(tmp_path, capsys):
+    out = tmp_path / "mission.svg"
+    assert main(["tree", "--format", "svg", "--out", str(out)]) == 0
+    svg = out.read_text()
+    assert svg.lstrip().startswith("<?xml") and "<svg" in svg
+    for stage in STAGES:
+        assert stage in svg
+
+
+def test_py_trees_render_can_build_the_tree_offline(tmp_path):
+    # The design card: the tree renders through py-trees-render with no hardware.
+    render = shutil.which("py-trees-render", path=str(__import__("pathlib").Path(sys.executable).parent))
+    if render is None:
+        pytest.skip("py-trees-render not installed")
+    done = subprocess.run(
+        [render, "trees.mission.create_tree"], cwd=tmp_path, capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+    assert list(tmp_path.glob("*.dot"))
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["run", "--placement", "sideways"], "invalid choice"),
+        (["run", "--seed", "abc"], "invalid int"),
+        (["tree", "--format", "gif"], "invalid choice"),
+        (["fly"], "invalid choice"),
+        (["run", "--chair", "/no/such/chair.obj"], "no such file"),
+        (["inspect", "/no/such/run"], "not a run record"),
+    ],
+)
+def test_bad_arguments_give_one_clear_line(argv, expected, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert expected in err
+    assert len(err.splitlines()) == 1
+    assert "Traceback" not in err
+
+
+def test_run_rejects_an_empty_mesh_file(tmp_path, capsys):
+    empty = tmp_path / "chair.obj"
+    empty.write_text("")
+    assert main(["run", "--chair", str(empty), "--mute"]) == 2
+    assert "empty file" in capsys.readouterr().err
+
+
+def test_inspect_replays_a_recorded_run(tmp_path, capsys):
+    root = create_tree()
+    recorder = RunRecorder(tmp_path, root)
+    runner = MissionRunner(
+        root,
+        ScriptedSkills(delays_s={"scan_chair": 0.05}),
+        fake_robot(judge=FakeJudge()),
+        seed=1,
+        arena=DEFAULT_ARENA,
+        recorder=recorder,
+        tick_period_s=0.002,
+    )
+    recorder.write_summary(summarise(runner.run(), {"chair": "stub"}))
+    recorder.close()
+
+    assert main(["inspect", str(tmp_path), "--timeline", "--blackboard"]) == 0
+    out = capsys.readouterr().out
+    assert "ReleaseAndStand [✓]" in out
+    assert "outcome: success" in out
+    assert "/sitting/pose" in out
+    assert "ScanChair" in out and "RUNNING -> SUCCESS" in out
+
+    assert main(["inspect", str(tmp_path), "--tick", "1"]) == 0
+    first = capsys.readouterr().out
+    assert "ScanChair [*]" in first and "ReleaseAndStand [-]" in first
+
+    assert main(["inspect", str(tmp_path), "--tick", "99999"]) == 2
+    assert "outside the run" in capsys.readouterr().err
