@@ -1,0 +1,220 @@
+"""Following an SE(2) path with PID control on x, y and θ in the robot's frame.
+
+At each control step the tracked pose (the ArUco tag seen by the arm camera) gives the
+error to the current waypoint w, rotated into the robot's frame:
+
+.. math::
+
+    e_{xy} = R(-θ) (w_{xy} - x_{xy}), \\qquad e_θ = \\mathrm{wrap}(w_θ - θ),
+
+and three PIDs turn it into the walking velocity (vx, vy, ω), saturated to the NAO's
+speeds. When the tag is not seen, the pose is the last tracked pose carried forward by
+the odometry's motion since then (or the odometry itself before any sighting), and the
+step is counted. Waypoints advance inside a loose tolerance; at the last one the robot
+stops, settles and is measured again, and the walk ends when that measurement is within
+the final tolerance (3 cm, 5 degrees).
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import math
+import threading
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+
+from hardware.interfaces import Clock, Humanoid
+from skills.control.pid import PID
+from skills.geometry import SE2Pose, wrap_angle
+from skills.results import WalkResult
+
+logger = logging.getLogger(__name__)
+
+
+class WalkError(ValueError):
+    """Bad input to the walk (an empty path or a non-positive time step)."""
+
+
+class WalkGains(NamedTuple):
+    """Controller settings. Speeds are the NAO's comfortable walking limits."""
+
+    kp_xy: float = 1.2
+    ki_xy: float = 0.15
+    kd_xy: float = 0.05
+    kp_theta: float = 1.2
+    ki_theta: float = 0.1
+    kd_theta: float = 0.02
+    max_vx_mps: float = 0.10
+    max_vy_mps: float = 0.07
+    max_omega_radps: float = 0.5
+    waypoint_tolerance_m: float = 0.06
+    waypoint_tolerance_rad: float = math.radians(25.0)
+    final_tolerance_m: float = 0.03
+    final_tolerance_rad: float = math.radians(5.0)
+    # Stopping happens inside a tighter box so that the settle drift stays within the final one.
+    stop_tolerance_m: float = 0.015
+    stop_tolerance_rad: float = math.radians(2.5)
+    settle_s: float = 0.3
+
+
+DEFAULT_GAINS = WalkGains()
+
+
+def path_length(path: tuple[SE2Pose, ...]) -> tuple[float, float]:
+    """Total translation (metres) and total absolute rotation (radians) along a path."""
+    translation = sum(a.distance_to(b) for a, b in itertools.pairwise(path))
+    rotation = sum(abs(wrap_angle(b.theta - a.theta)) for a, b in itertools.pairwise(path))
+    return translation, rotation
+
+
+def walk_timeout_s(
+    path: tuple[SE2Pose, ...], gains: WalkGains, start: SE2Pose | None = None
+) -> float:
+    """A time limit proportional to the path: half the top speeds, plus 20 s to settle."""
+    full = (start, *path) if start is not None else path
+    translation, rotation = path_length(full)
+    return 20.0 + translation / (0.5 * gains.max_vx_mps) + rotation / (0.5 * gains.max_omega_radps)
+
+
+class _PoseEstimate:
+    """Tracked pose, falling back to odometry increments when the tag is not seen."""
+
+    def __init__(self, humanoid: Humanoid, locate: Callable[[], SE2Pose | None]) -> None:
+        self._humanoid = humanoid
+        self._locate = locate
+        self._anchor: tuple[SE2Pose, SE2Pose] | None = None  # (tracked, odometry) together
+        self.unseen_steps = 0
+        self.steps = 0
+
+    def __call__(self) -> SE2Pose:
+        self.steps += 1
+        tracked = self._locate()
+        odometry = self._humanoid.pose()
+        if tracked is not None:
+            self._anchor = (tracked, odometry)
+            return tracked
+        self.unseen_steps += 1
+        if self._anchor is None:
+            return odometry
+        tracked_then, odometry_then = self._anchor
+        # T_world_now = T_world_tracked · (T_odom_then⁻¹ · T_odom_now)
+        moved = np.linalg.inv(odometry_then.as_transform()) @ odometry.as_transform()
+        now = tracked_then.as_transform() @ moved
+        return SE2Pose(float(now[0, 3]), float(now[1, 3]), math.atan2(now[1, 0], now[0, 0]))
+
+
+def _errors(pose: SE2Pose, target: SE2Pose) -> tuple[float, float, float]:
+    """Target minus pose in the robot frame: (forward m, left m, yaw rad)."""
+    dx, dy = target.x - pose.x, target.y - pose.y
+    c, s = math.cos(pose.theta), math.sin(pose.theta)
+    return c * dx + s * dy, -s * dx + c * dy, wrap_angle(target.theta - pose.theta)
+
+
+def walk_path(
+    humanoid: Humanoid,
+    clock: Clock,
+    locate: Callable[[], SE2Pose | None],
+    path: tuple[SE2Pose, ...],
+    *,
+    cancel: threading.Event | None = None,
+    dt_s: float = 0.1,
+    gains: WalkGains = DEFAULT_GAINS,
+    timeout_s: float | None = None,
+) -> WalkResult:
+    """Walks the humanoid along ``path`` and stops at its last waypoint.
+
+    Args:
+        humanoid: the walking robot (velocity commands in its own frame).
+        clock: robot time; ``clock.sleep(dt_s)`` separates control steps.
+        locate: the tracked pose now, or None when the tag is not seen.
+        path: waypoints in the world frame; the last is the goal (the first may be the start).
+        cancel: when set, the robot stops and the walk returns (reason "cancelled").
+        dt_s: control period, seconds.
+        gains: PID gains, speed limits and tolerances.
+        timeout_s: give up after this long on the clock; default :func:`walk_timeout_s`.
+
+    Returns:
+        reached True when the final tracked errors are within 3 cm and 5 degrees.
+
+    Raises:
+        WalkError: an empty path or a non-positive ``dt_s``.
+    """
+    if not path:
+        raise WalkError("cannot walk an empty path")
+    if dt_s <= 0.0:
+        raise WalkError(f"the control period must be positive, got {dt_s}")
+    estimate = _PoseEstimate(humanoid, locate)
+    began = clock.now()
+    pose = estimate()
+    limit_s = timeout_s if timeout_s is not None else walk_timeout_s(path, gains, pose)
+    pid_x = PID(gains.kp_xy, gains.ki_xy, gains.kd_xy, integral_limit=0.05)
+    pid_y = PID(gains.kp_xy, gains.ki_xy, gains.kd_xy, integral_limit=0.05)
+    pid_theta = PID(gains.kp_theta, gains.ki_theta, gains.kd_theta, integral_limit=0.2)
+    goal = path[-1]
+    index = 0
+
+    def finish(reached: bool, final_pose: SE2Pose, reason: str = "") -> WalkResult:
+        humanoid.stop()
+        error_m = final_pose.distance_to(goal)
+        error_rad = abs(wrap_angle(goal.theta - final_pose.theta))
+        if estimate.unseen_steps:
+            logger.info(
+                "walk: tag not seen in %d of %d steps (odometry used)",
+                estimate.unseen_steps,
+                estimate.steps,
+            )
+        return WalkResult(reached, error_m, error_rad, clock.now() - began, reason)
+
+    try:
+        while True:
+            if cancel is not None and cancel.is_set():
+                return finish(False, pose, "cancelled")
+            if clock.now() - began > limit_s:
+                return finish(
+                    False,
+                    pose,
+                    f"timed out after {limit_s:.0f} s at {pose.distance_to(goal):.3f} m from the goal"
+                    f" (tag unseen in {estimate.unseen_steps} of {estimate.steps} steps)",
+                )
+            target = path[index]
+            ex, ey, etheta = _errors(pose, target)
+            distance = math.hypot(ex, ey)
+            last = index == len(path) - 1
+            if not last and (
+                distance < gains.waypoint_tolerance_m and abs(etheta) < gains.waypoint_tolerance_rad
+            ):
+                index += 1
+                for pid in (pid_x, pid_y, pid_theta):
+                    pid.reset()
+                continue
+            if (
+                last
+                and distance < gains.stop_tolerance_m
+                and abs(etheta) < gains.stop_tolerance_rad
+            ):
+                humanoid.stop()
+                clock.sleep(gains.settle_s)
+                pose = estimate()
+                if (
+                    pose.distance_to(goal) <= gains.final_tolerance_m
+                    and abs(wrap_angle(goal.theta - pose.theta)) <= gains.final_tolerance_rad
+                ):
+                    return finish(True, pose)
+                for pid in (pid_x, pid_y, pid_theta):
+                    pid.reset()
+                continue
+            vx = pid_x.update(ex, dt_s)
+            vy = pid_y.update(ey, dt_s)
+            omega = pid_theta.update(etheta, dt_s)
+            # Scale x and y together so the walking direction is kept under saturation.
+            scale = max(1.0, abs(vx) / gains.max_vx_mps, abs(vy) / gains.max_vy_mps)
+            omega = max(-gains.max_omega_radps, min(gains.max_omega_radps, omega))
+            humanoid.set_velocity(vx / scale, vy / scale, omega)
+            clock.sleep(dt_s)
+            pose = estimate()
+    except BaseException:
+        humanoid.stop()
+        raise
