@@ -42,6 +42,8 @@ L_INIT_M = 0.25
 PUSH_STEP_M = 0.01
 MAX_PUSH_M = 1.0
 SEAT_STEP_M = 0.01
+REACH_SLACK_M = 0.005
+"""p slides to this much inside the arms' reach, so the reach check is not a rounding call."""
 SEAT_HEIGHT_TOLERANCE_M = 0.03
 """How much the seat's height may change under p as it slides and still count as the seat."""
 PLANNING_TIME_S = 1.0
@@ -139,8 +141,8 @@ def place_se2_goal(
 
     # Slide p toward the NAO, but only as far as the seat continues under it.
     direction = sitting_pose.direction()
-    slides = np.arange(0.0, distance - reach_m + SEAT_STEP_M, SEAT_STEP_M)
-    slides = np.minimum(slides, distance - reach_m)
+    needed = distance - (reach_m - REACH_SLACK_M)
+    slides = np.minimum(np.arange(0.0, needed + SEAT_STEP_M, SEAT_STEP_M), needed)
     p = np.asarray(sitting_pose.position, dtype=float)
     heights = seat_support_heights(
         chair_mesh, p[:2] + slides[:, None] * direction, float(p[2]) + 0.02

@@ -1,0 +1,173 @@
+"""SE(2) goal placement, arm reach and OMPL planning around a box chair in the default arena."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import trimesh
+
+from skills.arena import DEFAULT_ARENA, Arena, Box2D
+from skills.geometry import SE2Pose, SittingPose, yaw_transform
+from skills.meshes import box_chair_mesh
+from skills.planning import collision
+from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
+from skills.planning.reach import check_reach, max_forward_reach
+from skills.planning.se2 import (
+    PUSH_STEP_M,
+    AccessibilityError,
+    check_accessibility,
+    goal_on_ray,
+    place_se2_goal,
+    reach_validator,
+    seat_support_heights,
+)
+
+PELVIS_ABOVE_SEAT_M = 0.05
+START = DEFAULT_ARENA.humanoid_start
+
+
+def _placed_chair(x: float, y: float, yaw_deg: float, **chair_kwargs):
+    """A box chair (sitting direction +x, seat centre at the origin) moved into the world."""
+    T_world_chair = yaw_transform(math.radians(yaw_deg), np.array([x, y, 0.0]))
+    seat_height = chair_kwargs.get("seat_height_m", 0.24)
+    chair_mesh = box_chair_mesh(**chair_kwargs).apply_transform(T_world_chair)
+    sitting_pose = SittingPose(np.array([0.0, 0.0, seat_height + PELVIS_ABOVE_SEAT_M]), 0.0)
+    return chair_mesh, sitting_pose.transformed(T_world_chair)
+
+
+def _check(chair_mesh, sitting_pose, arena: Arena = DEFAULT_ARENA, seed: int = 0):
+    return check_accessibility(
+        chair_mesh, sitting_pose, START, arena, seed=seed, seating_validator=reach_validator
+    )
+
+
+@pytest.mark.parametrize("yaw_deg", [0.0, 25.0, -30.0])
+def test_chair_facing_the_humanoid_is_accessible(yaw_deg: float) -> None:
+    chair_mesh, sitting_pose = _placed_chair(0.6, 0.1, yaw_deg)
+    result = _check(chair_mesh, sitting_pose)
+    assert result.accessible, result.reason
+    assert result.seconds < 1.0
+    assert result.path[0] == START and result.path[-1] == result.se2_goal
+    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
+    for a, b in zip(result.path, result.path[1:], strict=False):
+        for t in np.linspace(0.0, 1.0, 6):
+            x, y = a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)
+            assert checker.is_free(x, y, a.theta), (x, y)
+    assert math.cos(result.se2_goal.theta - (sitting_pose.yaw + math.pi)) > 0.9999
+
+
+def test_chair_facing_the_back_wall_next_to_it_is_not_accessible() -> None:
+    chair_mesh, sitting_pose = _placed_chair(0.4, 0.0, 180.0)
+    result = _check(chair_mesh, sitting_pose)
+    assert not result.accessible
+    assert result.path == ()
+    assert "s_goal" in result.reason and ("wall" in result.reason or "outside" in result.reason)
+
+
+def test_goal_blocked_everywhere_means_no_path() -> None:
+    # A fence across the arena between the humanoid and the chair.
+    fenced = DEFAULT_ARENA._replace(
+        obstacles=(
+            *DEFAULT_ARENA.obstacles,
+            Box2D(1.3, 1.4, DEFAULT_ARENA.y_min, DEFAULT_ARENA.y_max),
+        )
+    )
+    chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0)
+    result = _check(chair_mesh, sitting_pose, arena=fenced)
+    assert not result.accessible
+    assert result.reason == "no collision-free path to s_goal"
+    assert 0.9 <= result.seconds < 2.0  # it used its 1 s budget
+
+
+def test_same_seed_same_path() -> None:
+    chair_mesh, sitting_pose = _placed_chair(0.7, -0.2, 90.0)
+    first, second = (
+        _check(chair_mesh, sitting_pose, seed=5),
+        _check(chair_mesh, sitting_pose, seed=5),
+    )
+    assert first.accessible and first.path == second.path
+
+
+def test_goal_is_pushed_out_along_the_ray_to_the_first_free_spot() -> None:
+    chair_mesh, sitting_pose = _placed_chair(0.6, 0.1, 40.0)
+    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
+    placement = place_se2_goal(chair_mesh, sitting_pose, checker, l_init_m=0.05)
+    goal = placement.se2_goal
+    assert not checker.collides_with_chair(goal)
+    offset = np.array([goal.x, goal.y]) - placement.sitting_pose.position[:2]
+    along = offset @ sitting_pose.direction()
+    assert abs(offset @ [-sitting_pose.direction()[1], sitting_pose.direction()[0]]) < 1e-9
+    assert along == pytest.approx(placement.standoff_m)
+    # One step closer collides: the push stopped at the first free spot.
+    assert checker.collides_with_chair(goal_on_ray(sitting_pose, along - PUSH_STEP_M))
+    # The seat front edge is 0.14 m ahead of p and the ellipsoid reaches 0.16 m forward.
+    assert 0.29 <= along <= 0.32
+
+
+def test_far_sitting_position_slides_toward_the_nao_on_the_seat() -> None:
+    chair_mesh, _ = _placed_chair(0.6, 0.0, 0.0, seat_depth_m=0.5)
+    p_back = SittingPose(np.array([0.45, 0.0, 0.29]), 0.0)  # 0.15 m behind the seat centre
+    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
+    placement = place_se2_goal(chair_mesh, p_back, checker)
+    moved = placement.sitting_pose.position
+    assert moved[0] > 0.45 + 0.05 and moved[1] == pytest.approx(0.0)
+    assert placement.standoff_m <= max_forward_reach(0.29) + 1e-9
+    assert seat_support_heights(chair_mesh, moved[None, :2], 0.31)[0] == pytest.approx(0.24)
+    result = _check(chair_mesh, p_back)
+    assert result.accessible, result.reason
+    assert result.sitting_pose.position[0] == pytest.approx(moved[0])
+
+
+def test_slide_stops_at_the_seat_edge_and_unreachable_seat_is_rejected() -> None:
+    chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0)
+    # A footrest bar in front of the seat keeps the NAO 0.25 m farther away.
+    footrest = trimesh.creation.box(
+        extents=(0.25, 0.3, 0.1),
+        transform=trimesh.transformations.translation_matrix((0.6 + 0.14 + 0.125, 0.0, 0.15)),
+    )
+    chair_mesh = trimesh.util.concatenate([chair_mesh, footrest])
+    result = _check(chair_mesh, sitting_pose)
+    assert not result.accessible
+    assert "beyond the arms" in result.reason
+    # p slid to the seat's front edge (0.14 m ahead of the seat centre) and no farther.
+    assert 0.6 + 0.12 <= result.sitting_pose.position[0] <= 0.6 + 0.14
+
+
+def test_reach_numbers_follow_the_nao_arm() -> None:
+    assert 0.27 < max_forward_reach(0.29) < 0.33
+    assert max_forward_reach(1.0) == 0.0
+    assert check_reach(0.2, 0.29).reachable
+    assert not check_reach(0.5, 0.29).reachable
+    assert not check_reach(0.05, 0.29).reachable
+
+
+def test_moved_chair_reuses_its_decomposition(monkeypatch: pytest.MonkeyPatch) -> None:
+    chair_mesh, _ = _placed_chair(0.6, 0.0, 0.0)
+    pieces = chair_convex_pieces(chair_mesh)
+    T = yaw_transform(math.radians(70.0), np.array([0.1, -0.05, 0.0]))
+    moved = chair_mesh.copy().apply_transform(T)
+
+    def no_vhacd(mesh):
+        raise AssertionError("V-HACD should not run for a rigidly moved chair")
+
+    monkeypatch.setattr(collision, "convex_pieces", no_vhacd)
+    moved_pieces = chair_convex_pieces(moved)
+    assert len(moved_pieces) == len(pieces)
+    expected = np.vstack([p.copy().apply_transform(T).vertices for p in pieces])
+    assert np.allclose(np.vstack([p.vertices for p in moved_pieces]), expected, atol=1e-6)
+
+
+def test_bad_inputs_raise_one_line_errors() -> None:
+    chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0)
+    with pytest.raises(AccessibilityError, match="not finite"):
+        _check(chair_mesh, SittingPose(np.array([np.nan, 0.0, 0.3]), 0.0))
+    with pytest.raises(AccessibilityError, match="no triangles"):
+        _check(trimesh.Trimesh(), sitting_pose)
+
+
+def test_humanoid_pose_is_unchanged_type() -> None:
+    chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0)
+    result = _check(chair_mesh, sitting_pose)
+    assert all(isinstance(w, SE2Pose) for w in result.path)
