@@ -1,0 +1,291 @@
+"""Chair reconstruction from posed depth frames: TSDF fusion, floor removal, clustering.
+
+Pipeline (each step timed in ``ChairScan.seconds``):
+
+1. ``crop``: every depth pixel is back-projected to the world; pixels outside the scan
+   volume (the box any chair in the chair area lies in, floor included) are dropped, so
+   the TSDF only allocates blocks where the chair can be.
+2. ``tsdf``: the depths are fused in an open3d tensor ``VoxelBlockGrid``.
+3. ``floor``: the fused points' dominant horizontal plane (RANSAC) is the floor;
+   everything within ``floor_band_m`` of it, or below it, is removed.
+4. ``cluster``: the remaining points are voxelised and split into 26-connected
+   components; the chair is the largest component whose centre lies in the chair area.
+5. ``mesh``: marching cubes on the same grid; the faces whose vertices lie in the
+   chair's voxels are kept, and the legs' cut ends are lowered onto the floor plane.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import open3d as o3d
+import trimesh
+from scipy import ndimage
+
+from hardware.interfaces import RGBDFrame
+from skills.arena import DEFAULT_ARENA, Box2D
+from skills.perception.camera import clean_depth, depth_to_world, validate_frame
+from skills.perception.errors import PerceptionError
+from skills.perception.views import CHAIR_MARGIN_M
+from skills.results import ChairScan
+
+
+@dataclass(frozen=True)
+class ReconstructionConfig:
+    """Parameters of :func:`reconstruct_chair` (metres unless named otherwise).
+
+    Attributes:
+        voxel_size_m: TSDF voxel edge.
+        sdf_trunc_voxels: TSDF truncation distance in voxels.
+        depth_max_m: depth beyond this is ignored.
+        chair_area: where the chair's centre may be (world xy).
+        chair_margin_m: how far the chair may reach beyond ``chair_area``.
+        volume_z_m: (bottom, top) of the scan volume.
+        floor_band_m: points closer to the floor plane than this are floor.
+        floor_ransac_iterations: RANSAC iterations for the floor plane.
+        min_chair_points: fewer chair points than this is a failure.
+        with_mesh: extract the triangle mesh (off when only the points are needed).
+        seed: RANSAC seed.
+    """
+
+    voxel_size_m: float = 0.008
+    sdf_trunc_voxels: float = 4.0
+    depth_max_m: float = 2.0
+    chair_area: Box2D = field(default_factory=lambda: DEFAULT_ARENA.chair_area)
+    chair_margin_m: float = CHAIR_MARGIN_M + 0.05
+    volume_z_m: tuple[float, float] = (-0.06, 0.75)
+    floor_band_m: float = 0.012
+    floor_ransac_iterations: int = 300
+    min_chair_points: int = 300
+    with_mesh: bool = True
+    seed: int = 0
+
+    def volume(self) -> tuple[np.ndarray, np.ndarray]:
+        """The scan volume's (min corner, max corner) in the world frame."""
+        a, m = self.chair_area, self.chair_margin_m
+        return (
+            np.array([a.x_min - m, a.y_min - m, self.volume_z_m[0]]),
+            np.array([a.x_max + m, a.y_max + m, self.volume_z_m[1]]),
+        )
+
+
+def crop_depth(frame: RGBDFrame, config: ReconstructionConfig) -> np.ndarray:
+    """The frame's depth (float32 metres) with pixels outside the scan volume set to 0."""
+    depth = clean_depth(frame, depth_max_m=config.depth_max_m)
+    points = depth_to_world(frame, depth)
+    lower, upper = config.volume()
+    inside = np.all((points >= lower) & (points <= upper), axis=-1)
+    return np.where(inside, depth, 0.0).astype(np.float32)
+
+
+def fuse_tsdf(
+    frames: Sequence[RGBDFrame], depths: Sequence[np.ndarray], config: ReconstructionConfig
+) -> o3d.t.geometry.VoxelBlockGrid:
+    """Integrates depth images into a tensor TSDF grid (open3d's VoxelBlockGrid)."""
+    device = o3d.core.Device("CPU:0")
+    grid = o3d.t.geometry.VoxelBlockGrid(
+        attr_names=("tsdf", "weight"),
+        attr_dtypes=(o3d.core.float32, o3d.core.float32),
+        attr_channels=((1), (1)),
+        voxel_size=config.voxel_size_m,
+        block_resolution=8,
+        block_count=40000,
+        device=device,
+    )
+    trunc = config.sdf_trunc_voxels * config.voxel_size_m
+    for frame, depth_m in zip(frames, depths, strict=True):
+        if not np.any(depth_m):
+            continue
+        depth = o3d.t.geometry.Image(o3d.core.Tensor(np.ascontiguousarray(depth_m)))
+        intrinsic = o3d.core.Tensor(frame.intrinsics.matrix(), o3d.core.float64)
+        extrinsic = o3d.core.Tensor(np.linalg.inv(frame.T_world_camera), o3d.core.float64)
+        blocks = grid.compute_unique_block_coordinates(
+            depth,
+            intrinsic,
+            extrinsic,
+            depth_scale=1.0,
+            depth_max=config.depth_max_m,
+            trunc_voxel_multiplier=config.sdf_trunc_voxels,
+        )
+        grid.integrate(
+            blocks,
+            depth,
+            intrinsic,
+            extrinsic,
+            depth_scale=1.0,
+            depth_max=config.depth_max_m,
+            trunc_voxel_multiplier=config.sdf_trunc_voxels,
+        )
+    del trunc
+    return grid
+
+
+def fit_floor(points: np.ndarray, config: ReconstructionConfig) -> np.ndarray:
+    """The floor plane (a, b, c, d), c > 0, from RANSAC on the fused points.
+
+    The largest plane found whose normal is within about 18 degrees of vertical; planes
+    that are not horizontal (a large wall or table top is unlikely here, but a backrest
+    could be) are removed and the search repeated, at most three times.
+
+    Raises:
+        PerceptionError: no horizontal plane was found.
+    """
+    o3d.utility.random.seed(config.seed)
+    remaining = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+    for _ in range(3):
+        if len(remaining.points) < 3 * config.min_chair_points:
+            break
+        plane, inliers = remaining.segment_plane(
+            distance_threshold=max(0.006, 0.75 * config.voxel_size_m),
+            ransac_n=3,
+            num_iterations=config.floor_ransac_iterations,
+        )
+        plane = np.asarray(plane, dtype=np.float64)
+        plane /= np.linalg.norm(plane[:3])
+        if plane[2] < 0:
+            plane = -plane
+        if plane[2] > 0.95:
+            return plane
+        remaining = remaining.select_by_index(inliers, invert=True)
+    raise PerceptionError("no floor plane found in the scan (is the floor in view?)")
+
+
+def largest_cluster(
+    points: np.ndarray, config: ReconstructionConfig, cell_m: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Keeps the biggest 26-connected component of occupied cells whose centre is in the
+    chair area (grown by 5 cm).
+
+    Returns:
+        (mask over ``points``, boolean occupancy grid of the chair, grid origin).
+
+    Raises:
+        PerceptionError: no component lies in the chair area.
+    """
+    origin = points.min(axis=0) - 2 * cell_m
+    cells = np.floor((points - origin) / cell_m).astype(np.int64)
+    shape = cells.max(axis=0) + 3
+    occupancy = np.zeros(shape, dtype=bool)
+    occupancy[tuple(cells.T)] = True
+    labels, count = ndimage.label(occupancy, structure=np.ones((3, 3, 3), dtype=bool))
+    if count == 0:
+        raise PerceptionError("nothing left above the floor in the scan area")
+    point_labels = labels[tuple(cells.T)]
+    sizes = np.bincount(point_labels, minlength=count + 1)
+    sizes[0] = 0
+    area = config.chair_area
+    best_label, best_size = 0, 0
+    for label in np.argsort(sizes)[::-1]:
+        if sizes[label] <= best_size or label == 0:
+            break
+        centre = points[point_labels == label].mean(axis=0)
+        if area.x_min - 0.05 <= centre[0] <= area.x_max + 0.05 and (
+            area.y_min - 0.05 <= centre[1] <= area.y_max + 0.05
+        ):
+            best_label, best_size = int(label), int(sizes[label])
+            break
+    if best_label == 0:
+        raise PerceptionError("no object found with its centre in the chair area")
+    return point_labels == best_label, labels == best_label, origin
+
+
+def reconstruct_chair(frames: Sequence[RGBDFrame], config: ReconstructionConfig) -> ChairScan:
+    """Reconstructs the chair from posed RGB-D frames of any camera backend.
+
+    Args:
+        frames: captures with ``T_world_camera`` from the arm's forward kinematics.
+        config: voxel size, scan volume and thresholds.
+
+    Returns:
+        The chair's mesh and points in the world frame (z up, floor removed, the legs'
+        lowest points on the floor plane), the number of views and the time per step.
+
+    Raises:
+        PerceptionError: a frame is bad (all zeros, NaN, too few points, bad pose), or
+            no floor, or no chair-sized object in the chair area.
+    """
+    if not frames:
+        raise PerceptionError("no frames to reconstruct from")
+    seconds: dict[str, float] = {}
+    started = time.perf_counter()
+    for index, frame in enumerate(frames):
+        validate_frame(frame, index)
+    depths = [crop_depth(frame, config) for frame in frames]
+    if sum(int(np.count_nonzero(d)) for d in depths) < config.min_chair_points:
+        raise PerceptionError("the frames show nothing inside the scan volume")
+    seconds["crop"] = time.perf_counter() - started
+
+    tick = time.perf_counter()
+    grid = fuse_tsdf(frames, depths, config)
+    cloud = grid.extract_point_cloud(weight_threshold=1.5)
+    points = cloud.point.positions.numpy().astype(np.float64)
+    seconds["tsdf"] = time.perf_counter() - tick
+    if len(points) < config.min_chair_points:
+        raise PerceptionError(f"the fused scan has only {len(points)} points")
+
+    tick = time.perf_counter()
+    plane = fit_floor(points, config)
+    height = points @ plane[:3] + plane[3]
+    above = points[height > config.floor_band_m]
+    seconds["floor"] = time.perf_counter() - tick
+
+    tick = time.perf_counter()
+    cell_m = 1.5 * config.voxel_size_m
+    if len(above) < config.min_chair_points:
+        raise PerceptionError("nothing chair-sized stands on the floor in the chair area")
+    keep, chair_cells, origin = largest_cluster(above, config, cell_m)
+    chair_points = above[keep]
+    seconds["cluster"] = time.perf_counter() - tick
+    if len(chair_points) < config.min_chair_points:
+        raise PerceptionError(
+            f"the chair has only {len(chair_points)} points (need {config.min_chair_points})"
+        )
+
+    chair_mesh = trimesh.Trimesh()
+    if config.with_mesh:
+        tick = time.perf_counter()
+        chair_mesh = _chair_mesh(grid, chair_cells, origin, cell_m, plane, config)
+        seconds["mesh"] = time.perf_counter() - tick
+    seconds["total"] = time.perf_counter() - started
+    return ChairScan(chair_mesh, chair_points, len(frames), seconds)
+
+
+def _chair_mesh(
+    grid: o3d.t.geometry.VoxelBlockGrid,
+    chair_cells: np.ndarray,
+    origin: np.ndarray,
+    cell_m: float,
+    plane: np.ndarray,
+    config: ReconstructionConfig,
+) -> trimesh.Trimesh:
+    mesh = grid.extract_triangle_mesh(weight_threshold=1.5)
+    vertices = mesh.vertex.positions.numpy().astype(np.float64)
+    faces = mesh.triangle.indices.numpy().astype(np.int64)
+    # A vertex belongs to the chair when its cell, or a neighbour, is a chair cell.
+    grown = ndimage.binary_dilation(chair_cells, structure=np.ones((3, 3, 3), dtype=bool))
+    cells = np.floor((vertices - origin) / cell_m).astype(np.int64)
+    inside = np.all((cells >= 0) & (cells < np.array(grown.shape)), axis=1)
+    on_chair = np.zeros(len(vertices), dtype=bool)
+    on_chair[inside] = grown[tuple(cells[inside].T)]
+    height = vertices @ plane[:3] + plane[3]
+    on_chair &= height > config.floor_band_m
+    faces = faces[np.all(on_chair[faces], axis=1)]
+    if len(faces) == 0:
+        raise PerceptionError("the chair's surface could not be extracted from the TSDF")
+    chair = trimesh.Trimesh(vertices, faces, process=False)
+    chair.remove_unreferenced_vertices()
+    # Floor removal cut the legs a band above the floor: lower their ends onto it.
+    vertices = np.array(chair.vertices)
+    height = vertices @ plane[:3] + plane[3]
+    cut = height < height.min() + config.voxel_size_m
+    vertices[cut] -= np.outer(height[cut], plane[:3])
+    chair.vertices = vertices
+    # Small disconnected crumbs of the TSDF surface are noise, not chair.
+    parts = chair.split(only_watertight=False)
+    if len(parts) > 1:
+        biggest = max(len(part.faces) for part in parts)
+        chair = trimesh.util.concatenate([p for p in parts if len(p.faces) >= 0.02 * biggest])
+    return chair

@@ -1,0 +1,286 @@
+"""Rendered RGB-D frames for tests and benchmarks (not a simulated world).
+
+A minimal, physics-free pybullet scene (DIRECT client, TinyRenderer) holding meshes,
+a floor and ArUco tags, rendered from any camera pose with a Carmine-like depth noise
+model; and :class:`SyntheticArm`, a :class:`hardware.interfaces.ScanningArm` whose camera
+pose comes from the Panda's forward kinematics. The mission uses ``hardware.sim``;
+this module exists so the perception algorithms can be tested on their own.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pybullet
+import pybullet_data
+import trimesh
+
+from hardware.interfaces import CameraIntrinsics, RGBDFrame
+from skills.arena import TagSpec
+
+# The OpenGL camera looks along -z with y up; OpenCV looks along +z with y down.
+_GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
+
+T_HAND_CAMERA = np.array(
+    [
+        [0.0, -1.0, 0.0, 0.05],
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.04],
+        [0.0, 0.0, 0.0, 1.0],
+    ]
+)
+"""Assumed hand-eye extrinsic: the optical axis along the hand's approach axis (+z),
+the camera 5 cm off the hand's centre toward +x and 4 cm forward."""
+
+
+def carmine_intrinsics() -> CameraIntrinsics:
+    """A PrimeSense Carmine 1.09-like 640x480 camera (57.5 x 45 degree field of view)."""
+    width, height = 640, 480
+    focal = (width / 2) / math.tan(math.radians(57.5) / 2)
+    return CameraIntrinsics(width, height, focal, focal, (width - 1) / 2, (height - 1) / 2)
+
+
+def carmine_depth_noise(
+    depth_m: np.ndarray, rng: np.random.Generator, dropout: float = 0.005
+) -> np.ndarray:
+    """Axial noise σ(z) = 1.425e-3 z² (structured-light sensors), 1 mm quantisation and
+    random missing pixels; pixels outside 0.35..3.5 m are missing (0)."""
+    noisy = depth_m + rng.normal(0.0, 1.0, depth_m.shape) * 1.425e-3 * depth_m**2
+    noisy = np.round(noisy * 1000.0) / 1000.0
+    noisy[(depth_m < 0.35) | (depth_m > 3.5) | (rng.random(depth_m.shape) < dropout)] = 0.0
+    return noisy.astype(np.float32)
+
+
+def opengl_projection(intrinsics: CameraIntrinsics, near_m: float, far_m: float) -> list[float]:
+    """Column-major OpenGL projection of a pinhole camera (principal point at the centre)."""
+    w, h = intrinsics.width, intrinsics.height
+    proj = np.zeros((4, 4))
+    proj[0, 0] = 2.0 * intrinsics.fx / w
+    proj[1, 1] = 2.0 * intrinsics.fy / h
+    proj[2, 2] = -(far_m + near_m) / (far_m - near_m)
+    proj[2, 3] = -2.0 * far_m * near_m / (far_m - near_m)
+    proj[3, 2] = -1.0
+    return proj.T.reshape(-1).tolist()
+
+
+class SyntheticScene:
+    """Meshes, a floor and tags in a pybullet DIRECT client, rendered by TinyRenderer."""
+
+    def __init__(self, *, floor: bool = True, noise: bool = True, seed: int = 0) -> None:
+        self.client = pybullet.connect(pybullet.DIRECT)
+        self._scratch = tempfile.TemporaryDirectory(prefix="bearchair-synthetic-")
+        self._rng = np.random.default_rng(seed)
+        self.noise = noise
+        self._count = 0
+        if floor:
+            shape = pybullet.createVisualShape(
+                pybullet.GEOM_BOX,
+                halfExtents=[3.0, 3.0, 0.01],
+                rgbaColor=[0.55, 0.5, 0.45, 1.0],
+                physicsClientId=self.client,
+            )
+            pybullet.createMultiBody(
+                0, -1, shape, basePosition=[0, 0, -0.01], physicsClientId=self.client
+            )
+
+    def close(self) -> None:
+        """Disconnects the client and removes the scratch files."""
+        if self.client >= 0:
+            pybullet.disconnect(self.client)
+            self.client = -1
+        self._scratch.cleanup()
+
+    def add_mesh(
+        self,
+        mesh: trimesh.Trimesh,
+        T_world_mesh: np.ndarray | None = None,
+        rgba: Sequence[float] = (0.7, 0.45, 0.25, 1.0),
+    ) -> int:
+        """Adds a mesh (exported to OBJ) and returns its body id."""
+        self._count += 1
+        path = Path(self._scratch.name) / f"mesh{self._count}.obj"
+        mesh.export(path)
+        shape = pybullet.createVisualShape(
+            pybullet.GEOM_MESH,
+            fileName=str(path),
+            rgbaColor=list(rgba),
+            physicsClientId=self.client,
+        )
+        body = pybullet.createMultiBody(0, -1, shape, physicsClientId=self.client)
+        self.set_pose(body, np.eye(4) if T_world_mesh is None else T_world_mesh)
+        return body
+
+    def add_tag(self, tag: TagSpec, T_world_tag: np.ndarray, border_cells: float = 1.0) -> int:
+        """Adds a flat ArUco tag (black square of ``tag.side_m``) with a white margin.
+
+        The tag frame is OpenCV's marker frame: x to the marker image's right, y up in the
+        image, z out of the printed face.
+        """
+        dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, tag.dictionary))
+        cells = dictionary.markerSize + 2
+        cell_px = 40
+        marker = cv2.aruco.generateImageMarker(dictionary, tag.marker_id, cells * cell_px)
+        pad = int(border_cells * cell_px)
+        image = cv2.copyMakeBorder(marker, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=255)
+        self._count += 1
+        png = Path(self._scratch.name) / f"tag{self._count}.png"
+        cv2.imwrite(str(png), cv2.cvtColor(image, cv2.COLOR_GRAY2RGB))
+        half = 0.5 * tag.side_m * image.shape[0] / marker.shape[0]
+        obj = Path(self._scratch.name) / f"tag{self._count}.obj"
+        obj.write_text(
+            f"v {-half} {-half} 0\nv {half} {-half} 0\nv {half} {half} 0\nv {-half} {half} 0\n"
+            "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\n"
+            "f 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n"
+        )
+        shape = pybullet.createVisualShape(
+            pybullet.GEOM_MESH, fileName=str(obj), physicsClientId=self.client
+        )
+        body = pybullet.createMultiBody(0, -1, shape, physicsClientId=self.client)
+        texture = pybullet.loadTexture(str(png), physicsClientId=self.client)
+        pybullet.changeVisualShape(
+            body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1], physicsClientId=self.client
+        )
+        self.set_pose(body, T_world_tag)
+        return body
+
+    def set_pose(self, body: int, T_world_body: np.ndarray) -> None:
+        """Places a body (its mesh frame) at a world pose."""
+        quat = _quaternion_xyzw(T_world_body[:3, :3])
+        pybullet.resetBasePositionAndOrientation(
+            body, T_world_body[:3, 3].tolist(), quat, physicsClientId=self.client
+        )
+
+    def remove(self, body: int) -> None:
+        """Removes a body from the scene."""
+        pybullet.removeBody(body, physicsClientId=self.client)
+
+    def render(
+        self,
+        T_world_camera: np.ndarray,
+        intrinsics: CameraIntrinsics | None = None,
+        stamp_s: float = 0.0,
+        near_m: float = 0.05,
+        far_m: float = 5.0,
+    ) -> RGBDFrame:
+        """Renders colour and depth (metres along the optical axis) from an OpenCV camera pose."""
+        intrinsics = intrinsics or carmine_intrinsics()
+        T_world_gl = T_world_camera @ _GL_FROM_CV
+        view = np.linalg.inv(T_world_gl).T.reshape(-1).tolist()
+        _, _, rgba, depth_buffer, _ = pybullet.getCameraImage(
+            intrinsics.width,
+            intrinsics.height,
+            viewMatrix=view,
+            projectionMatrix=opengl_projection(intrinsics, near_m, far_m),
+            renderer=pybullet.ER_TINY_RENDERER,
+            physicsClientId=self.client,
+        )
+        rgba = np.asarray(rgba, dtype=np.uint8).reshape(intrinsics.height, intrinsics.width, 4)
+        buffer = np.asarray(depth_buffer, dtype=np.float64).reshape(
+            intrinsics.height, intrinsics.width
+        )
+        depth = far_m * near_m / (far_m - (far_m - near_m) * buffer)
+        depth[buffer >= 1.0] = 0.0
+        if self.noise:
+            depth = carmine_depth_noise(depth, self._rng)
+        return RGBDFrame(
+            np.ascontiguousarray(rgba[:, :, :3]),
+            depth.astype(np.float32),
+            intrinsics,
+            np.asarray(T_world_camera, dtype=np.float64).copy(),
+            stamp_s,
+        )
+
+
+class PandaKinematics:
+    """Forward kinematics and collision queries of the Franka Panda (pybullet_data's URDF)."""
+
+    HAND_LINK = 8
+
+    def __init__(self) -> None:
+        self.client = pybullet.connect(pybullet.DIRECT)
+        pybullet.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=self.client)
+        self.robot = pybullet.loadURDF(
+            "franka_panda/panda.urdf",
+            useFixedBase=True,
+            flags=pybullet.URDF_USE_SELF_COLLISION,
+            physicsClientId=self.client,
+        )
+
+    def close(self) -> None:
+        """Disconnects the client."""
+        if self.client >= 0:
+            pybullet.disconnect(self.client)
+            self.client = -1
+
+    def set_joints(self, joints_rad: Sequence[float]) -> None:
+        """Sets the 7 arm joints (fingers stay open)."""
+        for index, angle in enumerate(joints_rad):
+            pybullet.resetJointState(self.robot, index, float(angle), physicsClientId=self.client)
+        for finger in (9, 10):
+            pybullet.resetJointState(self.robot, finger, 0.04, physicsClientId=self.client)
+
+    def link_pose(self, link: int) -> np.ndarray:
+        """T_world_link of a link at the current joints."""
+        state = pybullet.getLinkState(
+            self.robot, link, computeForwardKinematics=True, physicsClientId=self.client
+        )
+        transform = np.eye(4)
+        transform[:3, :3] = np.asarray(
+            pybullet.getMatrixFromQuaternion(state[5], physicsClientId=self.client)
+        ).reshape(3, 3)
+        transform[:3, 3] = state[4]
+        return transform
+
+    def camera_pose(
+        self, joints_rad: Sequence[float], T_hand_camera: np.ndarray = T_HAND_CAMERA
+    ) -> np.ndarray:
+        """T_world_camera at a joint configuration."""
+        self.set_joints(joints_rad)
+        return self.link_pose(self.HAND_LINK) @ T_hand_camera
+
+
+class SyntheticArm:
+    """A :class:`hardware.interfaces.ScanningArm` that teleports and renders a scene.
+
+    Motions are instantaneous; a clock, if given, advances by ``seconds_per_move``.
+    """
+
+    def __init__(
+        self,
+        scene: SyntheticScene,
+        initial_joints_rad: Sequence[float] = (0.0, -0.5, 0.0, -2.3, 0.0, 1.9, 0.785),
+        T_hand_camera: np.ndarray = T_HAND_CAMERA,
+    ) -> None:
+        self.scene = scene
+        self.kinematics = PandaKinematics()
+        self.T_hand_camera = T_hand_camera
+        self._joints = np.asarray(initial_joints_rad, dtype=np.float64)
+        self.moves = 0
+        self.captures = 0
+        self.stamp_s = 0.0
+
+    def joint_positions(self) -> np.ndarray:
+        return self._joints.copy()
+
+    def move_to(self, joint_positions_rad: Sequence[float], timeout_s: float = 10.0) -> None:
+        self._joints = np.asarray(joint_positions_rad, dtype=np.float64).copy()
+        self.moves += 1
+
+    def capture(self) -> RGBDFrame:
+        self.captures += 1
+        T_world_camera = self.kinematics.camera_pose(self._joints, self.T_hand_camera)
+        return self.scene.render(T_world_camera, stamp_s=self.stamp_s)
+
+    def close(self) -> None:
+        self.kinematics.close()
+
+
+def _quaternion_xyzw(rotation: np.ndarray) -> list[float]:
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_matrix(rotation).as_quat().tolist()
