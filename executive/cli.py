@@ -46,6 +46,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", type=Path, help="run record directory (default: runs/<time>-seed<N>)")
     run.add_argument("--mute", action="store_true", help="print instructions instead of speaking")
     run.add_argument("--timeout", type=float, default=900.0, help="stop after this many seconds")
+    run.add_argument(
+        "--robots",
+        type=Path,
+        metavar="CELL_JSON",
+        help="run on the real NAO and Panda described by this file instead of the simulation",
+    )
     run.set_defaults(func=_run)
 
     tree = subparsers.add_parser("tree", help="render the mission tree")
@@ -77,7 +83,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from executive.mission import StageProgress, default_out_dir, format_summary, run_in_simulation
+    from executive.mission import (
+        StageProgress,
+        default_out_dir,
+        format_summary,
+        run_in_simulation,
+        run_on_robots,
+    )
 
     config = RunConfig(
         chair_path=args.chair,
@@ -92,7 +104,10 @@ def _run(args: argparse.Namespace) -> int:
         raise CliError("bearchair run: --timeout must be positive")
     out_dir = args.out or default_out_dir(config)
     config = RunConfig(**{**config.__dict__, "out_dir": out_dir})
-    summary = run_in_simulation(config, on_tick=StageProgress())
+    if args.robots is not None:
+        summary = run_on_robots(config, args.robots, on_tick=StageProgress())
+    else:
+        summary = run_in_simulation(config, on_tick=StageProgress())
     print(format_summary(summary))
     print(f"run record: {out_dir}")
     return 0 if summary["outcome"] == "success" else 1
@@ -141,6 +156,7 @@ def main(argv: list[str] | None = None) -> int:
     """The console script. Exit status: 0 success, 1 mission failure, 2 user error."""
     from executive.inspect_run import RunRecordError
     from executive.render import RenderError
+    from hardware.real import BackendUnavailable
     from skills.meshes import MeshLoadError
 
     try:
@@ -154,7 +170,13 @@ def main(argv: list[str] | None = None) -> int:
     except CliError as error:
         print(error, file=sys.stderr)
         return 2
-    except (MeshLoadError, RunRecordError, RenderError, FileNotFoundError) as error:
+    except (
+        MeshLoadError,
+        RunRecordError,
+        RenderError,
+        BackendUnavailable,
+        FileNotFoundError,
+    ) as error:
         print(f"bearchair: {error}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

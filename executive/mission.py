@@ -82,28 +82,69 @@ def run_in_simulation(
     )
     world = SimWorld(sim_config)
     try:
+        return _run_tree(
+            root, recorder, world.robot, config, run_info, skills, on_tick, world.render_png
+        )
+    finally:
+        world.close()
+
+
+def run_on_robots(
+    config: RunConfig,
+    cell_file: Path,
+    skills: MissionSkills | None = None,
+    on_tick: Callable[[MissionRunner], None] | None = None,
+) -> dict[str, Any]:
+    """Runs the mission on the real NAO and Panda described by ``cell_file``."""
+    from hardware.real.robots import connect_robots
+
+    robot = connect_robots(cell_file)
+    root = create_tree()
+    recorder = RunRecorder(config.out_dir, root)
+    run_info = {
+        "chair": "real",
+        "placement": "real",
+        "helper": "person",
+        "seed": config.seed,
+        "backend": "real",
+        "started_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    }
+    return _run_tree(root, recorder, robot, config, run_info, skills, on_tick, None)
+
+
+def _run_tree(
+    root: Any,
+    recorder: RunRecorder,
+    robot: Any,
+    config: RunConfig,
+    run_info: dict[str, Any],
+    skills: MissionSkills | None,
+    on_tick: Callable[[MissionRunner], None] | None,
+    render_png: Callable[[Path], None] | None,
+) -> dict[str, Any]:
+    """Ticks the tree on ``robot`` and writes the summary; the record survives any error."""
+    try:
         runner = MissionRunner(
             root,
             skills or DefaultSkills(),
-            world.robot,
+            robot,
             seed=config.seed,
             arena=config.arena,
             recorder=recorder,
             timeout_s=config.timeout_s,
             on_tick=on_tick,
         )
-        outcome = runner.run()
-        summary = summarise(outcome, run_info)
-        try:
-            world.render_png(config.out_dir / "final_scene.png")
-            summary["picture"] = "final_scene.png"
-        except Exception as error:
-            logger.warning("could not render the final scene: %s", error)
+        summary = summarise(runner.run(), run_info)
+        if render_png is not None:
+            try:
+                render_png(config.out_dir / "final_scene.png")
+                summary["picture"] = "final_scene.png"
+            except Exception as error:  # a missing picture must not lose the record
+                logger.warning("could not render the final scene: %s", error)
         recorder.write_summary(summary)
         return summary
     finally:
         recorder.close()
-        world.close()
 
 
 def format_summary(summary: dict[str, Any]) -> str:

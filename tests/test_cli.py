@@ -42,11 +42,17 @@ def test_tree_svg_is_written(tmp_path, capsys):
 
 def test_py_trees_render_can_build_the_tree_offline(tmp_path):
     # The design card: the tree renders through py-trees-render with no hardware.
-    render = shutil.which("py-trees-render", path=str(__import__("pathlib").Path(sys.executable).parent))
+    render = shutil.which(
+        "py-trees-render", path=str(__import__("pathlib").Path(sys.executable).parent)
+    )
     if render is None:
         pytest.skip("py-trees-render not installed")
     done = subprocess.run(
-        [render, "trees.mission.create_tree"], cwd=tmp_path, capture_output=True, text=True, timeout=120
+        [render, "trees.mission.create_tree"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert done.returncode == 0, done.stderr
     assert list(tmp_path.glob("*.dot"))
