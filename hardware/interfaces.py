@@ -7,6 +7,7 @@ metres, radians, seconds. Camera frames follow OpenCV: x right, y down, z forwar
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import NamedTuple, Protocol, runtime_checkable
@@ -183,7 +184,6 @@ class Robot:
 
     def close(self) -> None:
         """Stops every actuator; safe to call more than once."""
-        try:
+        # Stopping must never raise during shutdown, whatever state the robot is in.
+        with contextlib.suppress(Exception):
             self.humanoid.stop()
-        except Exception:
-            pass

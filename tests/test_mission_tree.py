@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import time
 
 import py_trees
 import pytest
@@ -176,3 +177,39 @@ def test_blackboard_keys_are_documented():
                 assert key in documented, (
                     f"{key} used by {node.name} is not documented in behaviours.keys"
                 )
+
+
+def test_ctrl_c_stops_the_tree_cancels_the_skill_and_stops_the_robot(tmp_path):
+    skills = ScriptedSkills(delays_s={"imagine_sitting": 30.0})
+    robot = fake_robot()
+    root = create_tree()
+    recorder = RunRecorder(tmp_path, root)
+
+    def press_ctrl_c(runner: MissionRunner) -> None:
+        if root.children[1].status == Status.RUNNING and runner.tree.count > 3:
+            raise KeyboardInterrupt
+
+    runner = MissionRunner(
+        root,
+        skills,
+        robot,
+        seed=0,
+        arena=DEFAULT_ARENA,
+        recorder=recorder,
+        tick_period_s=0.005,
+        on_tick=press_ctrl_c,
+    )
+    outcome = runner.run()
+    summary = summarise(outcome, {})
+    recorder.write_summary(summary)
+    recorder.close()
+    assert outcome.interrupted
+    assert summary["outcome"] == "failure"
+    assert summary["failed_stage"] == "ImagineSitting"
+    assert "Ctrl-C" in summary["reason"]
+    assert robot.humanoid.stopped >= 1
+    deadline = time.monotonic() + 2.0
+    while "imagine_sitting" not in skills.cancelled and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert "imagine_sitting" in skills.cancelled
+    assert RecordedRun(tmp_path).summary["interrupted"] is True
