@@ -131,7 +131,7 @@ def test_timeout_stops_the_tree_and_cancels_the_running_skill():
 
 def test_run_record_and_inspect_replay(tmp_path):
     checks = [BLOCKED, ACCESSIBLE]
-    summary, runner = run(
+    _, runner = run(
         ScriptedSkills({"check_accessibility": checks}, delays_s={"scan_chair": 0.05}),
         out_dir=tmp_path,
     )
