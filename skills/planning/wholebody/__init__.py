@@ -1,0 +1,35 @@
+"""Whole-body seating: the NAO's goal posture and trajectory by optimisation (casadi +
+IPOPT), their execution through the humanoid interface, the release and the stand-up.
+
+Public functions (the mission's skills):
+
+* :func:`plan_seating` (chair_mesh, sitting_pose, humanoid_pose) -> SeatingPlan
+* :func:`preplan_seating` (chair_mesh, sitting_pose, se2_goal) -> SeatingPlan
+* :func:`execute_seating` (humanoid, plan, *, cancel=None) -> None
+* :func:`release_and_stand` (humanoid, plan, *, cancel=None) -> None
+
+Infeasible plans raise :class:`InfeasibleSeating` (a ``ValueError``) naming the violated
+constraint.
+"""
+
+from skills.planning.wholebody.seating import (
+    REST_POSTURE,
+    STANDING_POSTURE,
+    InfeasibleSeating,
+    SeatingCancelled,
+    execute_seating,
+    plan_seating,
+    preplan_seating,
+    release_and_stand,
+)
+
+__all__ = [
+    "REST_POSTURE",
+    "STANDING_POSTURE",
+    "InfeasibleSeating",
+    "SeatingCancelled",
+    "execute_seating",
+    "plan_seating",
+    "preplan_seating",
+    "release_and_stand",
+]

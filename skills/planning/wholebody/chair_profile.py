@@ -1,0 +1,143 @@
+"""The chair as two blocks in the NAO's sagittal plane, for collision constraints.
+
+The chair mesh is moved into the NAO frame (x forward, y left, z up, origin on the floor
+between the feet) and sampled; only the part within a lateral band ``|y| <= band`` (the
+width swept by the NAO's body, arms and the bear) matters for a planar, symmetric motion.
+That cross-section is bounded by two axis-aligned blocks, each the region behind a
+vertical plane and below a horizontal one:
+
+* the seat block  ``{x >= seat_front_x, z <= seat_top_z}``: the seat top is the
+  largest horizontal surface under the sitting pose, its front plane the chair's
+  front-most point at or below the seat;
+* the back block  ``{x >= back_front_x, z <= back_top_z}``: everything above the seat
+  (backrest, or anything else standing up from it), from its front-most point up to
+  its top.
+
+Everything below the seat top and behind its front is treated as solid (no knees under
+the seat), which is conservative. The signed clearance of a point to a block is
+``max(front_x - x, z - top_z)``: positive outside, and never more than the true
+distance.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import trimesh
+
+from skills.geometry import transform_points
+
+BAND_HALF_WIDTH_M = 0.13
+"""Half-width of the lateral band the planar motion sweeps (arms at |y| ~ 0.11 m)."""
+
+HORIZONTAL_NORMAL_Z = 0.95
+"""A surface sample with |n_z| at least this belongs to a horizontal surface."""
+
+
+class ChairProfileError(ValueError):
+    """The chair has no usable seat under the sitting pose in the NAO's sagittal plane."""
+
+
+class ChairProfile(NamedTuple):
+    """The chair's cross-section in the NAO frame as two blocks (metres).
+
+    Attributes:
+        seat_front_x: the seat block's front plane.
+        seat_top_z: the seat's top plane (the largest horizontal surface under g).
+        back_front_x: the back block's front plane (large when there is no backrest).
+        back_top_z: the back block's top.
+    """
+
+    seat_front_x: float
+    seat_top_z: float
+    back_front_x: float
+    back_top_z: float
+
+    def as_vector(self) -> np.ndarray:
+        """The four numbers in the order the optimisation's parameters take them."""
+        return np.array([self.seat_front_x, self.seat_top_z, self.back_front_x, self.back_top_z])
+
+    def clearance(self, points_xz: np.ndarray) -> np.ndarray:
+        """Conservative signed clearance (metres) of (N, 2) points to both blocks."""
+        seat = np.maximum(self.seat_front_x - points_xz[:, 0], points_xz[:, 1] - self.seat_top_z)
+        back = np.maximum(self.back_front_x - points_xz[:, 0], points_xz[:, 1] - self.back_top_z)
+        return np.minimum(seat, back)
+
+
+def fit_chair_profile(
+    chair_mesh: trimesh.Trimesh,
+    T_nao_world: np.ndarray,
+    sitting_point_nao: np.ndarray,
+    *,
+    band_half_width_m: float = BAND_HALF_WIDTH_M,
+    samples: int = 30000,
+    seed: int = 0,
+) -> ChairProfile:
+    """Fits the two-block profile of a chair seen from the NAO.
+
+    Args:
+        chair_mesh: the chair in the world frame (z up, metres).
+        T_nao_world: maps world points into the NAO frame.
+        sitting_point_nao: (3,) the sitting pose's position in the NAO frame.
+        band_half_width_m: lateral half-width of the swept band.
+        samples: surface samples (deterministic for a given ``seed``).
+        seed: sampling seed.
+
+    Raises:
+        ChairProfileError: no chair surface lies under the sitting pose in the band.
+    """
+    points, face_index = trimesh.sample.sample_surface(chair_mesh, samples, seed=seed)
+    points = np.vstack([points, chair_mesh.vertices])
+    normals = np.vstack(
+        [chair_mesh.face_normals[face_index], np.zeros((len(chair_mesh.vertices), 3))]
+    )
+    points = transform_points(T_nao_world, points)
+    normals = normals @ T_nao_world[:3, :3].T
+    in_band = np.abs(points[:, 1]) <= band_half_width_m
+    points, normals = points[in_band], normals[in_band]
+    if len(points) == 0:
+        raise ChairProfileError("no part of the chair lies in front of the NAO")
+    g_x, g_z = float(sitting_point_nao[0]), float(sitting_point_nao[2])
+
+    # The seat top: the highest horizontal surface under g not far above it (a pelvis
+    # sits a few centimetres above the seat; higher horizontal surfaces are armrests or
+    # the backrest's top).
+    under = (np.abs(points[:, 0] - g_x) <= 0.06) & (points[:, 2] <= g_z + 0.05)
+    horizontal = under & (np.abs(normals[:, 2]) >= HORIZONTAL_NORMAL_Z)
+    candidates = points[horizontal] if np.any(horizontal) else points[under]
+    if len(candidates) == 0:
+        raise ChairProfileError(
+            f"no seat under the sitting pose ({g_x:.2f} m forward, {g_z:.2f} m high)"
+        )
+    seat_top_z = float(np.max(candidates[:, 2]))
+    below = points[:, 2] <= seat_top_z + 0.01
+    seat_front_x = float(np.min(points[below, 0]))
+    above = points[:, 2] > seat_top_z + 0.015
+    if np.any(above):
+        back_front_x = float(np.min(points[above, 0]))
+        back_top_z = float(np.max(points[above, 2]))
+    else:
+        back_front_x, back_top_z = seat_front_x + 10.0, seat_top_z
+    return ChairProfile(seat_front_x, seat_top_z, back_front_x, back_top_z)
+
+
+def largest_horizontal_surface_height(chair_mesh: trimesh.Trimesh, *, bin_m: float = 0.01) -> float:
+    """Height (metres) of the chair's largest horizontal upward-facing surface: its seat.
+
+    Sums the area of upward faces (normal z >= 0.95) in height bins and returns the
+    area-weighted height of the largest bin.
+    """
+    normals = chair_mesh.face_normals
+    up = normals[:, 2] >= HORIZONTAL_NORMAL_Z
+    heights = chair_mesh.triangles_center[up, 2]
+    areas = chair_mesh.area_faces[up]
+    if len(heights) == 0:
+        raise ChairProfileError("the chair has no horizontal surface")
+    bins = np.floor(heights / bin_m).astype(int)
+    totals: dict[int, float] = {}
+    for b, a in zip(bins, areas, strict=True):
+        totals[b] = totals.get(b, 0.0) + float(a)
+    best = max(totals, key=totals.__getitem__)
+    mask = bins == best
+    return float(np.average(heights[mask], weights=areas[mask]))

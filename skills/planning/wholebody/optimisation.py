@@ -1,0 +1,312 @@
+"""The goal posture and trajectory optimisations (the paper, eq. 8-16), over casadi SX.
+
+Both problems are built once per process and reused: everything that changes between
+solves (the sitting pose g, the chair's profile, start and goal postures, velocity
+limits, whether the bear is held) is a parameter or a bound, never a rebuild.
+
+Posture constraints (one vector per posture, see :data:`CONSTRAINT_GROUPS`):
+
+* ``bear placement``: the bear's base b(q) at g within ``PLACEMENT_TOLERANCE_M``;
+* ``bear upright``: the forearms (hence the held bear) within a tilt of vertical;
+* ``support polygon``: the centre of mass's x within the feet's support interval
+  ``[x_back + margin, x_front - margin]`` (the motion is symmetric, so y is 0);
+* ``chair collision``: every sampled body point and the bear's outline clear the
+  chair's two blocks (:mod:`.chair_profile`) by the point's radius plus a margin;
+* ``bear-body collision``: the NAO's legs, torso and head clear the held bear;
+* ``floor``: nothing below the floor.
+
+The block clearance ``max(front_x - x, z - top_z)`` is smoothed for IPOPT by a
+log-sum-exp of sharpness κ minus ln(n)/κ, a lower bound within ln(n)/κ (1.7 mm for
+n = 2) of the max, so the smoothed constraints are conservative; every result is
+re-checked with the exact max.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from typing import NamedTuple
+
+import casadi as ca
+import numpy as np
+
+from skills.planning.wholebody.nao_model import PlanarNao, planar_nao
+
+# The bear, held upright between the hands, facing the NAO (its back to the chair).
+BEAR_HEIGHT_M = 0.25
+BEAR_DEPTH_M = 0.12
+BEAR_MASS_KG = 0.2
+BEAR_GRIP_HEIGHT_M = 0.10
+"""The bear's base (its seat point: bottom centre) is this far below the grip point
+(midway between the fingertips), along the bear's up axis, which stays perpendicular to
+the forearms (a rigid grasp)."""
+BEAR_COM_HEIGHT_M = 0.10
+
+PLACEMENT_TOLERANCE_M = 0.015
+BEAR_TILT_GOAL_RAD = math.radians(8.0)
+BEAR_TILT_MOTION_RAD = math.radians(30.0)
+SUPPORT_MARGIN_M = 0.01
+BODY_MARGIN_M = 0.01
+BEAR_CHAIR_MARGIN_M = 0.003
+SMOOTH_MAX_SHARPNESS = 400.0
+
+GOAL_COM_WEIGHT = 10.0
+GOAL_TORSO_WEIGHT = 1.0
+
+N_KNOTS = 30
+
+# (link, offset in link frame (m), radius (m), label): sampled points of the NAO's body.
+LEG_TORSO_HEAD_POINTS = (
+    ("LTibia", (0.0, 0.0, 0.0), 0.035, "knee"),
+    ("LTibia", (0.0, 0.0, -0.05), 0.03, "shin"),
+    ("LThigh", (0.0, 0.0, -0.05), 0.035, "thigh"),
+    ("LThigh", (0.0, 0.0, 0.0), 0.04, "hip"),
+    ("torso", (0.045, 0.0, -0.05), 0.02, "belly"),
+    ("torso", (0.045, 0.0, 0.02), 0.02, "chest"),
+    ("torso", (0.045, 0.0, 0.09), 0.02, "upper chest"),
+    ("Head", (0.02, 0.0, 0.05), 0.065, "head"),
+)
+ARM_POINTS = (
+    ("LBicep", (0.0, 0.0, 0.0), 0.03, "shoulder"),
+    ("LBicep", (0.05, 0.0, 0.0), 0.025, "upper arm"),
+    ("LElbow", (0.0, 0.0, 0.0), 0.025, "elbow"),
+    ("l_wrist", (0.0, 0.0, 0.0), 0.025, "wrist"),
+    ("l_gripper", (0.0, 0.0, 0.0), 0.015, "hand"),
+)
+# Bear outline points (x along the bear's forward, z up from its base), metres.
+BEAR_OUTLINE = (
+    *(
+        (sx * BEAR_DEPTH_M / 2.0, fz * BEAR_HEIGHT_M, f"bear {side} {level}")
+        for sx, side in ((-1.0, "front"), (1.0, "back"))
+        for fz, level in ((0.0, "bottom"), (0.5, "middle"), (1.0, "top"))
+    ),
+    (0.0, 0.0, "bear bottom centre"),
+    (0.0, BEAR_HEIGHT_M, "bear top centre"),
+)
+
+
+class ConstraintRow(NamedTuple):
+    """One scalar posture constraint: ``lower <= value <= upper`` (before bounds)."""
+
+    group: str
+    label: str
+
+
+class PostureGeometry(NamedTuple):
+    """Named numeric quantities of one posture (NAO frame, metres)."""
+
+    com_x: float
+    bear_base: np.ndarray
+    bear_up: np.ndarray
+    torso_pitch_rad: float
+    body_points: dict[str, np.ndarray]
+    bear_points: dict[str, np.ndarray]
+
+
+def _smooth_max(a: ca.SX, b: ca.SX, sharpness: float = SMOOTH_MAX_SHARPNESS) -> ca.SX:
+    """A smooth lower bound of max(a, b) (see :func:`_smooth_max_n`)."""
+    return _smooth_max_n([a, b], sharpness)
+
+
+def _smooth_max_n(values: list[ca.SX], sharpness: float = SMOOTH_MAX_SHARPNESS) -> ca.SX:
+    """A smooth lower bound of max(values): log-sum-exp minus ln(n)/κ.
+
+    max - ln(n)/κ <= result <= max, so a constraint on it is conservative. The exact max
+    shifts the exponents into range; its kinks cancel out of the value.
+    """
+    m = values[0]
+    for v in values[1:]:
+        m = ca.fmax(m, v)
+    total = sum(ca.exp(sharpness * (v - m)) for v in values)
+    return m + (ca.log(total) - math.log(len(values))) / sharpness
+
+
+class SeatingProblems:
+    """The two NLPs and the posture model, built once.
+
+    Parameters of the goal NLP: ``[g_x, g_z, chair(4), diagnose]``; with ``diagnose``
+    = 1 the cost becomes the bear placement error (used to explain infeasibility).
+    Parameters of the trajectory NLP: ``[q_goal(5), chair(4), bear_held]``.
+    """
+
+    def __init__(self, nao: PlanarNao | None = None, n_knots: int = N_KNOTS) -> None:
+        self.nao = nao or planar_nao()
+        self.n_knots = n_knots
+        q = ca.SX.sym("q", 5)
+        chair = ca.SX.sym("chair", 4)
+        bear_held = ca.SX.sym("bear_held")
+        values, self.rows, self.row_lower, self.row_upper, geometry = self._posture(
+            q, chair, bear_held
+        )
+        self.posture_constraints = ca.Function("posture_g", [q, chair, bear_held], [values])
+        self.posture_geometry = ca.Function("posture_geometry", [q, bear_held], geometry)
+        self.support_centre_x = 0.5 * sum(self.nao.support_x)
+        self._build_goal(q, chair)
+        self._build_trajectory()
+        self.lock = threading.Lock()
+
+    # ---- the posture model -------------------------------------------------------
+    def _posture(self, q: ca.SX, chair: ca.SX, bear_held: ca.SX):
+        nao = self.nao
+        frames = nao.frames(q)
+        nao_com, nao_mass = nao.centre_of_mass(frames)
+        grip = nao.point(frames, "l_gripper")
+        rot = frames["l_wrist"][:3, :3]
+        forward = ca.vertcat(rot[0, 0], rot[2, 0])  # the forearm's direction in (x, z)
+        up = ca.vertcat(-forward[1], forward[0])
+        bear_base = grip - BEAR_GRIP_HEIGHT_M * up
+        bear_com = bear_base + BEAR_COM_HEIGHT_M * up
+        bear_mass = BEAR_MASS_KG * bear_held
+        com = (nao_mass * nao_com + bear_mass * bear_com) / (nao_mass + bear_mass)
+        torso_rot = frames["torso"][:3, :3]
+        torso_pitch = ca.atan2(-torso_rot[2, 0], torso_rot[0, 0])
+
+        seat_front, seat_top, back_front, back_top = (chair[i] for i in range(4))
+
+        def chair_clearance(p: ca.SX) -> ca.SX:
+            seat = _smooth_max(seat_front - p[0], p[1] - seat_top)
+            back = _smooth_max(back_front - p[0], p[1] - back_top)
+            return ca.fmin(seat, back)
+
+        rows: list[ConstraintRow] = []
+        exprs: list[ca.SX] = []
+        lower: list[float] = []
+        upper: list[float] = []
+
+        def add(group: str, label: str, expr: ca.SX, lo: float, hi: float = math.inf) -> None:
+            rows.append(ConstraintRow(group, label))
+            exprs.append(expr)
+            lower.append(lo)
+            upper.append(hi)
+
+        # Placement and uprightness get their bounds at solve time (goal vs motion).
+        add("bear placement", "forward", bear_base[0], -math.inf, math.inf)
+        add("bear placement", "height", bear_base[1], -math.inf, math.inf)
+        add("bear upright", "forearm tilt", forward[1] * bear_held, -math.inf, math.inf)
+        add(
+            "support polygon",
+            "centre of mass",
+            com[0],
+            nao.support_x[0] + SUPPORT_MARGIN_M,
+            nao.support_x[1] - SUPPORT_MARGIN_M,
+        )
+        body_points: dict[str, ca.SX] = {}
+        for link, offset, radius, label in LEG_TORSO_HEAD_POINTS + ARM_POINTS:
+            point = nao.point(frames, link, offset)
+            body_points[label] = point
+            add("chair collision", f"NAO {label}", chair_clearance(point) - radius, BODY_MARGIN_M)
+            add("floor", f"NAO {label}", point[1] - radius, 0.0)
+        # A released bear (bear_held = 0) no longer constrains anything: its rows are
+        # lifted by a metre.
+        lift = 1.0 - bear_held
+        bear_points: dict[str, ca.SX] = {}
+        for bx, bz, label in BEAR_OUTLINE:
+            point = bear_base + bx * forward + bz * up
+            bear_points[label] = point
+            add("chair collision", label, chair_clearance(point) + lift, BEAR_CHAIR_MARGIN_M)
+            add("floor", label, point[1] + lift, 0.0)
+        for _link, _offset, radius, label in LEG_TORSO_HEAD_POINTS:
+            rel = body_points[label] - bear_base
+            lx = ca.dot(rel, forward)
+            lz = ca.dot(rel, up)
+            outside = _smooth_max_n(
+                [-BEAR_DEPTH_M / 2 - lx, lx - BEAR_DEPTH_M / 2, -lz, lz - BEAR_HEIGHT_M]
+            )
+            add("bear-body collision", f"NAO {label}", outside - radius + lift, BODY_MARGIN_M)
+        geometry = [
+            com[0],
+            bear_base,
+            up,
+            torso_pitch,
+            ca.horzcat(*body_points.values()),
+            ca.horzcat(*bear_points.values()),
+        ]
+        self.body_labels = list(body_points)
+        self.bear_labels = list(bear_points)
+        return ca.vertcat(*exprs), rows, np.array(lower), np.array(upper), geometry
+
+    def geometry(self, q: np.ndarray, bear_held: bool = True) -> PostureGeometry:
+        """Numeric quantities of a posture (for checks and reports)."""
+        com_x, base, up, torso, body, bear = self.posture_geometry(q, float(bear_held))
+        body = np.asarray(body)
+        bear = np.asarray(bear)
+        return PostureGeometry(
+            com_x=float(com_x),
+            bear_base=np.asarray(base).ravel(),
+            bear_up=np.asarray(up).ravel(),
+            torso_pitch_rad=float(torso),
+            body_points={label: body[:, i] for i, label in enumerate(self.body_labels)},
+            bear_points={label: bear[:, i] for i, label in enumerate(self.bear_labels)},
+        )
+
+    def posture_bounds(
+        self, *, g_xz: np.ndarray | None, tilt_rad: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of the posture vector: placement at g (or free), tilt."""
+        lower, upper = self.row_lower.copy(), self.row_upper.copy()
+        if g_xz is not None:
+            lower[0:2] = np.asarray(g_xz) - PLACEMENT_TOLERANCE_M
+            upper[0:2] = np.asarray(g_xz) + PLACEMENT_TOLERANCE_M
+        lower[2], upper[2] = -math.sin(tilt_rad), math.sin(tilt_rad)
+        return lower, upper
+
+    # ---- the goal posture (eq. 12-16) -------------------------------------------
+    def _build_goal(self, q: ca.SX, chair: ca.SX) -> None:
+        g_xz = ca.SX.sym("g", 2)
+        diagnose = ca.SX.sym("diagnose")
+        values = self.posture_constraints(q, chair, 1.0)
+        com_x, base, _, torso_pitch, _, _ = self.posture_geometry(q, 1.0)
+        d_com = ca.sqrt((com_x - self.support_centre_x) ** 2 + 1e-8)
+        cost = GOAL_COM_WEIGHT * d_com + GOAL_TORSO_WEIGHT * torso_pitch**2
+        placement_error = ca.sumsqr(base - g_xz)
+        objective = (1 - diagnose) * cost + diagnose * 100.0 * placement_error
+        nlp = {"x": q, "p": ca.vertcat(g_xz, chair, diagnose), "f": objective, "g": values}
+        self.goal_solver = ca.nlpsol("seating_goal", "ipopt", nlp, _ipopt_options(200))
+
+    # ---- the trajectory (eq. 8-11) ----------------------------------------------
+    def _build_trajectory(self) -> None:
+        n = self.n_knots
+        Q = ca.SX.sym("Q", 5, n)
+        q_goal = ca.SX.sym("q_goal", 5)
+        chair = ca.SX.sym("chair", 4)
+        bear_held = ca.SX.sym("bear_held")
+        weights = ca.SX.sym("weights", 5)
+        cost = 0
+        for k in range(n):
+            diff = Q[:, k] - q_goal
+            cost += 0.5 * ca.sum1(weights * diff**2)
+        velocity = [Q[:, k + 1] - Q[:, k] for k in range(n - 1)]
+        interior = self.posture_constraints.map(n - 2)(Q[:, 1:-1], chair, bear_held)
+        g = ca.vertcat(*velocity, ca.vec(interior))
+        nlp = {
+            "x": ca.vec(Q),
+            "p": ca.vertcat(q_goal, chair, bear_held, weights),
+            "f": cost,
+            "g": g,
+        }
+        self.trajectory_solver = ca.nlpsol("seating_trajectory", "ipopt", nlp, _ipopt_options(300))
+
+
+def _ipopt_options(max_iter: int) -> dict:
+    return {
+        "print_time": False,
+        "ipopt.print_level": 0,
+        "ipopt.sb": "yes",
+        "ipopt.max_iter": max_iter,
+        "ipopt.tol": 1e-6,
+        "ipopt.constr_viol_tol": 1e-5,
+        "ipopt.mu_strategy": "adaptive",
+    }
+
+
+_problems: SeatingProblems | None = None
+_problems_lock = threading.Lock()
+
+
+def seating_problems() -> SeatingProblems:
+    """The process-wide problems (built on first use, about a second)."""
+    global _problems
+    with _problems_lock:
+        if _problems is None:
+            _problems = SeatingProblems()
+        return _problems

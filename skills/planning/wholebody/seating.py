@@ -1,0 +1,464 @@
+"""Seating the bear: plan the NAO's whole-body motion, play it, release, stand up.
+
+The plan (the paper, "Motion Planning"):
+
+1. g is expressed in the NAO frame (the NAO faces opposite the sitting direction, so g
+   lies ahead of it at a forward distance d and a height h); the chair's cross-section
+   becomes two blocks (:mod:`.chair_profile`).
+2. q_goal minimises w1·d_COM + w2·torso_pitch² subject to the joint limits, the bear's
+   base at g, the bear upright, the centre of mass over the feet and no collision
+   (:mod:`.optimisation`).
+3. The trajectory from :data:`STANDING_POSTURE` to q_goal minimises
+   Σ ½‖q(k) − q_goal‖² under joint velocity limits, with the same stability and
+   collision constraints at every knot. Knots after the goal is reached are dropped.
+4. The retract motion, with the bear released: the legs hold still while the elbows
+   fold the hands back and up out of the bear, then the body stands up to
+   :data:`REST_POSTURE`; both are solved by the same trajectory problem.
+
+Every solution is re-checked numerically against the exact (non-smoothed) constraints
+before it is returned.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from typing import NamedTuple
+
+import numpy as np
+import trimesh
+
+from hardware.interfaces import Humanoid
+from skills.geometry import SE2Pose, SittingPose, transform_points, wrap_angle
+from skills.planning.wholebody.chair_profile import (
+    ChairProfile,
+    ChairProfileError,
+    fit_chair_profile,
+)
+from skills.planning.wholebody.nao_model import DRIVEN_JOINTS, to_joint_positions
+from skills.planning.wholebody.optimisation import (
+    ARM_POINTS,
+    BEAR_TILT_GOAL_RAD,
+    BEAR_TILT_MOTION_RAD,
+    LEG_TORSO_HEAD_POINTS,
+    PLACEMENT_TOLERANCE_M,
+    SeatingProblems,
+    seating_problems,
+)
+from skills.results import SeatingPlan
+
+STANDING_POSTURE = np.array([-0.2, 0.4, -0.2, 0.3, 0.3])
+"""q = (ankle, knee, hip, shoulder, elbow) while carrying the bear: knees slightly bent,
+torso upright, forearms horizontal with the bear in front of the chest."""
+REST_POSTURE = np.array([-0.2, 0.4, -0.2, 1.4, 0.4])
+"""q after the retract: standing, arms down along the body."""
+
+PLANNING_VELOCITY_RADPS = 0.3
+"""Joint speed limit of the quasi-static motion (well under the URDF's 6-8 rad/s)."""
+RETRACT_ELBOW_RAD = 1.45
+"""Elbow flexion that folds the hands back and up out of the released bear."""
+LATERAL_TOLERANCE_M = 0.05
+"""How far g may lie beside the NAO's sagittal plane (the planar motion cannot reach it)."""
+FACING_TOLERANCE_RAD = math.radians(20.0)
+"""How far the NAO's heading may differ from the opposite of the sitting direction."""
+TOE_POINT_XZ = np.array([0.10, 0.02])
+"""The front of the feet in the NAO frame (metres), checked against the chair."""
+CHECK_TOLERANCE = 1e-4
+DIAGNOSIS_TOLERANCE = 0.005
+
+_ACCEPTED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+
+_warm_goal: np.ndarray | None = None
+_GOAL_GUESSES = (
+    np.array([0.2, 0.0, -0.8, -0.4, 0.4]),
+    np.array([-0.3, 0.9, -1.0, 0.3, 0.5]),
+    np.array([-0.6, 1.4, -1.2, 0.0, 0.8]),
+)
+
+
+class InfeasibleSeating(ValueError):
+    """No seating motion satisfies the constraints; the message names the violated one.
+
+    Attributes:
+        constraint: the violated constraint group (for example ``"bear placement"``).
+    """
+
+    def __init__(self, constraint: str, detail: str) -> None:
+        super().__init__(f"{constraint}: {detail}" if detail else constraint)
+        self.constraint = constraint
+
+
+class SeatingCancelled(RuntimeError):
+    """The seating motion was cancelled before or while it played."""
+
+
+class SeatingScene(NamedTuple):
+    """The seating problem's numbers in the NAO frame (metres, radians).
+
+    Attributes:
+        g_xz: the bear's target base (forward distance d, height h).
+        lateral_m: g's offset beside the sagittal plane (ignored by the planar motion).
+        facing_error_rad: the NAO's heading minus the opposite of the sitting direction.
+        profile: the chair's two-block cross-section.
+    """
+
+    g_xz: np.ndarray
+    lateral_m: float
+    facing_error_rad: float
+    profile: ChairProfile
+
+
+def seating_scene(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, humanoid_pose: SE2Pose
+) -> SeatingScene:
+    """Expresses g and the chair in the NAO frame at ``humanoid_pose``.
+
+    Raises:
+        InfeasibleSeating: g is beside the sagittal plane, the NAO does not face the
+            chair, or the chair has no seat under g.
+    """
+    T_nao_world = np.linalg.inv(humanoid_pose.as_transform())
+    g_nao = transform_points(T_nao_world, np.asarray(sitting_pose.position, float)[None, :])[0]
+    facing_error = wrap_angle(humanoid_pose.theta - (sitting_pose.yaw + math.pi))
+    if abs(facing_error) > FACING_TOLERANCE_RAD:
+        raise InfeasibleSeating(
+            "sitting direction",
+            f"the NAO faces {math.degrees(facing_error):+.0f} deg off the opposite of the "
+            f"sitting direction (tolerance {math.degrees(FACING_TOLERANCE_RAD):.0f} deg)",
+        )
+    if abs(g_nao[1]) > LATERAL_TOLERANCE_M:
+        raise InfeasibleSeating(
+            "bear placement",
+            f"the sitting pose is {g_nao[1]:+.2f} m beside the NAO's sagittal plane "
+            f"(tolerance {LATERAL_TOLERANCE_M:.2f} m)",
+        )
+    try:
+        profile = fit_chair_profile(chair_mesh, T_nao_world, g_nao)
+    except ChairProfileError as error:
+        raise InfeasibleSeating("chair", str(error)) from error
+    return SeatingScene(g_nao[[0, 2]], float(g_nao[1]), facing_error, profile)
+
+
+def _worst_violation(
+    problems: SeatingProblems, values: np.ndarray, lower: np.ndarray, upper: np.ndarray
+) -> tuple[float, str, str]:
+    """(violation in metres or radians, group, label) of the most violated row."""
+    values = values.reshape(-1, len(problems.rows))
+    lower = lower.reshape(-1, len(problems.rows))
+    upper = upper.reshape(-1, len(problems.rows))
+    violation = np.maximum(lower - values, values - upper)
+    knot, row = np.unravel_index(int(np.argmax(violation)), violation.shape)
+    entry = problems.rows[row]
+    label = entry.label if violation.shape[0] == 1 else f"{entry.label} at knot {knot}"
+    return float(violation[knot, row]), entry.group, label
+
+
+def _posture_values(
+    problems: SeatingProblems, q: np.ndarray, profile: ChairProfile, bear_held: bool
+) -> np.ndarray:
+    return np.asarray(
+        problems.posture_constraints(q, profile.as_vector(), float(bear_held))
+    ).ravel()
+
+
+def exact_posture_violation(
+    problems: SeatingProblems,
+    q: np.ndarray,
+    profile: ChairProfile,
+    *,
+    g_xz: np.ndarray | None,
+    tilt_rad: float,
+    bear_held: bool = True,
+) -> tuple[float, str, str]:
+    """Worst violation of a posture's constraints with the exact block clearance.
+
+    The optimisation's smoothed max over-estimates the clearance by at most ln(2)/κ;
+    here the clearances come from :meth:`ChairProfile.clearance` instead.
+    """
+    lower, upper = problems.posture_bounds(g_xz=g_xz, tilt_rad=tilt_rad)
+    values = _posture_values(problems, q, profile, bear_held)
+    geometry = problems.geometry(q, bear_held)
+    for i, row in enumerate(problems.rows):
+        if row.group != "chair collision":
+            continue
+        if row.label.startswith("NAO "):
+            label = row.label[4:]
+            point = geometry.body_points[label]
+            radius = _radius_of(label)
+            values[i] = profile.clearance(point[None, :])[0] - radius
+        elif bear_held:
+            values[i] = profile.clearance(geometry.bear_points[row.label][None, :])[0]
+    return _worst_violation(problems, values, lower, upper)
+
+
+def _radius_of(label: str) -> float:
+    for _, _, radius, name in LEG_TORSO_HEAD_POINTS + ARM_POINTS:
+        if name == label:
+            return radius
+    raise KeyError(label)
+
+
+def solve_goal_posture(problems: SeatingProblems, scene: SeatingScene) -> tuple[np.ndarray, float]:
+    """q_goal (eq. 12-16) and its solve time in seconds.
+
+    Raises:
+        InfeasibleSeating: naming the violated constraint.
+    """
+    global _warm_goal
+    started = time.perf_counter()
+    chair = scene.profile.as_vector()
+    lower, upper = problems.posture_bounds(g_xz=scene.g_xz, tilt_rad=BEAR_TILT_GOAL_RAD)
+    guesses = ([_warm_goal] if _warm_goal is not None else []) + list(_GOAL_GUESSES)
+    best: tuple[float, str, str] | None = None
+    for guess in guesses:
+        with problems.lock:
+            result = problems.goal_solver(
+                x0=guess,
+                p=np.r_[scene.g_xz, chair, 0.0],
+                lbx=problems.nao.q_lower,
+                ubx=problems.nao.q_upper,
+                lbg=lower,
+                ubg=upper,
+            )
+        q = np.asarray(result["x"]).ravel()
+        violation = exact_posture_violation(
+            problems, q, scene.profile, g_xz=scene.g_xz, tilt_rad=BEAR_TILT_GOAL_RAD
+        )
+        if violation[0] <= CHECK_TOLERANCE:
+            _warm_goal = q
+            return q, time.perf_counter() - started
+        if best is None or violation[0] < best[0]:
+            best = violation
+    # Infeasible: is g out of reach? Minimise the placement error under the others.
+    free_lower, free_upper = problems.posture_bounds(g_xz=None, tilt_rad=BEAR_TILT_GOAL_RAD)
+    with problems.lock:
+        result = problems.goal_solver(
+            x0=guesses[0],
+            p=np.r_[scene.g_xz, chair, 1.0],
+            lbx=problems.nao.q_lower,
+            ubx=problems.nao.q_upper,
+            lbg=free_lower,
+            ubg=free_upper,
+        )
+    q = np.asarray(result["x"]).ravel()
+    others = exact_posture_violation(
+        problems, q, scene.profile, g_xz=None, tilt_rad=BEAR_TILT_GOAL_RAD
+    )
+    reached = problems.geometry(q).bear_base
+    # The diagnosis needs no precision: a placement error far beyond what the others'
+    # residual could explain names the placement.
+    if (
+        others[0] <= DIAGNOSIS_TOLERANCE
+        and np.max(np.abs(reached - scene.g_xz)) > PLACEMENT_TOLERANCE_M
+    ):
+        raise InfeasibleSeating(
+            "bear placement",
+            f"out of reach: {scene.g_xz[0]:.2f} m forward, {scene.g_xz[1]:.2f} m high "
+            f"(closest reachable {reached[0]:.2f} m forward, {reached[1]:.2f} m high)",
+        )
+    worst = others if others[0] > CHECK_TOLERANCE else best
+    assert worst is not None
+    raise InfeasibleSeating(worst[1], f"{worst[2]} violated by {worst[0]:.3f} in the goal posture")
+
+
+def solve_trajectory(
+    problems: SeatingProblems,
+    profile: ChairProfile,
+    q_start: np.ndarray,
+    q_goal: np.ndarray,
+    *,
+    bear_held: bool,
+    freeze_legs: bool = False,
+    velocity_radps: float = PLANNING_VELOCITY_RADPS,
+    phase: str = "trajectory",
+) -> tuple[np.ndarray, np.ndarray]:
+    """The knots from ``q_start`` to ``q_goal`` (eq. 8-11) and their times.
+
+    Returns:
+        (times_s (K,), postures (K, 5)), trailing knots at q_goal dropped.
+
+    Raises:
+        InfeasibleSeating: naming the violated constraint and knot.
+    """
+    n = problems.n_knots
+    # The knot spacing that lets the slowest joint arrive with a third of the knots
+    # to spare; the cost then spends them at the goal and they are dropped.
+    travel = float(np.max(np.abs(q_goal - q_start)))
+    dt = max(travel / velocity_radps / (n * 2 / 3), 0.05)
+    dq = velocity_radps * dt
+    lower_row, upper_row = problems.posture_bounds(
+        g_xz=None, tilt_rad=BEAR_TILT_MOTION_RAD if bear_held else math.pi
+    )
+    start_violation = exact_posture_violation(
+        problems, q_start, profile, g_xz=None, tilt_rad=BEAR_TILT_MOTION_RAD, bear_held=bear_held
+    )
+    if start_violation[0] > CHECK_TOLERANCE:
+        raise InfeasibleSeating(
+            start_violation[1],
+            f"{start_violation[2]} violated by {start_violation[0]:.3f} in the start posture "
+            f"of the {phase} (the NAO stands too close to the chair?)",
+        )
+    lbx = np.tile(problems.nao.q_lower, n)
+    ubx = np.tile(problems.nao.q_upper, n)
+    if freeze_legs:
+        for k in range(n):
+            lbx[5 * k : 5 * k + 3] = ubx[5 * k : 5 * k + 3] = q_start[:3]
+    lbx[:5] = ubx[:5] = q_start
+    lbx[-5:] = ubx[-5:] = q_goal
+    lbg = np.r_[np.full(5 * (n - 1), -dq), np.tile(lower_row, n - 2)]
+    ubg = np.r_[np.full(5 * (n - 1), dq), np.tile(upper_row, n - 2)]
+    x0 = np.linspace(q_start, q_goal, n).ravel()
+    with problems.lock:
+        result = problems.trajectory_solver(
+            x0=x0,
+            p=np.r_[q_goal, profile.as_vector(), float(bear_held), np.ones(5)],
+            lbx=lbx,
+            ubx=ubx,
+            lbg=lbg,
+            ubg=ubg,
+        )
+    knots = np.asarray(result["x"]).reshape(n, 5)
+    worst = (0.0, "", "")
+    for k in range(1, n - 1):
+        violation = exact_posture_violation(
+            problems,
+            knots[k],
+            profile,
+            g_xz=None,
+            tilt_rad=BEAR_TILT_MOTION_RAD if bear_held else math.pi,
+            bear_held=bear_held,
+        )
+        if violation[0] > worst[0]:
+            worst = (violation[0], violation[1], f"{violation[2]} at knot {k}")
+    steps = np.max(np.abs(np.diff(knots, axis=0)))
+    if steps > dq + CHECK_TOLERANCE:
+        worst = max(worst, (steps - dq, "joint velocity", "a knot step"))
+    if worst[0] > CHECK_TOLERANCE:
+        raise InfeasibleSeating(worst[1], f"{worst[2]} violated by {worst[0]:.3f} in the {phase}")
+    arrived = np.flatnonzero(np.max(np.abs(knots - q_goal), axis=1) <= 1e-3)
+    last = int(arrived[0]) if len(arrived) else n - 1
+    knots = knots[: last + 1]
+    knots[-1] = q_goal
+    return np.arange(len(knots)) * dt, knots
+
+
+def plan_seating(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, humanoid_pose: SE2Pose
+) -> SeatingPlan:
+    """The whole-body motion that seats the bear at g from the NAO's current pose.
+
+    Args:
+        chair_mesh: the chair in the world frame (z up, metres).
+        sitting_pose: the imagined sitting pose g (world frame).
+        humanoid_pose: the NAO's planar pose (the point on the floor between its feet).
+
+    Returns:
+        The plan: qibullet joint names (both sides), knot times, joint angles (the last
+        row is q_goal), the retract motion and the solve times.
+
+    Raises:
+        InfeasibleSeating: naming the violated constraint.
+    """
+    problems = seating_problems()
+    scene = seating_scene(chair_mesh, sitting_pose, humanoid_pose)
+    toe_clearance = scene.profile.clearance(TOE_POINT_XZ[None, :])[0]
+    if toe_clearance < 0.0:
+        raise InfeasibleSeating(
+            "chair collision", f"the NAO's feet are {-toe_clearance:.2f} m under the chair"
+        )
+    q_goal, goal_s = solve_goal_posture(problems, scene)
+    started = time.perf_counter()
+    times, knots = solve_trajectory(
+        problems, scene.profile, STANDING_POSTURE, q_goal, bear_held=True
+    )
+    trajectory_s = time.perf_counter() - started
+    started = time.perf_counter()
+    q_folded = q_goal.copy()
+    q_folded[4] = RETRACT_ELBOW_RAD
+    fold_times, fold = solve_trajectory(
+        problems,
+        scene.profile,
+        q_goal,
+        q_folded,
+        bear_held=False,
+        freeze_legs=True,
+        phase="retract (hands back)",
+    )
+    stand_times, stand = solve_trajectory(
+        problems,
+        scene.profile,
+        q_folded,
+        REST_POSTURE,
+        bear_held=False,
+        phase="retract (standing up)",
+    )
+    retract_s = time.perf_counter() - started
+    retract_knots = np.vstack([fold, stand[1:]])
+    retract_times = np.r_[fold_times, fold_times[-1] + stand_times[1:]]
+    return SeatingPlan(
+        joint_names=DRIVEN_JOINTS,
+        times_s=times,
+        positions_rad=to_joint_positions(knots),
+        retract_times_s=retract_times,
+        retract_positions_rad=to_joint_positions(retract_knots),
+        seconds={"goal": goal_s, "trajectory": trajectory_s, "retract": retract_s},
+    )
+
+
+def preplan_seating(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
+) -> SeatingPlan:
+    """The seating plan from a prospective SE(2) goal (the accessibility check's pre-plan).
+
+    Raises:
+        InfeasibleSeating: naming the violated constraint.
+    """
+    return plan_seating(chair_mesh, sitting_pose, se2_goal)
+
+
+def _play(
+    humanoid: Humanoid,
+    joint_names: tuple[str, ...],
+    times_s: np.ndarray,
+    positions_rad: np.ndarray,
+    cancel: threading.Event | None,
+    what: str,
+) -> None:
+    if cancel is not None and cancel.is_set():
+        raise SeatingCancelled(f"{what} cancelled before it started")
+    humanoid.play_joint_trajectory(joint_names, list(map(float, times_s)), positions_rad)
+    if cancel is not None and cancel.is_set():
+        raise SeatingCancelled(f"{what} cancelled while playing")
+
+
+def execute_seating(
+    humanoid: Humanoid, plan: SeatingPlan, *, cancel: threading.Event | None = None
+) -> None:
+    """Plays the seating motion; blocks until it ends.
+
+    Raises:
+        SeatingCancelled: ``cancel`` was set before or during the motion.
+    """
+    _play(humanoid, plan.joint_names, plan.times_s, plan.positions_rad, cancel, "seating motion")
+
+
+def release_and_stand(
+    humanoid: Humanoid, plan: SeatingPlan, *, cancel: threading.Event | None = None
+) -> None:
+    """Opens the hands (releasing the bear), folds them back and stands upright.
+
+    Raises:
+        SeatingCancelled: ``cancel`` was set before or during the motion.
+    """
+    if cancel is not None and cancel.is_set():
+        raise SeatingCancelled("release cancelled before it started")
+    humanoid.set_hands(True)
+    _play(
+        humanoid,
+        plan.joint_names,
+        plan.retract_times_s,
+        plan.retract_positions_rad,
+        cancel,
+        "retract motion",
+    )

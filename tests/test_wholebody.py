@@ -1,0 +1,269 @@
+"""Whole-body seating: the goal posture and trajectory meet their constraints, checked
+independently with the forward kinematics; infeasible requests fail cleanly."""
+
+from __future__ import annotations
+
+import math
+import threading
+
+import numpy as np
+import pytest
+
+from skills.geometry import SE2Pose, SittingPose
+from skills.meshes import box_chair_mesh
+from skills.planning.wholebody import (
+    InfeasibleSeating,
+    SeatingCancelled,
+    execute_seating,
+    plan_seating,
+    preplan_seating,
+    release_and_stand,
+)
+from skills.planning.wholebody.chair_profile import largest_horizontal_surface_height
+from skills.planning.wholebody.nao_model import DRIVEN_JOINTS, parse_urdf, planar_nao
+from skills.planning.wholebody.optimisation import (
+    BEAR_DEPTH_M,
+    BEAR_HEIGHT_M,
+    BEAR_TILT_GOAL_RAD,
+    PLACEMENT_TOLERANCE_M,
+    seating_problems,
+)
+from skills.planning.wholebody.seating import PLANNING_VELOCITY_RADPS, seating_scene
+
+SEAT_HEIGHT_M = 0.24
+# The box chair faces +x; g sits 2 cm above the seat, 2 cm in front of the seat's middle.
+SITTING_POSE = SittingPose(np.array([0.02, 0.0, SEAT_HEIGHT_M + 0.02]), 0.0)
+# The NAO faces the chair (-x), 0.3 m in front of g.
+NAO_POSE = SE2Pose(0.32, 0.0, math.pi)
+
+
+@pytest.fixture(scope="module")
+def chair():
+    return box_chair_mesh(seat_height_m=SEAT_HEIGHT_M)
+
+
+@pytest.fixture(scope="module")
+def plan(chair):
+    return plan_seating(chair, SITTING_POSE, NAO_POSE)
+
+
+def _planar(positions_rad: np.ndarray) -> np.ndarray:
+    """Back from qibullet joint angles to q = (ankle, knee, hip, shoulder, elbow)."""
+    column = {name: i for i, name in enumerate(DRIVEN_JOINTS)}
+    left = positions_rad[
+        :, [column[n] for n in ("LAnklePitch", "LKneePitch", "LHipPitch", "LShoulderPitch")]
+    ]
+    right = positions_rad[
+        :, [column[n] for n in ("RAnklePitch", "RKneePitch", "RHipPitch", "RShoulderPitch")]
+    ]
+    np.testing.assert_allclose(left, right)  # pitch axes are +y on both sides
+    elbow_left = -positions_rad[:, column["LElbowRoll"]]
+    elbow_right = positions_rad[:, column["RElbowRoll"]]
+    np.testing.assert_allclose(elbow_left, elbow_right)  # the roll limits mirror
+    return np.column_stack([left, elbow_left])
+
+
+def _frames(q: np.ndarray) -> dict[str, np.ndarray]:
+    return planar_nao().numeric_frames(q)
+
+
+def _com_x(q: np.ndarray, bear_base_and_up: tuple[np.ndarray, np.ndarray] | None) -> float:
+    """Centre of mass x from the URDF's link masses, computed here independently."""
+    _, links = parse_urdf()
+    frames = _frames(q)
+    total, mass = 0.0, 0.0
+    for name, link in links.items():
+        if link.mass_kg > 0 and name in frames:
+            point = frames[name][:3, :3] @ link.com + frames[name][:3, 3]
+            total += link.mass_kg * point[0]
+            mass += link.mass_kg
+    if bear_base_and_up is not None:
+        base, up = bear_base_and_up
+        total += 0.2 * (base + 0.10 * up)[0]
+        mass += 0.2
+    return total / mass
+
+
+def _bear(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(base, forward, up) of the held bear in the NAO's (x, z) plane."""
+    frames = _frames(q)
+    left = frames["l_gripper"][:3, 3][[0, 2]]
+    right = frames["r_gripper"][:3, 3][[0, 2]]
+    np.testing.assert_allclose(left, right, atol=1e-3)  # symmetric hands
+    forward = frames["l_wrist"][:3, 0][[0, 2]]
+    up = np.array([-forward[1], forward[0]])
+    return left - 0.10 * up, forward, up
+
+
+def _sample_points(q: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """Points along the NAO's leg, torso, head and arm chain in the (x, z) plane."""
+    frames = _frames(q)
+    chain = [
+        "l_ankle",
+        "LTibia",
+        "LThigh",
+        "torso",
+        "Head",
+        "LBicep",
+        "LElbow",
+        "l_wrist",
+        "l_gripper",
+    ]
+    points = [(name, frames[name][:3, 3][[0, 2]]) for name in chain]
+    for a, b in (("l_ankle", "LTibia"), ("LTibia", "LThigh"), ("LBicep", "LElbow")):
+        mid = 0.5 * (frames[a][:3, 3] + frames[b][:3, 3])
+        points.append((f"{a}-{b}", mid[[0, 2]]))
+    return points
+
+
+def _chair_clearance(point: np.ndarray, chair_points: np.ndarray) -> float:
+    """Distance from a point to the chair's cross-section points (NAO frame, x-z)."""
+    return float(np.min(np.linalg.norm(chair_points - point, axis=1)))
+
+
+def _chair_section(chair) -> np.ndarray:
+    """The box chair's surface near the NAO's sagittal plane, in the NAO's (x, z)."""
+    T_nao_world = np.linalg.inv(NAO_POSE.as_transform())
+    points = chair.sample(40000, seed=0)
+    points = points @ T_nao_world[:3, :3].T + T_nao_world[:3, 3]
+    band = np.abs(points[:, 1]) <= 0.13
+    return points[band][:, [0, 2]]
+
+
+def test_goal_posture_meets_every_constraint(chair, plan):
+    q_all = _planar(plan.positions_rad)
+    q_goal = q_all[-1]
+    nao = planar_nao()
+    # Joint limits: the URDF's limits of every driven joint on both sides.
+    joints, _ = parse_urdf()
+    for column, name in enumerate(DRIVEN_JOINTS):
+        joint = joints[name]
+        assert joint.lower - 1e-6 <= plan.positions_rad[-1, column] <= joint.upper + 1e-6, name
+    # Bear placement: its base at g in the NAO frame, within the tolerance.
+    scene = seating_scene(chair, SITTING_POSE, NAO_POSE)
+    np.testing.assert_allclose(scene.g_xz, [0.30, SEAT_HEIGHT_M + 0.02], atol=1e-9)
+    base, forward, up = _bear(q_goal)
+    assert np.max(np.abs(base - scene.g_xz)) <= PLACEMENT_TOLERANCE_M + 1e-6
+    # Upright bear, facing the sitting direction (the NAO's -x).
+    assert abs(math.asin(forward[1])) <= BEAR_TILT_GOAL_RAD + 1e-6
+    # Centre of mass inside the feet's support interval with the margin.
+    x_back, x_front = nao.support_x
+    com_x = _com_x(q_goal, (base, up))
+    assert x_back + 0.01 - 1e-6 <= com_x <= x_front - 0.01 + 1e-6
+    # No collision: every body sample point and the bear's outline clear the chair's
+    # actual surface (not the planner's blocks).
+    section = _chair_section(chair)
+    for name, point in _sample_points(q_goal):
+        assert _chair_clearance(point, section) >= 0.02, name
+    seat_top = SEAT_HEIGHT_M
+    bear_x = base[0] + np.array([-1, 1]) * BEAR_DEPTH_M / 2
+    assert base[1] >= seat_top - 1e-6  # the bear's bottom is on or above the seat
+    backrest_front_nao = NAO_POSE.x - (-0.14 + 0.03)  # backrest's front face, NAO frame
+    assert bear_x.max() <= backrest_front_nao
+    assert base[1] + BEAR_HEIGHT_M > seat_top
+    # The torso's bending is what the optimisation kept small: not folded over.
+    assert abs(sum(q_goal[:3])) < 1.2
+
+
+def test_trajectory_is_stable_and_within_velocity_limits(chair, plan):
+    q_all = _planar(plan.positions_rad)
+    times = plan.times_s
+    assert len(times) == len(q_all) >= 3
+    assert np.all(np.diff(times) > 0)
+    speeds = np.abs(np.diff(q_all, axis=0)) / np.diff(times)[:, None]
+    assert speeds.max() <= PLANNING_VELOCITY_RADPS + 1e-3
+    assert np.all(planar_nao().velocity_limit > PLANNING_VELOCITY_RADPS)
+    x_back, x_front = planar_nao().support_x
+    section = _chair_section(chair)
+    for q in q_all:
+        base, _, up = _bear(q)
+        com_x = _com_x(q, (base, up))
+        assert x_back <= com_x <= x_front
+        for name, point in _sample_points(q):
+            assert _chair_clearance(point, section) >= 0.015, name
+    # It starts at the carrying posture and ends at q_goal.
+    np.testing.assert_allclose(q_all[0], [-0.2, 0.4, -0.2, 0.3, 0.3])
+
+
+def test_retract_releases_upright_and_stable(chair, plan):
+    q_all = _planar(plan.retract_positions_rad)
+    np.testing.assert_allclose(q_all[0], _planar(plan.positions_rad)[-1])
+    assert np.all(np.diff(plan.retract_times_s) > 0)
+    x_back, x_front = planar_nao().support_x
+    for q in q_all:
+        assert x_back <= _com_x(q, None) <= x_front
+    # Hands first move back toward the NAO while the legs hold still.
+    frames_start = _frames(q_all[0])
+    frames_next = _frames(q_all[3])
+    assert frames_next["l_gripper"][0, 3] < frames_start["l_gripper"][0, 3]
+    np.testing.assert_allclose(q_all[3][:3], q_all[0][:3])
+    # Ends upright: torso pitch zero, arms down.
+    assert abs(sum(q_all[-1][:3])) < 1e-6
+    assert q_all[-1][3] > 1.0
+
+
+def test_bear_one_metre_away_is_out_of_reach(chair):
+    with pytest.raises(InfeasibleSeating, match="bear placement") as info:
+        preplan_seating(chair, SITTING_POSE, SE2Pose(1.02, 0.0, math.pi))
+    assert info.value.constraint == "bear placement"
+    assert "1.00 m forward" in str(info.value)
+
+
+def test_bear_one_metre_high_is_out_of_reach(chair):
+    high = SittingPose(SITTING_POSE.position + np.array([0.0, 0.0, 1.0]), 0.0)
+    with pytest.raises(InfeasibleSeating, match="bear placement") as info:
+        plan_seating(chair, high, NAO_POSE)
+    assert "1.26 m high" in str(info.value)
+
+
+def test_nao_facing_away_and_standing_inside_the_chair_fail_cleanly(chair):
+    with pytest.raises(InfeasibleSeating) as info:
+        plan_seating(chair, SITTING_POSE, SE2Pose(0.32, 0.0, 0.0))
+    assert info.value.constraint == "sitting direction"
+    with pytest.raises(InfeasibleSeating) as info:
+        plan_seating(chair, SITTING_POSE, SE2Pose(0.15, 0.0, math.pi))
+    assert info.value.constraint == "chair collision"
+
+
+def test_repeated_solves_reuse_the_built_problems(chair):
+    problems = seating_problems()
+    plan_seating(chair, SITTING_POSE, SE2Pose(0.30, 0.01, math.pi - 0.05))
+    assert seating_problems() is problems
+
+
+def test_seat_height_from_the_largest_horizontal_surface(chair):
+    assert largest_horizontal_surface_height(chair) == pytest.approx(SEAT_HEIGHT_M, abs=0.005)
+
+
+class _RecordingHumanoid:
+    def __init__(self, cancel: threading.Event | None = None) -> None:
+        self.calls: list[tuple] = []
+        self.cancel = cancel
+
+    def play_joint_trajectory(self, joint_names, times_s, positions_rad) -> None:
+        self.calls.append(("play", tuple(joint_names), len(times_s), positions_rad.shape))
+        if self.cancel is not None:
+            self.cancel.set()
+
+    def set_hands(self, open_hands: bool) -> None:
+        self.calls.append(("hands", open_hands))
+
+
+def test_execute_and_release_drive_the_humanoid(plan):
+    humanoid = _RecordingHumanoid()
+    execute_seating(humanoid, plan)
+    release_and_stand(humanoid, plan)
+    assert [c[0] for c in humanoid.calls] == ["play", "hands", "play"]
+    assert humanoid.calls[1] == ("hands", True)
+    assert humanoid.calls[0][1] == DRIVEN_JOINTS
+    assert humanoid.calls[2][2] == len(plan.retract_times_s)
+
+
+def test_cancel_stops_execution(plan):
+    cancel = threading.Event()
+    humanoid = _RecordingHumanoid(cancel)
+    with pytest.raises(SeatingCancelled):
+        execute_seating(humanoid, plan, cancel=cancel)
+    with pytest.raises(SeatingCancelled):
+        release_and_stand(humanoid, plan, cancel=cancel)
+    assert [c[0] for c in humanoid.calls] == ["play"]
