@@ -1,0 +1,155 @@
+"""Benchmark of the sitting imagination over the calibration meshes in ../shared/chairs.
+
+For every mesh: found or not, the sitting direction's error against the manifest's
+``front_yaw_deg`` (chairs and sofas with a front), the number of drops and correct
+sittings, and the wall time. Summary: the share of fronted meshes within 30 degrees,
+the tables found as chairs, the median error, the median time per chair (all, and the
+24-drop case) and the physics steps per second.
+
+Usage:
+    .venv/bin/python bench/imagination.py [--workers 2] [--seed 0] [--only chair-synth]
+        [--save raw.pkl] [--json summary.json]
+
+``--save`` stores every drop's raw outcome so the SAM thresholds can be re-scored
+without simulating again (``--rescore raw.pkl``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import pickle
+import statistics
+import sys
+import time
+from pathlib import Path
+
+CHAIRS_DIR = Path(__file__).resolve().parents[2] / "shared" / "chairs"
+
+
+def _angle_error_deg(yaw_rad: float, front_deg: float) -> float:
+    error = (math.degrees(yaw_rad) - front_deg + 180.0) % 360.0 - 180.0
+    return abs(error)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--only", default="", help="only meshes whose file name contains this")
+    parser.add_argument("--save", type=Path, help="pickle the raw drops here")
+    parser.add_argument("--rescore", type=Path, help="re-score saved raw drops, no simulation")
+    parser.add_argument("--json", type=Path, help="write the summary as JSON here")
+    args = parser.parse_args(argv)
+
+    if not CHAIRS_DIR.is_dir():
+        print(f"skipped: {CHAIRS_DIR} is absent (calibration meshes not available)")
+        return 0
+    manifest = json.loads((CHAIRS_DIR / "manifest.json").read_text())
+    entries = [e for e in manifest["meshes"] if args.only in e["file"]]
+
+    from skills.imagination import imagine_sitting_details, warm_up
+    from skills.imagination.imagine import choose_sitting_pose
+    from skills.imagination.sam import score_drop
+    from skills.meshes import load_mesh
+
+    rows = []
+    saved: dict[str, tuple] = {}
+    if args.rescore:
+        saved = pickle.loads(args.rescore.read_bytes())
+    else:
+        started = time.perf_counter()
+        warm_up(args.workers)
+        print(f"worker start-up: {time.perf_counter() - started:.2f} s ({args.workers} workers)")
+
+    print(
+        f"{'mesh':24s} {'kind':6s} {'found':5s} {'err':>6s} {'ncor':>4s} {'drops':>5s} "
+        f"{'prep':>5s} {'sim':>5s} {'total':>5s}  reason"
+    )
+    for entry in entries:
+        name = entry["file"]
+        if args.rescore:
+            if name not in saved:
+                continue
+            prepared, raw, seconds, steps, physics = saved[name]
+            drops = tuple(score_drop(d) for d in raw)
+            result = choose_sitting_pose(prepared, drops, seconds, list(raw))
+        else:
+            mesh = load_mesh(CHAIRS_DIR / name)
+            details = imagine_sitting_details(mesh, seed=args.seed, workers=args.workers)
+            result, raw = details.result, details.raw_drops
+            steps, physics = details.steps, details.physics_seconds
+            saved[name] = (details.prepared, raw, result.seconds, steps, physics)
+        front = entry.get("front_yaw_deg")
+        error = (
+            _angle_error_deg(result.sitting_pose.yaw, front)
+            if result.found and front is not None
+            else None
+        )
+        rows.append(
+            {
+                "file": name,
+                "kind": entry["kind"],
+                "found": result.found,
+                "front": front,
+                "error_deg": error,
+                "n_correct": result.n_correct,
+                "n_drops": result.n_drops,
+                "seconds": result.seconds,
+                "steps": steps,
+                "physics_s": physics,
+                "reason": result.reason,
+            }
+        )
+        print(
+            f"{name:24s} {entry['kind']:6s} {result.found!s:5s} "
+            f"{'' if error is None else f'{error:6.1f}':>6s} {result.n_correct:4d} "
+            f"{result.n_drops:5d} {result.seconds['prepare']:5.2f} "
+            f"{result.seconds['simulate']:5.2f} {result.seconds['total']:5.2f}  {result.reason}"
+        )
+        sys.stdout.flush()
+
+    if args.save and not args.rescore:
+        args.save.write_bytes(pickle.dumps(saved))
+    summary = _summary(rows)
+    print()
+    for key, value in summary.items():
+        print(f"{key:40s} {value}")
+    if args.json:
+        args.json.write_text(json.dumps({"summary": summary, "rows": rows}, indent=1))
+    return 0
+
+
+def _summary(rows: list[dict]) -> dict:
+    fronted = [r for r in rows if r["front"] is not None]
+    within = [r for r in fronted if r["error_deg"] is not None and r["error_deg"] <= 30.0]
+    errors = [r["error_deg"] for r in fronted if r["error_deg"] is not None]
+    tables = [r for r in rows if r["kind"] == "table"]
+    totals = [r["seconds"]["total"] for r in rows]
+    simulate = [r["seconds"]["simulate"] for r in rows]
+    totals_24 = [r["seconds"]["total"] for r in rows if r["n_drops"] == 24]
+    steps = sum(r["steps"] for r in rows)
+    physics = sum(r["physics_s"] for r in rows)
+    return {
+        "fronted meshes within 30 deg": f"{len(within)}/{len(fronted)} "
+        f"({100.0 * len(within) / max(len(fronted), 1):.1f}%)",
+        "fronted meshes found": f"{len(errors)}/{len(fronted)}",
+        "tables found as chairs": f"{sum(r['found'] for r in tables)}/{len(tables)}",
+        "median error (deg, found fronted)": round(statistics.median(errors), 1)
+        if errors
+        else None,
+        "median total s per mesh": round(statistics.median(totals), 3) if totals else None,
+        "median simulate s per mesh": round(statistics.median(simulate), 3) if simulate else None,
+        "median total s, 24-drop meshes": round(statistics.median(totals_24), 3)
+        if totals_24
+        else None,
+        "24-drop meshes": f"{len(totals_24)}/{len(rows)}",
+        "physics steps per second (per drop, summed over workers)": round(steps / physics)
+        if physics
+        else None,
+    }
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,201 @@
+"""Chair preparation for the imagination: g_obb, convex pieces and mass properties.
+
+The paper computes the chair's minimum-volume oriented bounding box (OBB) and applies
+g_obb = (R_z(γ_obb), p_obb): a yaw-only rotation aligning the OBB with the axes and a
+horizontal translation centring it. Because the chair is upright, the minimum-volume
+box among the yaw-only boxes is the minimum-area rectangle of the footprint (the
+vertices projected on the floor) times the full height, found exactly by rotating
+calipers (``trimesh.bounds.oriented_bounds_2D``).
+
+Everything is cached by the mesh's digest: in memory for this process and on disk
+(``cache_dir()/imagination``), so a second call on the same chair skips it.
+"""
+
+from __future__ import annotations
+
+import math
+import pickle
+import threading
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+import trimesh
+
+from skills.geometry import make_transform, rot_z, transform_points
+from skills.meshes import cache_dir, convex_pieces, mesh_digest
+
+PREPARATION_VERSION = "v2"
+CHAIR_DENSITY_KG_M3 = 500.0
+"""Wood-like; the mass is clamped to CHAIR_MASS_RANGE_KG since hulls overestimate volume."""
+CHAIR_MASS_RANGE_KG = (1.5, 12.0)
+
+
+class PreparedChair(NamedTuple):
+    """A chair ready to be simulated, in its OBB frame (after g_obb).
+
+    Attributes:
+        digest: ``mesh_digest`` of the input mesh.
+        T_obb_mesh: 4x4 g_obb, maps mesh-frame points into the OBB frame.
+        gamma_obb_rad: the yaw of R_obb (T_obb_mesh's rotation is R_z(gamma_obb)).
+        extents_m: (3,) OBB size along the OBB frame's x, y, z.
+        z_min_m: lowest point of the chair (OBB frame, equal to the mesh frame's).
+        z_top_m: highest point of the chair.
+        pieces: convex pieces' vertices in the chair body frame (centred on the
+            centre of mass), each an (N, 3) float array.
+        collision_obj: an OBJ file of the pieces (one object each, body frame), which
+            pybullet loads as a compound of convex hulls.
+        com_obb_m: (3,) centre of mass in the OBB frame (the body frame's origin).
+        mass_kg: chair mass.
+        inertia_diag: (3,) moments of inertia about the body axes (kg m^2); the
+            products of inertia are dropped (chairs are near-symmetric in the OBB frame).
+    """
+
+    digest: str
+    T_obb_mesh: np.ndarray
+    gamma_obb_rad: float
+    extents_m: np.ndarray
+    z_min_m: float
+    z_top_m: float
+    pieces: tuple[np.ndarray, ...]
+    collision_obj: str
+    com_obb_m: np.ndarray
+    mass_kg: float
+    inertia_diag: np.ndarray
+
+
+_memory: dict[str, PreparedChair] = {}
+_memory_lock = threading.Lock()
+
+
+class ChairPreparationError(ValueError):
+    """The mesh cannot be simulated (degenerate, no volume)."""
+
+
+def yaw_obb(mesh: trimesh.Trimesh) -> tuple[float, np.ndarray, np.ndarray]:
+    """The yaw-only minimum-volume OBB of an upright mesh.
+
+    Returns:
+        (gamma_obb, centre_xy, extents_xy): the yaw that aligns the box with the axes
+        (R_z(gamma_obb) applied to the mesh makes it axis aligned), the box centre in
+        the mesh frame's xy-plane and the box's sides along the new x and y (metres).
+    """
+    footprint = np.asarray(mesh.convex_hull.vertices if len(mesh.vertices) > 3 else mesh.vertices)
+    footprint_xy = np.unique(np.round(footprint[:, :2], 6), axis=0)
+    if len(footprint_xy) < 3:
+        raise ChairPreparationError("the mesh has no footprint (fewer than 3 distinct points)")
+    T_box_xy, extents_xy = trimesh.bounds.oriented_bounds_2D(footprint_xy)
+    # T_box_xy (3x3) maps footprint points into the box frame: a rotation by its angle.
+    gamma = math.atan2(T_box_xy[1, 0], T_box_xy[0, 0])
+    # Fold into [-π/4, π/4): the 8 drop rotations cover the rest, and a small yaw keeps
+    # the OBB frame close to the mesh frame.
+    quarter = math.pi / 2.0
+    folded = (gamma + math.pi / 4.0) % quarter - math.pi / 4.0
+    turns = round((folded - gamma) / quarter)
+    extents_xy = np.asarray(extents_xy, dtype=float)
+    if turns % 2:
+        extents_xy = extents_xy[::-1]
+    rotated = footprint_xy @ rot_z(folded)[:2, :2].T
+    centre_rotated = 0.5 * (rotated.min(axis=0) + rotated.max(axis=0))
+    centre_xy = rot_z(-folded)[:2, :2] @ centre_rotated
+    return folded, centre_xy, extents_xy
+
+
+def prepare_chair(mesh: trimesh.Trimesh) -> PreparedChair:
+    """g_obb, convex decomposition and mass properties, cached by the mesh digest.
+
+    Args:
+        mesh: the chair, z up, metres, in any horizontal placement.
+
+    Raises:
+        ChairPreparationError: when the mesh has no usable volume.
+    """
+    digest = mesh_digest(mesh)
+    with _memory_lock:
+        if digest in _memory:
+            return _memory[digest]
+    path = cache_dir() / "imagination" / f"{digest}-{PREPARATION_VERSION}.pkl"
+    prepared: PreparedChair | None = None
+    if path.exists():
+        try:
+            with path.open("rb") as stream:
+                prepared = PreparedChair(*pickle.load(stream))
+            if not Path(prepared.collision_obj).exists():
+                prepared = None
+        except Exception:
+            prepared = None
+    if prepared is None:
+        prepared = _prepare(mesh, digest)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        scratch = path.with_suffix(f".{threading.get_ident()}.tmp")
+        with scratch.open("wb") as stream:
+            pickle.dump(tuple(prepared), stream)
+        scratch.replace(path)
+    with _memory_lock:
+        _memory[digest] = prepared
+    return prepared
+
+
+def _prepare(mesh: trimesh.Trimesh, digest: str) -> PreparedChair:
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    if len(vertices) < 4 or float(np.ptp(vertices[:, 2])) < 1e-3:
+        raise ChairPreparationError("the mesh is flat or has fewer than 4 vertices")
+    gamma, centre_xy, extents_xy = yaw_obb(mesh)
+    rotation = rot_z(gamma)
+    translation = -rotation @ np.array([centre_xy[0], centre_xy[1], 0.0])
+    T_obb_mesh = make_transform(rotation, translation)
+    z_min, z_top = float(vertices[:, 2].min()), float(vertices[:, 2].max())
+
+    hulls = [
+        transform_points(T_obb_mesh, np.asarray(piece.vertices)) for piece in convex_pieces(mesh)
+    ]
+    hull_meshes = [trimesh.convex.convex_hull(h) for h in hulls if len(h) >= 4]
+    hull_meshes = [h for h in hull_meshes if h.volume > 1e-9]
+    if not hull_meshes:
+        raise ChairPreparationError("the convex decomposition found no solid pieces")
+    volumes = np.array([h.volume for h in hull_meshes])
+    total_volume = float(volumes.sum())
+    mass = float(np.clip(total_volume * CHAIR_DENSITY_KG_M3, *CHAIR_MASS_RANGE_KG))
+    density = mass / total_volume
+    com = (volumes[:, None] * np.array([h.center_mass for h in hull_meshes])).sum(0) / total_volume
+    inertia = np.zeros((3, 3))
+    for hull, volume in zip(hull_meshes, volumes, strict=True):
+        # trimesh's moment of inertia is about the piece's own centre of mass, unit density.
+        offset = hull.center_mass - com
+        piece_mass = density * volume
+        inertia += density * hull.moment_inertia + piece_mass * (
+            float(offset @ offset) * np.eye(3) - np.outer(offset, offset)
+        )
+    pieces = tuple(np.asarray(h.vertices, dtype=float) - com for h in hull_meshes)
+    collision_obj = cache_dir() / "imagination" / f"{digest}-{PREPARATION_VERSION}-pieces.obj"
+    _write_pieces_obj(
+        collision_obj, [(p, h.faces) for p, h in zip(pieces, hull_meshes, strict=True)]
+    )
+    return PreparedChair(
+        digest=digest,
+        T_obb_mesh=T_obb_mesh,
+        gamma_obb_rad=gamma,
+        extents_m=np.array([extents_xy[0], extents_xy[1], z_top - z_min]),
+        z_min_m=z_min,
+        z_top_m=z_top,
+        pieces=pieces,
+        collision_obj=str(collision_obj),
+        com_obb_m=com,
+        mass_kg=mass,
+        inertia_diag=np.maximum(np.diag(inertia), 1e-6),
+    )
+
+
+def _write_pieces_obj(path: Path, pieces: list[tuple[np.ndarray, np.ndarray]]) -> None:
+    """Writes convex pieces as separate OBJ objects (pybullet: one hull per object)."""
+    lines: list[str] = []
+    base = 1
+    for index, (vertices, faces) in enumerate(pieces):
+        lines.append(f"o piece_{index}")
+        lines.extend(f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in vertices)
+        lines.extend(f"f {a + base} {b + base} {c + base}" for a, b, c in faces)
+        base += len(vertices)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    scratch = path.with_suffix(f".{threading.get_ident()}.tmp")
+    scratch.write_text("\n".join(lines) + "\n")
+    scratch.replace(path)

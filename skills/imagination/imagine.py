@@ -1,0 +1,326 @@
+"""Sitting imagination: drop the agent on the chair and read the sitting pose off the drops.
+
+The paper's procedure ("Sitting Imagination"):
+
+1. Prepare the chair: g_obb (yaw-only OBB alignment and horizontal centring), convex
+   pieces, mass properties (``skills.imagination.chair``).
+2. For each rotation α_i = iπ/4 (i = 0..7) drop the agent in its pre-sitting posture,
+   facing +x, with the pelvis 15 cm above the OBB, at the OBB centre and at ±L_sit
+   along x; if at most one correct sitting was found, drop again at ±2 L_sit and
+   ±3 L_sit: 24 or 56 drops. Rotating the chair by α_i under an agent facing +x is the
+   same as turning the agent by −α_i over the fixed chair (gravity is along z), which
+   is what is simulated, so every drop is measured directly in the chair frame.
+3. Score every drop with the sitting affordance model (``skills.imagination.sam``).
+4. The best rotation α* has the most correct sittings, ties going to the lowest mean
+   J + L. With weights w = 1 / (J + L) over its correct sittings,
+
+       p' = Σ w p / Σ w,   γ' = atan2(Σ w sin γ, Σ w cos γ)   (a circular mean),
+
+   and the sitting pose in the mesh frame is p = g_obb⁻¹ ∘ p', γ = γ' − γ_obb.
+
+Drops run in worker processes (each with its own pybullet DIRECT client), grouped one
+rotation per physics world. Each drop's small start jitter is seeded from
+(seed, rotation, position), so a seed gives the same result for any number of workers.
+"""
+
+from __future__ import annotations
+
+import atexit
+import math
+import multiprocessing
+import threading
+import time
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from typing import NamedTuple
+
+import numpy as np
+import trimesh
+
+from skills.geometry import SittingPose, transform_points, wrap_angle
+from skills.imagination.agent import agent_urdf_path
+from skills.imagination.chair import ChairPreparationError, PreparedChair, prepare_chair
+from skills.imagination.sam import DEFAULT_THRESHOLDS, SamThresholds, failed_criteria, score_drop
+from skills.imagination.simulation import (
+    DropSpec,
+    RawDrop,
+    SimulationSettings,
+    TaskSpec,
+    _pybullet,
+    run_task,
+    worker_initializer,
+)
+from skills.results import DropOutcome, ImaginationResult
+
+N_ROTATIONS = 8
+FIRST_POSITIONS = (0, -1, 1)
+EXTRA_POSITIONS = (-2, 2, -3, 3)
+L_SIT_RATIO = 0.15
+"""L_sit = L_SIT_RATIO × the OBB's mean horizontal side (metres)."""
+JITTER_POSITION_M = 0.005
+JITTER_YAW_RAD = math.radians(2.0)
+MIN_CORRECT = 1
+"""Correct sittings the best rotation needs for a sitting pose to be reported."""
+
+
+class ImaginationDetails(NamedTuple):
+    """The result together with what the benchmark needs.
+
+    Attributes:
+        result: what ``imagine_sitting`` returns.
+        raw_drops: the unscored simulation outcomes, in drop order.
+        steps: physics steps over all drops.
+        physics_seconds: wall time spent stepping physics, summed over workers.
+        prepared: the chair after preparation.
+    """
+
+    result: ImaginationResult
+    raw_drops: tuple[RawDrop, ...]
+    steps: int
+    physics_seconds: float
+    prepared: PreparedChair | None
+
+
+def imagine_sitting(
+    chair_mesh: trimesh.Trimesh,
+    *,
+    seed: int,
+    cancel: threading.Event | None = None,
+    workers: int = 2,
+) -> ImaginationResult:
+    """Finds how to sit on a chair by simulating drops of a child-sized agent.
+
+    Args:
+        chair_mesh: the chair, z up, metres (the floor at its lowest point), in any frame
+            whose z axis is vertical; usually the world frame.
+        seed: seeds the drops' start jitter; the same seed gives the same result.
+        cancel: when set, pending drops are abandoned and the result says "cancelled".
+        workers: worker processes (1 runs in this process).
+
+    Returns:
+        The sitting pose g = (p, γ) in the mesh's frame, every drop, and the timings;
+        or ``found=False`` with the reason (not a chair, degenerate mesh, cancelled).
+    """
+    return imagine_sitting_details(chair_mesh, seed=seed, cancel=cancel, workers=workers).result
+
+
+def imagine_sitting_details(
+    chair_mesh: trimesh.Trimesh,
+    *,
+    seed: int,
+    cancel: threading.Event | None = None,
+    workers: int = 2,
+    thresholds: SamThresholds = DEFAULT_THRESHOLDS,
+    settings: SimulationSettings | None = None,
+) -> ImaginationDetails:
+    """``imagine_sitting`` with the raw drops and physics statistics (for benchmarks)."""
+    settings = settings or SimulationSettings()
+    started = time.perf_counter()
+    _pybullet()  # imported quietly here, before V-HACD imports it with its banner
+    try:
+        prepared = prepare_chair(chair_mesh)
+    except ChairPreparationError as error:
+        total = time.perf_counter() - started
+        result = ImaginationResult(
+            False,
+            None,
+            0,
+            0,
+            (),
+            {"prepare": total, "simulate": 0.0, "total": total},
+            f"not simulated: {error}",
+        )
+        return ImaginationDetails(result, (), 0, 0.0, None)
+    urdf = str(agent_urdf_path())
+    prepared_at = time.perf_counter()
+
+    runner = _runner(workers)
+    raw: list[RawDrop] = []
+    physics_seconds = 0.0
+    cancelled = False
+    for positions in (FIRST_POSITIONS, EXTRA_POSITIONS):
+        tasks = [
+            TaskSpec(prepared, urdf, _drop_specs(prepared, i, positions, seed), settings)
+            for i in range(N_ROTATIONS)
+        ]
+        outcomes, seconds, cancelled = runner(tasks, cancel)
+        physics_seconds += seconds
+        raw.extend(drop for task_drops in outcomes for drop in task_drops)
+        if cancelled:
+            break
+        n_correct = sum(score_drop(drop, thresholds).correct for drop in raw)
+        if n_correct > 1:
+            break
+    simulated_at = time.perf_counter()
+
+    raw.sort(key=lambda d: (d.spec.rotation_index, _position_order(d.spec.position_index)))
+    drops = tuple(score_drop(drop, thresholds) for drop in raw)
+    seconds = {
+        "prepare": prepared_at - started,
+        "simulate": simulated_at - prepared_at,
+        "total": simulated_at - started,
+    }
+    steps = sum(drop.steps for drop in raw)
+    if cancelled:
+        result = ImaginationResult(False, None, 0, len(drops), drops, seconds, "cancelled")
+    else:
+        result = choose_sitting_pose(prepared, drops, seconds, raw)
+    return ImaginationDetails(result, tuple(raw), steps, physics_seconds, prepared)
+
+
+def choose_sitting_pose(
+    prepared: PreparedChair,
+    drops: tuple[DropOutcome, ...],
+    seconds: dict[str, float],
+    raw: list[RawDrop] | None = None,
+) -> ImaginationResult:
+    """The paper's choice of the best rotation and the weighted mean pose.
+
+    Args:
+        prepared: the chair (for g_obb).
+        drops: every scored drop (chair frame).
+        seconds: timings to carry into the result.
+        raw: the unscored drops, used to explain a failure.
+    """
+    by_rotation: dict[int, list[DropOutcome]] = {}
+    for drop in drops:
+        if drop.correct:
+            by_rotation.setdefault(drop.rotation_index, []).append(drop)
+    if not by_rotation or max(len(v) for v in by_rotation.values()) < MIN_CORRECT:
+        return ImaginationResult(
+            False, None, 0, len(drops), drops, seconds, _failure_reason(drops, raw)
+        )
+    best = min(
+        by_rotation,
+        key=lambda i: (-len(by_rotation[i]), float(np.mean([_jl(d) for d in by_rotation[i]])), i),
+    )
+    chosen = by_rotation[best]
+    weights = np.array([1.0 / max(_jl(d), 1e-6) for d in chosen])
+    position_chair = (weights[:, None] * np.array([d.position for d in chosen])).sum(
+        0
+    ) / weights.sum()
+    yaw_chair = math.atan2(
+        float(np.sum(weights * np.sin([d.yaw for d in chosen]))),
+        float(np.sum(weights * np.cos([d.yaw for d in chosen]))),
+    )
+    T_mesh_obb = np.linalg.inv(prepared.T_obb_mesh)
+    position = transform_points(T_mesh_obb, position_chair[None, :])[0]
+    pose = SittingPose(position, wrap_angle(yaw_chair - prepared.gamma_obb_rad))
+    return ImaginationResult(True, pose, len(chosen), len(drops), drops, seconds, "")
+
+
+def _jl(drop: DropOutcome) -> float:
+    return drop.joint_score + drop.link_score
+
+
+def _failure_reason(drops: tuple[DropOutcome, ...], raw: list[RawDrop] | None) -> str:
+    if not drops:
+        return "no drop was simulated"
+    reason = f"no correct sitting in {len(drops)} drops"
+    if raw:
+        counts: dict[str, int] = {}
+        for drop in raw:
+            for label in failed_criteria(drop):
+                counts[label] = counts.get(label, 0) + 1
+        common = sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))[:3]
+        if common:
+            reason += ": " + ", ".join(f"{label} in {n}" for label, n in common)
+    return reason + " (not a chair for a child-sized sitter)"
+
+
+def _position_order(k: int) -> int:
+    return abs(k) * 2 + (1 if k > 0 else 0)
+
+
+def _drop_specs(
+    prepared: PreparedChair, rotation_index: int, positions: tuple[int, ...], seed: int
+) -> tuple[DropSpec, ...]:
+    """The drops of one rotation: the agent faces −α_i in the chair frame."""
+    l_sit = L_SIT_RATIO * float(np.mean(prepared.extents_m[:2]))
+    specs = []
+    for k in positions:
+        rng = np.random.default_rng([seed & 0xFFFFFFFF, rotation_index, k + 16])
+        yaw = wrap_angle(-rotation_index * math.pi / 4.0 + rng.uniform(-1, 1) * JITTER_YAW_RAD)
+        facing = np.array(
+            [math.cos(-rotation_index * math.pi / 4.0), math.sin(-rotation_index * math.pi / 4.0)]
+        )
+        xy = k * l_sit * facing + rng.uniform(-1, 1, size=2) * JITTER_POSITION_M
+        specs.append(DropSpec(rotation_index, k, k * l_sit, (float(xy[0]), float(xy[1])), yaw))
+    return tuple(specs)
+
+
+# Runners: the same tasks, in this process or in a pool of worker processes.
+_Runner = "callable(tasks, cancel) -> (outcomes per task, physics seconds, cancelled)"
+_pools: dict[int, ProcessPoolExecutor] = {}
+_pools_lock = threading.Lock()
+
+
+def _runner(workers: int):
+    if workers <= 1:
+        return _run_here
+    return lambda tasks, cancel: _run_in_pool(_pool(workers), tasks, cancel)
+
+
+def _run_here(
+    tasks: list[TaskSpec], cancel: threading.Event | None
+) -> tuple[list[list[RawDrop]], float, bool]:
+    outcomes, seconds = [], 0.0
+    for task in tasks:
+        if cancel is not None and cancel.is_set():
+            return outcomes, seconds, True
+        drops, task_seconds = run_task(task)
+        outcomes.append(drops)
+        seconds += task_seconds
+    return outcomes, seconds, False
+
+
+def _run_in_pool(
+    pool: ProcessPoolExecutor, tasks: list[TaskSpec], cancel: threading.Event | None
+) -> tuple[list[list[RawDrop]], float, bool]:
+    futures: list[Future] = [pool.submit(run_task, task) for task in tasks]
+    pending = set(futures)
+    while pending:
+        _, pending = wait(pending, timeout=0.05, return_when=FIRST_COMPLETED)
+        if cancel is not None and cancel.is_set():
+            for future in pending:
+                future.cancel()
+            done = [f.result() for f in futures if f.done() and not f.cancelled()]
+            return [d for d, _ in done], sum(s for _, s in done), True
+    results = [future.result() for future in futures]
+    return [drops for drops, _ in results], sum(seconds for _, seconds in results), False
+
+
+def _pool(workers: int) -> ProcessPoolExecutor:
+    """A persistent pool per worker count: process start-up is paid once per process."""
+    with _pools_lock:
+        pool = _pools.get(workers)
+        if pool is None:
+            pool = ProcessPoolExecutor(
+                max_workers=workers,
+                mp_context=multiprocessing.get_context("spawn"),
+                initializer=worker_initializer,
+            )
+            _pools[workers] = pool
+        return pool
+
+
+def warm_up(workers: int = 2) -> None:
+    """Starts the worker processes now (they import pybullet and connect)."""
+    if workers > 1:
+        pool = _pool(workers)
+        for future in [pool.submit(_ping) for _ in range(workers)]:
+            future.result()
+
+
+def _ping() -> int:
+    return 0
+
+
+def shutdown_workers() -> None:
+    """Stops the worker processes (also done at exit)."""
+    with _pools_lock:
+        for pool in _pools.values():
+            pool.shutdown(wait=True, cancel_futures=True)
+        _pools.clear()
+
+
+atexit.register(shutdown_workers)

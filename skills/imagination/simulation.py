@@ -1,0 +1,379 @@
+"""The drops: the agent falls onto the chair in a pybullet DIRECT world.
+
+One *task* is a group of drops simulated together in one physics world: each drop has
+its own copy of the chair, spaced apart so they never interact, and one
+``stepSimulation`` advances them all. A drop stops (its agent and chair are removed
+from the world) as soon as its agent is at rest, or as soon as it cannot end as a
+correct sitting any more (the pelvis is below the lowest sitting height, or off the
+chair). Only raw measurements come back; the sitting affordance model scores them
+(``skills.imagination.sam``), so thresholds can be tuned without simulating again.
+
+A task is computed the same way in whichever process runs it, starting from
+``resetSimulation``: the result of a seed does not depend on the number of workers.
+
+Frames: the chair frame is the OBB frame of ``PreparedChair`` (after g_obb); chair
+copy j stands at T_world_chair_j = translation(0, j * spacing, 0).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import os
+import time
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from skills.imagination.agent import JOINTS, LINK_NAMES
+from skills.imagination.chair import PreparedChair
+
+
+class SimulationSettings(NamedTuple):
+    """Physics and stopping parameters (seconds, metres, radians).
+
+    Attributes:
+        time_step_s: physics step.
+        solver_iterations: constraint solver iterations per step.
+        max_time_s: simulated time after which a drop is stopped anyway.
+        min_time_s: no rest test before this (the agent is still falling).
+        check_every_steps: steps between two rest tests.
+        rest_checks: consecutive rest tests needed.
+        rest_linear_mps: pelvis speed below which the agent may be at rest.
+        rest_angular_rps: pelvis angular speed limit at rest.
+        rest_joint_rps: joint speed limit at rest.
+        give_up_height_m: a pelvis lower than this above the floor cannot sit.
+        drop_clearance_m: the pelvis starts this far above the OBB top (the paper: 15 cm).
+        chair_friction: lateral friction of chair and agent.
+        dynamic_chair: the chair has its mass (it may slide or tip), else it is fixed.
+    """
+
+    time_step_s: float = 1.0 / 120.0
+    solver_iterations: int = 20
+    max_time_s: float = 2.5
+    min_time_s: float = 0.35
+    check_every_steps: int = 4
+    rest_checks: int = 3
+    rest_linear_mps: float = 0.04
+    rest_angular_rps: float = 0.3
+    rest_joint_rps: float = 0.5
+    give_up_height_m: float = 0.08
+    drop_clearance_m: float = 0.15
+    chair_friction: float = 0.8
+    dynamic_chair: bool = True
+
+
+class DropSpec(NamedTuple):
+    """Where and how one agent is dropped (chair frame).
+
+    Attributes:
+        rotation_index: i of α_i = iπ/4 (the agent faces -α_i in the chair frame,
+            which is the paper's chair rotated by α_i under an agent facing +x).
+        position_index: k, the drop is k * L_sit along the agent's facing direction.
+        offset_m: k * L_sit.
+        xy_m: (2,) pelvis start position in the chair frame.
+        yaw_rad: agent start yaw in the chair frame.
+    """
+
+    rotation_index: int
+    position_index: int
+    offset_m: float
+    xy_m: tuple[float, float]
+    yaw_rad: float
+
+
+class TaskSpec(NamedTuple):
+    """Drops simulated together in one world."""
+
+    chair: PreparedChair
+    urdf_path: str
+    drops: tuple[DropSpec, ...]
+    settings: SimulationSettings
+
+
+class RawDrop(NamedTuple):
+    """The agent's final state, in the chair frame (the chair's pose at the end).
+
+    Attributes:
+        spec: the drop.
+        position: (3,) pelvis position (metres).
+        yaw: pelvis heading, from +x about +z (radians).
+        joint_angles: (n_joints,) in ``JOINTS`` order (radians).
+        link_z: (n_links, 3) each link frame's z axis, in ``LINK_NAMES`` order.
+        contacts: (n_links,) contact points of each link with the chair.
+        sitting_height_m: pelvis height above the floor.
+        steps: physics steps simulated.
+        stopped_by: ``rest``, ``fell`` or ``time``.
+    """
+
+    spec: DropSpec
+    position: np.ndarray
+    yaw: float
+    joint_angles: np.ndarray
+    link_z: np.ndarray
+    contacts: np.ndarray
+    sitting_height_m: float
+    steps: int
+    stopped_by: str
+
+
+TRUNK_LINKS = ("pelvis", "chest", "head")
+"""Links whose contact with the floor ends a drop as fallen."""
+
+_client: dict[str, Any] = {}
+
+
+def _pybullet() -> Any:
+    """Imports pybullet with its build banner (printed by C code) sent to /dev/null."""
+    if "module" not in _client:
+        import sys
+
+        sys.stdout.flush()
+        sys.stderr.flush()
+        saved = [os.dup(1), os.dup(2)]
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(devnull, 1)
+            os.dup2(devnull, 2)
+            import pybullet
+
+            ctypes.CDLL(None).fflush(None)
+        finally:
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in (*saved, devnull):
+                os.close(fd)
+        _client["module"] = pybullet
+    return _client["module"]
+
+
+def _connection() -> tuple[Any, int]:
+    """This process's own DIRECT client (one per process)."""
+    p = _pybullet()
+    if "id" not in _client or not p.isConnected(_client["id"]):
+        _client["id"] = p.connect(p.DIRECT)
+    return p, _client["id"]
+
+
+def worker_initializer() -> None:
+    """Runs in each worker process: C-level prints must not reach the caller's stdout."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)
+    os.close(devnull)
+    _pybullet()
+    _connection()
+
+
+def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
+    """Simulates a group of drops in a fresh world of this process's client.
+
+    Returns:
+        The raw outcomes in the order of ``task.drops`` and the wall time (seconds)
+        spent stepping the physics.
+    """
+    p, cid = _connection()
+    settings = task.settings
+    chair = task.chair
+    p.resetSimulation(physicsClientId=cid)
+    p.setGravity(0, 0, -9.81, physicsClientId=cid)
+    p.setPhysicsEngineParameter(
+        fixedTimeStep=settings.time_step_s,
+        numSolverIterations=settings.solver_iterations,
+        deterministicOverlappingPairs=1,
+        physicsClientId=cid,
+    )
+    floor_shape = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=cid)
+    floor = p.createMultiBody(
+        0, floor_shape, basePosition=[0, 0, chair.z_min_m], physicsClientId=cid
+    )
+    p.changeDynamics(floor, -1, lateralFriction=settings.chair_friction, physicsClientId=cid)
+    chair_shape = p.createCollisionShape(
+        p.GEOM_MESH, fileName=chair.collision_obj, physicsClientId=cid
+    )
+    spacing = float(max(chair.extents_m[:2])) + 2.5
+    agent_joint_indices: list[int] = []
+    link_indices: list[int] = []
+    pre_sitting = [joint.pre_sitting_rad for joint in JOINTS]
+    torques = [joint.max_torque_nm for joint in JOINTS]
+
+    active: list[dict[str, Any]] = []
+    for j, drop in enumerate(task.drops):
+        origin = np.array([0.0, j * spacing, 0.0])
+        chair_body = p.createMultiBody(
+            baseMass=chair.mass_kg if settings.dynamic_chair else 0.0,
+            baseCollisionShapeIndex=chair_shape,
+            basePosition=(origin + chair.com_obb_m).tolist(),
+            baseInertialFramePosition=[0, 0, 0],
+            physicsClientId=cid,
+        )
+        if settings.dynamic_chair:
+            p.changeDynamics(
+                chair_body,
+                -1,
+                localInertiaDiagonal=chair.inertia_diag.tolist(),
+                lateralFriction=settings.chair_friction,
+                physicsClientId=cid,
+            )
+        else:
+            p.changeDynamics(
+                chair_body, -1, lateralFriction=settings.chair_friction, physicsClientId=cid
+            )
+        quat = p.getQuaternionFromEuler([0.0, 0.0, drop.yaw_rad])
+        z = chair.z_top_m + settings.drop_clearance_m
+        agent = p.loadURDF(
+            task.urdf_path,
+            basePosition=[origin[0] + drop.xy_m[0], origin[1] + drop.xy_m[1], z],
+            baseOrientation=quat,
+            flags=p.URDF_USE_INERTIA_FROM_FILE,
+            physicsClientId=cid,
+        )
+        if not agent_joint_indices:
+            agent_joint_indices, link_indices = _index_maps(p, cid, agent)
+            trunk = {link_indices[LINK_NAMES.index(name)] for name in TRUNK_LINKS}
+        for index, angle in zip(agent_joint_indices, pre_sitting, strict=True):
+            p.resetJointState(agent, index, angle, physicsClientId=cid)
+        # Raise the agent until it starts clear of the chair: the legs hang below the
+        # pelvis and would otherwise start inside a tall backrest.
+        for _ in range(20):
+            if not p.getClosestPoints(agent, chair_body, 0.005, physicsClientId=cid):
+                break
+            z += 0.05
+            p.resetBasePositionAndOrientation(
+                agent,
+                [origin[0] + drop.xy_m[0], origin[1] + drop.xy_m[1], z],
+                quat,
+                physicsClientId=cid,
+            )
+        for link_index in link_indices:
+            p.changeDynamics(
+                agent, link_index, lateralFriction=settings.chair_friction, physicsClientId=cid
+            )
+        p.setJointMotorControlArray(
+            agent,
+            agent_joint_indices,
+            p.POSITION_CONTROL,
+            targetPositions=pre_sitting,
+            forces=torques,
+            physicsClientId=cid,
+        )
+        active.append(
+            {
+                "index": j,
+                "spec": drop,
+                "agent": agent,
+                "chair": chair_body,
+                "joints": agent_joint_indices,
+                "links": link_indices,
+                "rest": 0,
+                "floor": floor,
+                "trunk": trunk,
+            }
+        )
+
+    results: list[RawDrop | None] = [None] * len(task.drops)
+    max_steps = math.ceil(settings.max_time_s / settings.time_step_s)
+    min_steps = int(settings.min_time_s / settings.time_step_s)
+    step = 0
+    started = time.perf_counter()
+    while active and step < max_steps:
+        for _ in range(settings.check_every_steps):
+            p.stepSimulation(physicsClientId=cid)
+        step += settings.check_every_steps
+        still: list[dict[str, Any]] = []
+        for item in active:
+            stopped_by = _stop_reason(p, cid, item, chair, settings, step, min_steps)
+            if stopped_by is None and step < max_steps:
+                still.append(item)
+                continue
+            results[item["index"]] = _measure(p, cid, item, chair, step, stopped_by or "time")
+            p.removeBody(item["agent"], physicsClientId=cid)
+            p.removeBody(item["chair"], physicsClientId=cid)
+        active = still
+    seconds = time.perf_counter() - started
+    return [r for r in results if r is not None], seconds
+
+
+def _index_maps(p: Any, cid: int, agent: int) -> tuple[list[int], list[int]]:
+    """pybullet's joint indices in ``JOINTS`` order and link indices in ``LINK_NAMES`` order.
+
+    pybullet numbers links in its own traversal order, so names are matched, never assumed.
+    """
+    joint_by_name: dict[str, int] = {}
+    link_by_name: dict[str, int] = {"pelvis": -1}
+    for index in range(p.getNumJoints(agent, physicsClientId=cid)):
+        info = p.getJointInfo(agent, index, physicsClientId=cid)
+        joint_by_name[info[1].decode()] = index
+        link_by_name[info[12].decode()] = index
+    return [joint_by_name[j.name] for j in JOINTS], [link_by_name[n] for n in LINK_NAMES]
+
+
+def _stop_reason(
+    p: Any,
+    cid: int,
+    item: dict[str, Any],
+    chair: PreparedChair,
+    settings: SimulationSettings,
+    step: int,
+    min_steps: int,
+) -> str | None:
+    agent = item["agent"]
+    position, _ = p.getBasePositionAndOrientation(agent, physicsClientId=cid)
+    if position[2] - chair.z_min_m < settings.give_up_height_m:
+        return "fell"
+    # A sitter's pelvis, chest or head never touches the floor: the drop has failed.
+    for contact in p.getContactPoints(bodyA=agent, bodyB=item["floor"], physicsClientId=cid):
+        if contact[3] in item["trunk"]:
+            return "fell"
+    if step < min_steps:
+        return None
+    linear, angular = p.getBaseVelocity(agent, physicsClientId=cid)
+    states = p.getJointStates(agent, item["joints"], physicsClientId=cid)
+    joint_speed = max(abs(s[1]) for s in states)
+    at_rest = (
+        math.sqrt(sum(v * v for v in linear)) < settings.rest_linear_mps
+        and math.sqrt(sum(w * w for w in angular)) < settings.rest_angular_rps
+        and joint_speed < settings.rest_joint_rps
+    )
+    item["rest"] = item["rest"] + 1 if at_rest else 0
+    return "rest" if item["rest"] >= settings.rest_checks else None
+
+
+def _measure(
+    p: Any, cid: int, item: dict[str, Any], chair: PreparedChair, step: int, stopped_by: str
+) -> RawDrop:
+    agent, chair_body = item["agent"], item["chair"]
+    # T_world_chair: the chair body's pose composed with the body -> OBB frame offset.
+    chair_position, chair_quat = p.getBasePositionAndOrientation(chair_body, physicsClientId=cid)
+    R_world_chair = np.array(p.getMatrixFromQuaternion(chair_quat)).reshape(3, 3)
+    t_world_chair = np.array(chair_position) - R_world_chair @ chair.com_obb_m
+    R_chair_world = R_world_chair.T
+
+    def to_chair(point: np.ndarray) -> np.ndarray:
+        return R_chair_world @ (np.asarray(point) - t_world_chair)
+
+    base_position, base_quat = p.getBasePositionAndOrientation(agent, physicsClientId=cid)
+    R_world_pelvis = np.array(p.getMatrixFromQuaternion(base_quat)).reshape(3, 3)
+    R_chair_pelvis = R_chair_world @ R_world_pelvis
+    position = to_chair(base_position)
+    yaw = math.atan2(R_chair_pelvis[1, 0], R_chair_pelvis[0, 0])
+    link_z = [R_chair_pelvis[:, 2]]
+    for link_index in item["links"][1:]:
+        state = p.getLinkState(agent, link_index, physicsClientId=cid)
+        R_world_link = np.array(p.getMatrixFromQuaternion(state[5])).reshape(3, 3)
+        link_z.append(R_chair_world @ R_world_link[:, 2])
+    joints = p.getJointStates(agent, item["joints"], physicsClientId=cid)
+    position_of_link = {index: k for k, index in enumerate(item["links"])}
+    contacts = np.zeros(len(LINK_NAMES), dtype=int)
+    for contact in p.getContactPoints(bodyA=agent, bodyB=chair_body, physicsClientId=cid):
+        contacts[position_of_link[contact[3]]] += 1
+    return RawDrop(
+        spec=item["spec"],
+        position=position,
+        yaw=yaw,
+        joint_angles=np.array([s[0] for s in joints]),
+        link_z=np.array(link_z),
+        contacts=contacts,
+        sitting_height_m=float(base_position[2] - chair.z_min_m),
+        steps=step,
+        stopped_by=stopped_by,
+    )
