@@ -1,0 +1,228 @@
+"""The teddy bear: a rigid body in a sitting shape, built from primitives.
+
+The bear frame has its origin at the bottom centre of the torso (where it sits), x the
+way it faces (its legs stick out forward), z up along its torso. Height to the top of
+the ears: 0.25 m; mass 0.2 kg.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+import pybullet
+
+from hardware.sim.bullet import (
+    LockedBullet,
+    T_world_base_link,
+    matrix_to_pose,
+    reset_base_link,
+)
+from hardware.sim.clock import SimClock
+
+BEAR_MASS_KG = 0.2
+HOLD_FORCE_N = 60.0
+_BROWN = (0.55, 0.35, 0.17, 1.0)
+_LIGHT = (0.8, 0.65, 0.45, 1.0)
+_DARK = (0.15, 0.08, 0.04, 1.0)
+
+
+class BearPart(NamedTuple):
+    """A primitive of the bear: kind box/sphere/capsule, size (m), centre and rpy in the bear frame."""
+
+    kind: str
+    size: tuple[float, ...]
+    centre: tuple[float, float, float]
+    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    colour: tuple[float, float, float, float] = _BROWN
+
+
+_ALONG_X = (0.0, math.pi / 2.0, 0.0)
+BEAR_PARTS: tuple[BearPart, ...] = (
+    BearPart("box", (0.085, 0.1, 0.12), (0.0, 0.0, 0.06)),
+    BearPart("sphere", (0.06,), (0.0, 0.0, 0.175)),
+    BearPart("sphere", (0.02,), (0.05, 0.0, 0.165), colour=_LIGHT),
+    BearPart("sphere", (0.02,), (0.0, 0.04, 0.23)),
+    BearPart("sphere", (0.02,), (0.0, -0.04, 0.23)),
+    BearPart("capsule", (0.025, 0.07), (0.07, 0.03, 0.025), _ALONG_X),
+    BearPart("capsule", (0.025, 0.07), (0.07, -0.03, 0.025), _ALONG_X),
+    BearPart("capsule", (0.018, 0.05), (0.02, 0.062, 0.07), (0.6, 0.0, 0.0)),
+    BearPart("capsule", (0.018, 0.05), (0.02, -0.062, 0.07), (-0.6, 0.0, 0.0)),
+    BearPart("sphere", (0.008,), (0.068, 0.0, 0.172), colour=_DARK),
+)
+
+
+def _volume(part: BearPart) -> float:
+    if part.kind == "box":
+        return float(np.prod(part.size))
+    radius = part.size[0]
+    sphere = 4.0 / 3.0 * math.pi * radius**3
+    return sphere if part.kind == "sphere" else sphere + math.pi * radius**2 * part.size[1]
+
+
+def bear_centre_of_mass() -> np.ndarray:
+    """Centre of mass in the bear frame, for a uniformly dense bear."""
+    volumes = np.array([_volume(part) for part in BEAR_PARTS])
+    centres = np.array([part.centre for part in BEAR_PARTS])
+    return (volumes[:, None] * centres).sum(axis=0) / volumes.sum()
+
+
+class SimBear:
+    """The bear body, optionally held by a moving anchor (the NAO's hands).
+
+    While held, a fixed constraint between the world and the bear is moved every physics
+    step to ``anchor() @ T_anchor_bear`` and the bear does not collide with the holder's
+    links; :meth:`release` removes the constraint and lets physics take over.
+    """
+
+    def __init__(self, bullet: LockedBullet, clock: SimClock, T_world_bear: np.ndarray) -> None:
+        self._bullet = bullet
+        com = bear_centre_of_mass()
+        shapes = {"box": pybullet.GEOM_BOX, "sphere": pybullet.GEOM_SPHERE}
+        with bullet.lock:
+            collision_ids: list[int] = []
+            visual_ids: list[int] = []
+            for part in BEAR_PARTS:
+                position = list(np.asarray(part.centre) - com)
+                orientation = pybullet.getQuaternionFromEuler(part.rpy)
+                if part.kind == "capsule":
+                    geometry = {"radius": part.size[0], "height": part.size[1]}
+                    kind = pybullet.GEOM_CAPSULE
+                    visual_geometry = {"radius": part.size[0], "length": part.size[1]}
+                elif part.kind == "box":
+                    geometry = {"halfExtents": [v / 2.0 for v in part.size]}
+                    kind = shapes["box"]
+                    visual_geometry = geometry
+                else:
+                    geometry = {"radius": part.size[0]}
+                    kind = shapes["sphere"]
+                    visual_geometry = geometry
+                collision_ids.append(
+                    bullet.createCollisionShape(
+                        kind,
+                        collisionFramePosition=position,
+                        collisionFrameOrientation=orientation,
+                        **geometry,
+                    )
+                )
+                visual_ids.append(
+                    bullet.createVisualShape(
+                        kind,
+                        rgbaColor=list(part.colour),
+                        visualFramePosition=position,
+                        visualFrameOrientation=orientation,
+                        **visual_geometry,
+                    )
+                )
+            # A compound of primitives: one multibody with one link per extra part.
+            self.body = bullet.createMultiBody(
+                baseMass=BEAR_MASS_KG * 0.5,
+                baseCollisionShapeIndex=collision_ids[0],
+                baseVisualShapeIndex=visual_ids[0],
+                basePosition=[0, 0, 0],
+                linkMasses=[BEAR_MASS_KG * 0.5 / (len(BEAR_PARTS) - 1)] * (len(BEAR_PARTS) - 1),
+                linkCollisionShapeIndices=collision_ids[1:],
+                linkVisualShapeIndices=visual_ids[1:],
+                linkPositions=[[0, 0, 0]] * (len(BEAR_PARTS) - 1),
+                linkOrientations=[[0, 0, 0, 1]] * (len(BEAR_PARTS) - 1),
+                linkInertialFramePositions=[[0, 0, 0]] * (len(BEAR_PARTS) - 1),
+                linkInertialFrameOrientations=[[0, 0, 0, 1]] * (len(BEAR_PARTS) - 1),
+                linkParentIndices=[0] * (len(BEAR_PARTS) - 1),
+                linkJointTypes=[pybullet.JOINT_FIXED] * (len(BEAR_PARTS) - 1),
+                linkJointAxis=[[0, 0, 1]] * (len(BEAR_PARTS) - 1),
+            )
+            for link in range(-1, len(BEAR_PARTS) - 1):
+                bullet.changeDynamics(self.body, link, lateralFriction=0.9, rollingFriction=0.001)
+        self._T_bear_base = np.eye(4)
+        self._T_bear_base[:3, 3] = com
+        self._constraint: int | None = None
+        self._anchor: Callable[[], np.ndarray] | None = None
+        self._T_anchor_bear = np.eye(4)
+        self._ignored: list[tuple[int, int]] = []
+        self.set_T_world_bear(T_world_bear)
+        clock.add_process(self._step)
+
+    @property
+    def held(self) -> bool:
+        """True while a holder carries the bear."""
+        return self._constraint is not None
+
+    def T_world_bear(self) -> np.ndarray:
+        """The bear frame in the world (ground truth)."""
+        return T_world_base_link(self._bullet, self.body) @ np.linalg.inv(self._T_bear_base)
+
+    def set_T_world_bear(self, T_world_bear: np.ndarray) -> None:
+        """Teleports the bear (at rest)."""
+        reset_base_link(self._bullet, self.body, T_world_bear @ self._T_bear_base)
+
+    def hold(self, anchor: Callable[[], np.ndarray], holder_body: int) -> None:
+        """Attaches the bear rigidly to a moving frame at their current relative pose.
+
+        Args:
+            anchor: returns the holder's anchor frame ``T_world_anchor`` (e.g. between the hands).
+            holder_body: the holder's body, whose links stop colliding with the bear.
+        """
+        with self._bullet.lock:
+            self.release()
+            self._anchor = anchor
+            self._T_anchor_bear = np.linalg.inv(anchor()) @ self.T_world_bear()
+            position, orientation = matrix_to_pose(self.T_world_bear() @ self._T_bear_base)
+            self._constraint = self._bullet.createConstraint(
+                self.body,
+                -1,
+                -1,
+                -1,
+                pybullet.JOINT_FIXED,
+                [0, 0, 0],
+                [0, 0, 0],
+                position,
+                [0, 0, 0, 1],
+                orientation,
+            )
+            self._bullet.changeConstraint(self._constraint, maxForce=HOLD_FORCE_N)
+            self._ignored = []
+            for holder_link in range(-1, self._bullet.getNumJoints(holder_body)):
+                for bear_link in range(-1, self._bullet.getNumJoints(self.body)):
+                    self._bullet.setCollisionFilterPair(
+                        holder_body, self.body, holder_link, bear_link, 0
+                    )
+                    self._ignored.append((holder_body, holder_link))
+
+    def release(self) -> None:
+        """Removes the holding constraint; the bear then falls or settles under physics.
+
+        Collisions with the holder come back, except with the holder's links the bear
+        overlaps at this moment (they stay off so the bear is not shot out of the hands).
+        """
+        with self._bullet.lock:
+            if self._constraint is None:
+                return
+            self._bullet.removeConstraint(self._constraint)
+            self._constraint = None
+            self._anchor = None
+            for holder_body, holder_link in set(self._ignored):
+                overlapping = self._bullet.getClosestPoints(
+                    holder_body, self.body, 0.0, linkIndexA=holder_link
+                )
+                if overlapping:
+                    continue
+                for bear_link in range(-1, self._bullet.getNumJoints(self.body)):
+                    self._bullet.setCollisionFilterPair(
+                        holder_body, self.body, holder_link, bear_link, 1
+                    )
+            self._ignored = []
+
+    def _step(self, now_s: float, dt_s: float) -> None:
+        if self._constraint is None or self._anchor is None:
+            return
+        position, orientation = matrix_to_pose(
+            self._anchor() @ self._T_anchor_bear @ self._T_bear_base
+        )
+        self._bullet.changeConstraint(
+            self._constraint,
+            jointChildPivot=position,
+            jointChildFrameOrientation=orientation,
+            maxForce=HOLD_FORCE_N,
+        )

@@ -1,0 +1,156 @@
+"""One pybullet connection shared by every simulated device, behind one lock.
+
+The executive calls the world from worker threads while the main thread may poll it, so
+every pybullet call of a world goes through :class:`LockedBullet`, which holds the
+world's single ``threading.RLock`` for the duration of each call. Callers that need
+several calls to be atomic (read, then write) hold ``bullet.lock`` around them.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import math
+import threading
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pybullet
+from pybullet_utils import bullet_client
+
+from skills.meshes import cache_dir
+
+
+def sim_cache_dir() -> Path:
+    """Where generated simulation assets (URDFs, OBJs, textures) are written."""
+    path = cache_dir() / "sim"
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+class LockedBullet:
+    """A pybullet client whose every call holds the world's re-entrant lock.
+
+    Attributes:
+        lock: the world's lock; hold it to make a sequence of calls atomic.
+        client: the underlying ``BulletClient`` (use through this wrapper only).
+    """
+
+    def __init__(self, gui: bool = False) -> None:
+        self.lock = threading.RLock()
+        self.client = bullet_client.BulletClient(
+            connection_mode=pybullet.GUI if gui else pybullet.DIRECT
+        )
+        self.gui = gui
+        self._closed = False
+
+    def __getattr__(self, name: str) -> Any:
+        attribute = getattr(self.client, name)
+        if not callable(attribute):
+            return attribute
+
+        @functools.wraps(attribute)
+        def locked(*args: Any, **kwargs: Any) -> Any:
+            with self.lock:
+                if self._closed:
+                    raise RuntimeError("the simulated world is closed")
+                return attribute(*args, **kwargs)
+
+        return locked
+
+    @property
+    def closed(self) -> bool:
+        """True once :meth:`disconnect_once` has run."""
+        return self._closed
+
+    def disconnect_once(self) -> None:
+        """Disconnects from the physics server; later calls do nothing."""
+        with self.lock:
+            if self._closed:
+                return
+            self._closed = True
+            with contextlib.suppress(pybullet.error):
+                self.client.disconnect()
+
+
+def pose_to_matrix(position: Sequence[float], quaternion_xyzw: Sequence[float]) -> np.ndarray:
+    """4x4 transform from a pybullet position and (x, y, z, w) quaternion."""
+    transform = np.eye(4)
+    transform[:3, :3] = np.array(pybullet.getMatrixFromQuaternion(quaternion_xyzw)).reshape(3, 3)
+    transform[:3, 3] = position
+    return transform
+
+
+def matrix_to_pose(transform: np.ndarray) -> tuple[list[float], list[float]]:
+    """(position, (x, y, z, w) quaternion) of a 4x4 rigid transform."""
+    return list(map(float, transform[:3, 3])), rotation_to_quaternion(transform[:3, :3])
+
+
+def rotation_to_quaternion(rotation: np.ndarray) -> list[float]:
+    """(x, y, z, w) quaternion of a 3x3 rotation matrix (Shepperd's method)."""
+    m = rotation
+    trace = m[0, 0] + m[1, 1] + m[2, 2]
+    if trace > 0.0:
+        s = 2.0 * math.sqrt(trace + 1.0)
+        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, 0.25 * s]
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        q = [0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s]
+    elif m[1, 1] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        q = [(m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        q = [(m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s, (m[1, 0] - m[0, 1]) / s]
+    norm = math.sqrt(sum(v * v for v in q))
+    return [float(v / norm) for v in q]
+
+
+StepProcess = Callable[[float, float], None]
+"""A process advanced by the clock before each physics step: ``process(now_s, dt_s)``."""
+
+
+def T_world_base_link(bullet: LockedBullet, body: int) -> np.ndarray:
+    """The base's link frame in the world (pybullet reports the inertial frame instead)."""
+    with bullet.lock:
+        position, orientation = bullet.getBasePositionAndOrientation(body)
+        local_position, local_orientation = bullet.getDynamicsInfo(body, -1)[3:5]
+    T_world_inertial = pose_to_matrix(position, orientation)
+    T_link_inertial = pose_to_matrix(local_position, local_orientation)
+    return T_world_inertial @ np.linalg.inv(T_link_inertial)
+
+
+def reset_base_link(bullet: LockedBullet, body: int, T_world_link: np.ndarray) -> None:
+    """Teleports a body so that its base link frame is ``T_world_link``; zeroes its velocity."""
+    with bullet.lock:
+        local_position, local_orientation = bullet.getDynamicsInfo(body, -1)[3:5]
+        T_world_inertial = T_world_link @ pose_to_matrix(local_position, local_orientation)
+        position, orientation = matrix_to_pose(T_world_inertial)
+        bullet.resetBasePositionAndOrientation(body, position, orientation)
+        bullet.resetBaseVelocity(body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+
+
+def T_world_link(bullet: LockedBullet, body: int, link: int) -> np.ndarray:
+    """A link's URDF frame in the world, by forward kinematics of the current joint state."""
+    if link < 0:
+        return T_world_base_link(bullet, body)
+    state = bullet.getLinkState(body, link, computeForwardKinematics=True)
+    return pose_to_matrix(state[4], state[5])
+
+
+def joint_index_by_name(bullet: LockedBullet, body: int) -> dict[str, int]:
+    """Joint name -> index for every joint of a body."""
+    return {
+        bullet.getJointInfo(body, index)[1].decode(): index
+        for index in range(bullet.getNumJoints(body))
+    }
+
+
+def link_index_by_name(bullet: LockedBullet, body: int) -> dict[str, int]:
+    """Link name -> index (the base link is -1)."""
+    names = {bullet.getBodyInfo(body)[0].decode(): -1}
+    for index in range(bullet.getNumJoints(body)):
+        names[bullet.getJointInfo(body, index)[12].decode()] = index
+    return names

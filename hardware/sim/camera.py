@@ -1,0 +1,184 @@
+"""The wrist depth camera: a PrimeSense Carmine 1.09 rendered by pybullet's TinyRenderer.
+
+Rendering works in DIRECT mode (no GUI, no OpenGL context). The OpenGL z-buffer is
+turned into metric depth along the optical axis, then a Carmine-like noise model is
+applied (see :class:`CarmineNoise`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+import pybullet
+
+from hardware.interfaces import CameraIntrinsics
+from hardware.sim.bullet import LockedBullet
+from skills.geometry import make_transform
+
+CARMINE_HFOV_DEG = 58.0
+"""Horizontal field of view of the Carmine 1.09's depth camera (datasheet: 57.5 deg)."""
+
+
+def carmine_intrinsics(width: int = 640, height: int = 480) -> CameraIntrinsics:
+    """Pinhole intrinsics of the Carmine 1.09 at 640x480: fx = fy = 320 / tan(29 deg) ≈ 577.
+
+    The principal point is the image centre in pixel-centre coordinates (pixel (0, 0)'s
+    centre is at (0, 0)), i.e. cx = (W - 1) / 2, cy = (H - 1) / 2.
+    """
+    focal_px = (width / 2.0) / math.tan(math.radians(CARMINE_HFOV_DEG) / 2.0)
+    return CameraIntrinsics(
+        width, height, focal_px, focal_px, (width - 1) / 2.0, (height - 1) / 2.0
+    )
+
+
+CARMINE_INTRINSICS = carmine_intrinsics()
+
+T_HAND_CAMERA = make_transform(
+    np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]),
+    np.array([0.065, 0.0, 0.02]),
+)
+"""Hand-eye extrinsic: the camera (OpenCV optical frame) in the Panda's ``panda_hand`` frame.
+
+The camera is mounted 6.5 cm off the hand's axis along the hand's +x, 2 cm along the
+approach axis, looking along the hand's approach axis (+z). Its image x axis is the
+hand's -y and its image y axis (down) the hand's +x, so the closed fingers lie above the
+top edge of the image, outside the 45 deg vertical field of view.
+"""
+
+NEAR_M = 0.05
+FAR_M = 8.0
+MIN_RANGE_M = 0.35
+MAX_RANGE_M = 3.5
+BASELINE_M = 0.075
+
+
+class RenderedView(NamedTuple):
+    """A noiseless rendering: rgb (H, W, 3) uint8, depth_m (H, W) float32, segmentation."""
+
+    rgb: np.ndarray
+    depth_m: np.ndarray
+    segmentation: np.ndarray
+
+
+_CV_TO_GL = np.diag([1.0, -1.0, -1.0, 1.0])
+
+
+def opengl_matrices(
+    T_world_camera: np.ndarray, intrinsics: CameraIntrinsics
+) -> tuple[list[float], list[float]]:
+    """pybullet view and projection matrices (column-major) for an OpenCV camera pose.
+
+    The projection reproduces the pinhole model exactly: a point at camera coordinates
+    (X, Y, Z) lands at pixel (fx X / Z + cx, fy Y / Z + cy), with pixel centres at
+    integer coordinates.
+    """
+    view = np.linalg.inv(T_world_camera @ _CV_TO_GL)
+    width, height = intrinsics.width, intrinsics.height
+    projection = np.zeros((4, 4))
+    projection[0, 0] = 2.0 * intrinsics.fx / width
+    projection[1, 1] = 2.0 * intrinsics.fy / height
+    projection[0, 2] = 1.0 - 2.0 * (intrinsics.cx + 0.5) / width
+    projection[1, 2] = 2.0 * (intrinsics.cy + 0.5) / height - 1.0
+    projection[2, 2] = -(FAR_M + NEAR_M) / (FAR_M - NEAR_M)
+    projection[2, 3] = -2.0 * FAR_M * NEAR_M / (FAR_M - NEAR_M)
+    projection[3, 2] = -1.0
+    return view.T.flatten().tolist(), projection.T.flatten().tolist()
+
+
+def render_view(
+    bullet: LockedBullet, T_world_camera: np.ndarray, intrinsics: CameraIntrinsics
+) -> RenderedView:
+    """Renders RGB, metric depth along the optical axis and segmentation with TinyRenderer.
+
+    Depth: with the z-buffer value b in [0, 1], z_ndc = 2b - 1 and
+    z = 2 n f / (f + n - z_ndc (f - n)), the distance along the optical axis; the far
+    plane (nothing hit) gives 0.
+    """
+    view, projection = opengl_matrices(T_world_camera, intrinsics)
+    _, _, rgba, zbuffer, segmentation = bullet.getCameraImage(
+        intrinsics.width,
+        intrinsics.height,
+        viewMatrix=view,
+        projectionMatrix=projection,
+        renderer=pybullet.ER_TINY_RENDERER,
+        shadow=0,
+        lightDirection=[0.4, 0.3, 1.0],
+    )
+    rgba = np.asarray(rgba, dtype=np.uint8).reshape(intrinsics.height, intrinsics.width, 4)
+    zbuffer = np.asarray(zbuffer, dtype=np.float64).reshape(intrinsics.height, intrinsics.width)
+    z_ndc = 2.0 * zbuffer - 1.0
+    depth = 2.0 * NEAR_M * FAR_M / (FAR_M + NEAR_M - z_ndc * (FAR_M - NEAR_M))
+    depth[zbuffer >= 1.0 - 1e-7] = 0.0
+    segmentation = np.asarray(segmentation, dtype=np.int64).reshape(
+        intrinsics.height, intrinsics.width
+    )
+    return RenderedView(
+        np.ascontiguousarray(rgba[:, :, :3]), depth.astype(np.float32), segmentation
+    )
+
+
+class CarmineNoise(NamedTuple):
+    """A structured-light depth noise model after the Carmine/Kinect v1 literature.
+
+    The sensor measures disparity d = f b / z (pixels, baseline b = 7.5 cm) and
+    quantizes it to 1/8 pixel. We add Gaussian disparity noise of ``disparity_sigma_px``
+    before quantizing; the resulting axial noise grows as
+
+        σ_z ≈ z² / (f b) · sqrt(σ_d² + q² / 12) ≈ 1.5e-3 · z²  (metres, z in metres),
+
+    i.e. about 0.4 mm at 0.5 m, 1.5 mm at 1 m and 6 mm at 2 m. Missing pixels (depth 0):
+    ``dropout_fraction`` of all pixels at random, ``edge_dropout`` of the pixels next to
+    a depth discontinuity larger than 3 cm + 2 % of the depth (the projector's shadow and
+    mixed pixels), and everything outside [0.35, 3.5] m. RGB gets Gaussian noise of
+    ``rgb_sigma`` grey levels.
+    """
+
+    disparity_sigma_px: float = 0.054
+    disparity_step_px: float = 0.125
+    dropout_fraction: float = 0.02
+    edge_dropout: float = 0.5
+    rgb_sigma: float = 2.0
+
+    def apply(
+        self,
+        rgb: np.ndarray,
+        depth_m: np.ndarray,
+        intrinsics: CameraIntrinsics,
+        rng: np.random.Generator,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Noisy copies of ``rgb`` (uint8) and ``depth_m`` (float32, 0 = missing)."""
+        depth = depth_m.astype(np.float64)
+        valid = depth > 0.0
+        focal_baseline = intrinsics.fx * BASELINE_M
+        disparity = np.zeros_like(depth)
+        disparity[valid] = focal_baseline / depth[valid]
+        disparity += rng.normal(0.0, self.disparity_sigma_px, depth.shape)
+        disparity = np.round(disparity / self.disparity_step_px) * self.disparity_step_px
+        noisy = np.zeros_like(depth)
+        measurable = valid & (disparity > 0.0)
+        noisy[measurable] = focal_baseline / disparity[measurable]
+
+        jump = np.zeros(depth.shape, dtype=bool)
+        threshold = 0.03 + 0.02 * depth
+        horizontal = np.abs(np.diff(depth, axis=1)) > threshold[:, 1:]
+        vertical = np.abs(np.diff(depth, axis=0)) > threshold[1:, :]
+        jump[:, 1:] |= horizontal
+        jump[:, :-1] |= horizontal
+        jump[1:, :] |= vertical
+        jump[:-1, :] |= vertical
+        missing = rng.random(depth.shape) < self.dropout_fraction
+        missing |= jump & (rng.random(depth.shape) < self.edge_dropout)
+        missing |= (noisy < MIN_RANGE_M) | (noisy > MAX_RANGE_M)
+        noisy[missing] = 0.0
+
+        noisy_rgb = rgb.astype(np.float64) + rng.normal(0.0, self.rgb_sigma, rgb.shape)
+        return np.clip(np.round(noisy_rgb), 0, 255).astype(np.uint8), noisy.astype(np.float32)
+
+
+def clip_range(depth_m: np.ndarray) -> np.ndarray:
+    """Noiseless depth with the sensor's range limits applied (0 outside [0.35, 3.5] m)."""
+    depth = depth_m.copy()
+    depth[(depth < MIN_RANGE_M) | (depth > MAX_RANGE_M)] = 0.0
+    return depth

@@ -1,0 +1,223 @@
+"""The Franka Panda with its wrist depth camera, as a :class:`hardware.interfaces.ScanningArm`."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import pybullet
+import pybullet_data
+
+from hardware.interfaces import CameraIntrinsics, RGBDFrame
+from hardware.sim.bullet import LockedBullet, T_world_link, link_index_by_name
+from hardware.sim.camera import (
+    CARMINE_INTRINSICS,
+    T_HAND_CAMERA,
+    CarmineNoise,
+    RenderedView,
+    clip_range,
+    render_view,
+)
+from hardware.sim.clock import SimClock
+from skills.geometry import make_transform
+
+PANDA_URDF = Path(pybullet_data.getDataPath()) / "franka_panda" / "panda.urdf"
+ARM_JOINTS = 7
+HAND_LINK = "panda_hand"
+JOINT_FORCE_LIMITS_NM = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
+MAX_JOINT_SPEED_RADPS = 1.5
+REACHED_TOLERANCE_RAD = 4e-3
+SETTLED_SPEED_RADPS = 0.02
+
+PANDA_READY_RAD = (0.817, -1.007, -0.234, -1.996, -0.575, 1.606, -1.875)
+"""The camera 0.75 m above the floor at x = 0.2 m, looking at the chair area's centre (0.6, 0, 0.25)."""
+
+
+def look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """OpenCV camera pose at ``eye`` looking at ``target`` with the image upright (world z up)."""
+    forward = target - eye
+    forward = forward / np.linalg.norm(forward)
+    up = np.array([0.0, 0.0, 1.0]) if abs(forward[2]) < 0.99 else np.array([1.0, 0.0, 0.0])
+    right = np.cross(forward, up)
+    right /= np.linalg.norm(right)
+    down = np.cross(forward, right)
+    return make_transform(np.column_stack([right, down, forward]), eye)
+
+
+class SimPanda:
+    """A fixed-base Panda whose wrist camera renders the scene.
+
+    ``move_to`` runs joint position control (at most 1.5 rad/s per joint) and steps the
+    simulation through the clock until every joint is within 4 mrad of its target and
+    nearly still. ``capture`` renders through TinyRenderer at the pose given by forward
+    kinematics of the hand link composed with :data:`T_HAND_CAMERA`.
+
+    Attributes:
+        body: the pybullet body id.
+        intrinsics: the camera's pinhole model.
+        last_view: the noiseless rendering behind the last capture (tests and benchmarks
+            only: ground-truth depth and segmentation).
+    """
+
+    def __init__(
+        self,
+        bullet: LockedBullet,
+        clock: SimClock,
+        base_xy: tuple[float, float],
+        rng: np.random.Generator,
+        camera_noise: bool = True,
+        initial_joints: Sequence[float] = PANDA_READY_RAD,
+    ) -> None:
+        self._bullet = bullet
+        self._clock = clock
+        self._rng = rng
+        self._noise = CarmineNoise() if camera_noise else None
+        self.intrinsics: CameraIntrinsics = CARMINE_INTRINSICS
+        self.body = bullet.loadURDF(
+            str(PANDA_URDF),
+            basePosition=[base_xy[0], base_xy[1], 0.0],
+            useFixedBase=True,
+            flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
+        )
+        self._hand = link_index_by_name(bullet, self.body)[HAND_LINK]
+        info = [bullet.getJointInfo(self.body, j) for j in range(ARM_JOINTS)]
+        self.lower_limits = np.array([item[8] for item in info])
+        self.upper_limits = np.array([item[9] for item in info])
+        self.last_view: RenderedView | None = None
+        with bullet.lock:
+            for joint, angle in enumerate(initial_joints):
+                bullet.resetJointState(self.body, joint, angle)
+            for finger in (9, 10):
+                bullet.resetJointState(self.body, finger, 0.0)
+                bullet.setJointMotorControl2(
+                    self.body, finger, pybullet.POSITION_CONTROL, targetPosition=0.0, force=20.0
+                )
+            self._command(np.asarray(initial_joints, dtype=float))
+
+    def joint_positions(self) -> np.ndarray:
+        """The seven arm joint angles in radians."""
+        with self._bullet.lock:
+            states = self._bullet.getJointStates(self.body, list(range(ARM_JOINTS)))
+        return np.array([state[0] for state in states])
+
+    def joint_velocities(self) -> np.ndarray:
+        """The seven arm joint speeds in rad/s."""
+        with self._bullet.lock:
+            states = self._bullet.getJointStates(self.body, list(range(ARM_JOINTS)))
+        return np.array([state[1] for state in states])
+
+    def move_to(self, joint_positions_rad: Sequence[float], timeout_s: float = 10.0) -> None:
+        """Moves to a joint configuration, stepping the simulation until it is reached.
+
+        Raises:
+            ValueError: not 7 finite angles, or outside the joint limits.
+            TimeoutError: not reached within ``timeout_s`` simulated seconds.
+        """
+        target = np.asarray(joint_positions_rad, dtype=float).reshape(-1)
+        if target.shape != (ARM_JOINTS,) or not np.all(np.isfinite(target)):
+            raise ValueError(f"the Panda needs {ARM_JOINTS} finite joint angles, got {target}")
+        outside = (target < self.lower_limits - 1e-6) | (target > self.upper_limits + 1e-6)
+        if np.any(outside):
+            joints = ", ".join(f"joint {index + 1}" for index in np.flatnonzero(outside))
+            raise ValueError(f"target outside the Panda's joint limits at {joints}")
+        self._command(target)
+        start_s = self._clock.now()
+        while True:
+            error = np.max(np.abs(self.joint_positions() - target))
+            speed = np.max(np.abs(self.joint_velocities()))
+            if error < REACHED_TOLERANCE_RAD and speed < SETTLED_SPEED_RADPS:
+                return
+            if self._clock.now() - start_s > timeout_s:
+                raise TimeoutError(
+                    f"Panda did not reach its target in {timeout_s:.1f} s "
+                    f"(largest joint error {math.degrees(error):.1f} deg)"
+                )
+            self._clock.sleep(1.0 / 60.0)
+
+    def T_world_camera(self) -> np.ndarray:
+        """Camera pose: forward kinematics of the hand link composed with the hand-eye extrinsic."""
+        with self._bullet.lock:
+            return T_world_link(self._bullet, self.body, self._hand) @ T_HAND_CAMERA
+
+    def capture(self) -> RGBDFrame:
+        """Renders one RGB-D frame (640x480) at the current arm configuration."""
+        with self._bullet.lock:
+            T_world_camera = self.T_world_camera()
+            view = render_view(self._bullet, T_world_camera, self.intrinsics)
+            stamp_s = self._clock.now()
+        self.last_view = view
+        if self._noise is None:
+            rgb, depth = view.rgb.copy(), clip_range(view.depth_m)
+        else:
+            rgb, depth = self._noise.apply(view.rgb, view.depth_m, self.intrinsics, self._rng)
+        return RGBDFrame(rgb, depth, self.intrinsics, T_world_camera, stamp_s)
+
+    def joints_looking_at(
+        self,
+        eye: Sequence[float],
+        target: Sequence[float],
+        rest_joints: Sequence[float] | None = None,
+        starts: int = 8,
+        seed: int = 0,
+    ) -> tuple[np.ndarray, float]:
+        """Joint angles putting the camera at ``eye`` looking at ``target``, image about upright.
+
+        Bounded nonlinear least squares over the 7 joints on forward kinematics (pybullet
+        link state): residuals are the camera position error (m), 0.3 x the optical-axis
+        error, 0.05 x the error of the image's down axis against the upright one and
+        0.003 x the distance from ``rest_joints`` (soft preferences), from ``rest_joints`` and ``starts - 1`` seeded random starts. Does
+        not move the arm (its state is restored). A helper for choosing scan configurations.
+
+        Returns:
+            (joint angles (7,), camera position error in metres).
+        """
+        from scipy.optimize import least_squares
+
+        desired = look_at(np.asarray(eye, float), np.asarray(target, float))
+        rng = np.random.default_rng(seed)
+        rest = np.asarray(PANDA_READY_RAD if rest_joints is None else rest_joints, dtype=float)
+        with self._bullet.lock:
+            saved = self.joint_positions()
+
+            def residual(joints: np.ndarray) -> np.ndarray:
+                for joint, angle in enumerate(joints):
+                    self._bullet.resetJointState(self.body, joint, float(angle))
+                T_world_camera = self.T_world_camera()
+                return np.concatenate(
+                    [
+                        T_world_camera[:3, 3] - desired[:3, 3],
+                        0.3 * (T_world_camera[:3, 2] - desired[:3, 2]),
+                        0.05 * (T_world_camera[:3, 1] - desired[:3, 1]),
+                        0.003 * (joints - rest),
+                    ]
+                )
+
+            best = None
+            for index in range(starts):
+                initial = rest if index == 0 else rng.uniform(self.lower_limits, self.upper_limits)
+                initial = np.clip(initial, self.lower_limits + 1e-3, self.upper_limits - 1e-3)
+                result = least_squares(
+                    residual, initial, bounds=(self.lower_limits, self.upper_limits), diff_step=1e-4
+                )
+                if best is None or result.cost < best.cost:
+                    best = result
+            joints = np.asarray(best.x)
+            residual(joints)
+            error = float(np.linalg.norm(self.T_world_camera()[:3, 3] - desired[:3, 3]))
+            for joint, angle in enumerate(saved):
+                self._bullet.resetJointState(self.body, joint, float(angle))
+        return joints, error
+
+    def _command(self, target: np.ndarray) -> None:
+        with self._bullet.lock:
+            for joint in range(ARM_JOINTS):
+                self._bullet.setJointMotorControl2(
+                    self.body,
+                    joint,
+                    pybullet.POSITION_CONTROL,
+                    targetPosition=float(target[joint]),
+                    force=JOINT_FORCE_LIMITS_NM[joint],
+                    maxVelocity=MAX_JOINT_SPEED_RADPS,
+                )

@@ -1,0 +1,321 @@
+"""The simulated world: the embedded default backend of the mission.
+
+A pybullet scene (DIRECT by default, GUI on request) with the floor, the planning
+arena's walls and obstacles, a Franka Panda with a wrist Carmine camera, a chair from
+any mesh, a NAO carrying a teddy bear with an ArUco tag on its head, and a helper who
+turns the chair when told. Every device implements a protocol of
+:mod:`hardware.interfaces`; :attr:`SimWorld.robot` bundles them for the executive.
+Everything random is drawn from generators spawned from ``SimConfig.seed``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import pybullet
+import pybullet_data
+import trimesh
+from PIL import Image
+
+from hardware.interfaces import CameraIntrinsics, Robot, Speaker
+from hardware.sim.bear import SimBear
+from hardware.sim.bullet import LockedBullet, matrix_to_pose, pose_to_matrix
+from hardware.sim.camera import render_view
+from hardware.sim.chair import SimChair
+from hardware.sim.clock import SimClock
+from hardware.sim.helper import SimHelper, SimSpeaker
+from hardware.sim.judge import SimJudge
+from hardware.sim.nao import SimNao
+from hardware.sim.nao_model import nao_urdf
+from hardware.sim.panda import SimPanda
+from hardware.sim.tag import tag_assets
+from skills.arena import DEFAULT_ARENA, HUMANOID_TAG, Arena
+from skills.geometry import make_transform, rot_z, wrap_angle, yaw_of
+from skills.meshes import box_chair_mesh, load_mesh
+
+log = logging.getLogger(__name__)
+
+WALL_HEIGHT_M = 0.1
+WALL_THICKNESS_M = 0.02
+PLACEMENT_TOLERANCE_DEG = 30.0
+SETTLE_S = 0.5
+BEAR_SEAT_BELOW_HANDS_M = 0.065
+"""The bear is held with its torso's middle between the palms."""
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """How to build the simulated world.
+
+    Attributes:
+        chair_path: a chair mesh (OBJ, PLY, STL, OFF, GLB); None for the box chair.
+        placement: "accessible": the chair's sitting direction is within ±30 deg of the
+            direction from the chair to the humanoid's start; "inaccessible": it points
+            toward the arm (-x) or a side wall (±y), ±30 deg, chosen by the seed.
+        helper: how the helper reacts to instructions.
+        seed: seeds every random choice.
+        gui: open pybullet's GUI (paced to wall-clock time) instead of DIRECT.
+        camera_noise: apply the Carmine noise model to captures.
+        front_yaw_deg: the mesh's sitting direction in its own frame (from the manifest);
+            the box chair's is 0. None: the placement yaw is random (with a warning).
+        arena: the workspace layout.
+        voice: speaks sentences aloud; None prints them.
+    """
+
+    chair_path: Path | None = None
+    placement: Literal["accessible", "inaccessible"] = "accessible"
+    helper: Literal["obeys", "disobeys", "ignores"] = "obeys"
+    seed: int = 0
+    gui: bool = False
+    camera_noise: bool = True
+    front_yaw_deg: float | None = None
+    arena: Arena = DEFAULT_ARENA
+    voice: Speaker | None = None
+
+
+class SimWorld:
+    """Builds and owns the whole simulated scene. Use as a context manager or call close().
+
+    Attributes:
+        config: what was built.
+        robot: the devices bundled for the executive (arm, humanoid, speaker, clock,
+            helper, judge).
+        panda, nao, bear, chair, helper, speaker, clock, judge: the devices themselves.
+        floor: the floor's body id.
+        front_yaw_rad: the chair mesh's sitting direction in the chair frame (None if unknown).
+        placement_yaw_rad: the yaw the chair was placed with.
+    """
+
+    def __init__(self, config: SimConfig) -> None:
+        if config.placement not in ("accessible", "inaccessible"):
+            raise ValueError(f"unknown placement {config.placement!r} (accessible or inaccessible)")
+        self.config = config
+        chair_mesh = box_chair_mesh() if config.chair_path is None else load_mesh(config.chair_path)
+        front_yaw_deg = (
+            0.0
+            if config.chair_path is None and config.front_yaw_deg is None
+            else (config.front_yaw_deg)
+        )
+        self.front_yaw_rad = None if front_yaw_deg is None else math.radians(front_yaw_deg)
+        streams = np.random.SeedSequence(config.seed).spawn(5)
+        placement_rng, camera_rng, nao_rng, helper_rng, _ = (
+            np.random.default_rng(stream) for stream in streams
+        )
+
+        self._bullet = LockedBullet(gui=config.gui)
+        bullet = self._bullet
+        try:
+            with bullet.lock:
+                bullet.setGravity(0.0, 0.0, -9.81)
+                if config.gui:
+                    bullet.configureDebugVisualizer(pybullet.COV_ENABLE_GUI, 0)
+                self.clock = SimClock(bullet, realtime=config.gui)
+                self.floor = bullet.loadURDF(
+                    str(Path(pybullet_data.getDataPath()) / "plane.urdf"), useFixedBase=True
+                )
+                bullet.changeVisualShape(
+                    self.floor, -1, textureUniqueId=-1, rgbaColor=[0.62, 0.62, 0.6, 1.0]
+                )
+                bullet.changeDynamics(self.floor, -1, lateralFriction=0.9)
+                self.walls = self._build_walls(config.arena)
+                self.panda = SimPanda(
+                    bullet, self.clock, config.arena.arm_base_xy, camera_rng, config.camera_noise
+                )
+                T_world_chair = self._placement(config, placement_rng)
+                self.chair = SimChair(bullet, chair_mesh, T_world_chair)
+                texture_path, plate_path = tag_assets(HUMANOID_TAG)
+                texture = bullet.loadTexture(str(texture_path))
+                self.nao = SimNao(
+                    bullet,
+                    self.clock,
+                    str(nao_urdf(plate_path, HUMANOID_TAG.height_m)),
+                    config.arena.humanoid_start,
+                    nao_rng,
+                    texture_id=texture,
+                )
+                self.bear = SimBear(bullet, self.clock, self._bear_in_hands())
+                self.bear.hold(self.hands_frame, self.nao.body)
+                self.nao.on_hands = self._on_hands
+                self.helper = SimHelper(self.clock, self.chair, config.helper, helper_rng)
+                self.speaker = SimSpeaker(self.helper, config.voice)
+                self.judge = SimJudge(bullet, self.clock, self.bear, self.chair.body, self.floor)
+            self.clock.sleep(SETTLE_S)
+        except BaseException:
+            bullet.disconnect_once()
+            raise
+        self.robot = Robot(
+            arm=self.panda,
+            humanoid=self.nao,
+            speaker=self.speaker,
+            clock=self.clock,
+            helper=self.helper,
+            judge=self.judge,
+        )
+
+    # --- ground truth (tests and benchmarks only) ----------------------------------------
+    @property
+    def chair_mesh_true(self) -> trimesh.Trimesh:
+        """The chair mesh at its current true pose, world frame."""
+        return self.chair.mesh_world()
+
+    def T_world_chair_true(self) -> np.ndarray:
+        """The chair frame's current true pose (changes when the helper turns the chair)."""
+        return self.chair.T_world_chair()
+
+    def sitting_yaw_true(self) -> float | None:
+        """The chair's current true sitting direction in the world (radians), if known."""
+        if self.front_yaw_rad is None:
+            return None
+        return wrap_angle(self.front_yaw_rad + yaw_of(self.T_world_chair_true()))
+
+    # --- pictures -----------------------------------------------------------------------
+    def render_png(self, path: Path, view: Literal["top", "perspective"] = "perspective") -> None:
+        """Writes a 960x720 picture of the scene (TinyRenderer) for reports."""
+        arena = self.config.arena
+        centre = np.array([(arena.x_min + arena.x_max) / 2.0 - 0.3, 0.0, 0.25])
+        if view == "top":
+            eye = centre + np.array([0.0, 0.0, 4.2])
+            forward = np.array([0.0, 0.0, -1.0])
+            down = np.array([-1.0, 0.0, 0.0])
+        elif view == "perspective":
+            eye = np.array([arena.x_max + 0.6, arena.y_min - 1.6, 1.9])
+            forward = centre - eye
+            forward /= np.linalg.norm(forward)
+            right = np.cross(forward, [0.0, 0.0, 1.0])
+            right /= np.linalg.norm(right)
+            down = np.cross(forward, right)
+        else:
+            raise ValueError(f"unknown view {view!r} (top or perspective)")
+        right = np.cross(down, forward)
+        T_world_camera = make_transform(np.column_stack([right, down, forward]), eye)
+        focal = 480.0 / math.tan(math.radians(30.0))
+        intrinsics = CameraIntrinsics(960, 720, focal, focal, 479.5, 359.5)
+        rendered = render_view(self._bullet, T_world_camera, intrinsics)
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        Image.fromarray(rendered.rgb).save(path)
+
+    # --- life cycle ---------------------------------------------------------------------
+    def close(self) -> None:
+        """Stops the robots and disconnects from pybullet; safe to call more than once."""
+        if self._bullet.closed:
+            return
+        try:
+            self.nao.stop()
+        finally:
+            self._bullet.disconnect_once()
+
+    def __enter__(self) -> SimWorld:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # --- construction -------------------------------------------------------------------
+    def hands_frame(self) -> np.ndarray:
+        """The frame between the NAO's palms: mean position, averaged orientation."""
+        left = self.nao.T_world_link("l_wrist") @ _PALM
+        right = self.nao.T_world_link("r_wrist") @ _PALM
+        q_left = np.array(matrix_to_pose(left)[1])
+        q_right = np.array(matrix_to_pose(right)[1])
+        if np.dot(q_left, q_right) < 0.0:
+            q_right = -q_right
+        quaternion = (q_left + q_right) / np.linalg.norm(q_left + q_right)
+        return pose_to_matrix((left[:3, 3] + right[:3, 3]) / 2.0, quaternion)
+
+    def _bear_in_hands(self) -> np.ndarray:
+        middle = self.hands_frame()[:3, 3]
+        T_world_feet = self.nao.T_world_feet()
+        return make_transform(
+            T_world_feet[:3, :3], middle - np.array([0.0, 0.0, BEAR_SEAT_BELOW_HANDS_M])
+        )
+
+    def _on_hands(self, open_hands: bool) -> None:
+        if open_hands:
+            self.bear.release()
+
+    def _placement(self, config: SimConfig, rng: np.random.Generator) -> np.ndarray:
+        area = config.arena.chair_area
+        x = rng.uniform(area.x_min, area.x_max)
+        y = rng.uniform(area.y_min, area.y_max)
+        tolerance = math.radians(PLACEMENT_TOLERANCE_DEG)
+        offset = rng.uniform(-tolerance, tolerance)
+        if config.placement == "accessible":
+            start = config.arena.humanoid_start
+            sitting_yaw = math.atan2(start.y - y, start.x - x) + offset
+        else:
+            sitting_yaw = float(rng.choice([math.pi, math.pi / 2.0, -math.pi / 2.0])) + offset
+        if self.front_yaw_rad is None:
+            placement_yaw = rng.uniform(-math.pi, math.pi)
+            log.warning(
+                "chair %s has no known sitting direction (front_yaw_deg): placed with a random "
+                "yaw, so placement=%s is not enforced",
+                config.chair_path,
+                config.placement,
+            )
+        else:
+            placement_yaw = wrap_angle(sitting_yaw - self.front_yaw_rad)
+        self.placement_yaw_rad = placement_yaw
+        return make_transform(rot_z(placement_yaw), np.array([x, y, 0.0]))
+
+    def _build_walls(self, arena: Arena) -> list[int]:
+        bullet = self._bullet
+        bodies = []
+        half_t = WALL_THICKNESS_M / 2.0
+        length_x = arena.x_max - arena.x_min + WALL_THICKNESS_M
+        length_y = arena.y_max - arena.y_min + WALL_THICKNESS_M
+        mid_x = (arena.x_min + arena.x_max) / 2.0
+        mid_y = (arena.y_min + arena.y_max) / 2.0
+        walls = [
+            ((length_x, WALL_THICKNESS_M), (mid_x, arena.y_min - half_t)),
+            ((length_x, WALL_THICKNESS_M), (mid_x, arena.y_max + half_t)),
+            ((WALL_THICKNESS_M, length_y), (arena.x_min - half_t, mid_y)),
+            ((WALL_THICKNESS_M, length_y), (arena.x_max + half_t, mid_y)),
+        ]
+        boxes = [((sx, sy, WALL_HEIGHT_M), (cx, cy)) for (sx, sy), (cx, cy) in walls]
+        for obstacle in arena.obstacles:
+            base_x, base_y = arena.arm_base_xy
+            if (
+                obstacle.x_min <= base_x <= obstacle.x_max
+                and obstacle.y_min <= base_y <= obstacle.y_max
+            ):
+                continue  # the arm's own footprint: the Panda itself stands there
+            boxes.append(
+                (
+                    (
+                        obstacle.x_max - obstacle.x_min,
+                        obstacle.y_max - obstacle.y_min,
+                        obstacle.height,
+                    ),
+                    (
+                        (obstacle.x_min + obstacle.x_max) / 2.0,
+                        (obstacle.y_min + obstacle.y_max) / 2.0,
+                    ),
+                )
+            )
+        for (sx, sy, sz), (cx, cy) in boxes:
+            collision = bullet.createCollisionShape(
+                pybullet.GEOM_BOX, halfExtents=[sx / 2.0, sy / 2.0, sz / 2.0]
+            )
+            visual = bullet.createVisualShape(
+                pybullet.GEOM_BOX,
+                halfExtents=[sx / 2.0, sy / 2.0, sz / 2.0],
+                rgbaColor=[0.3, 0.45, 0.7, 1.0],
+            )
+            bodies.append(
+                bullet.createMultiBody(
+                    baseMass=0.0,
+                    baseCollisionShapeIndex=collision,
+                    baseVisualShapeIndex=visual,
+                    basePosition=[cx, cy, sz / 2.0],
+                )
+            )
+        return bodies
+
+
+_PALM = make_transform(np.eye(3), np.array([0.045, 0.0, -0.008]))
+"""The palm centre in the NAO's wrist link frame (the middle of the hand box)."""
