@@ -4,8 +4,9 @@ A run directory holds:
 
 * ``ticks.jsonl``: one JSON object per tick whose statuses, feedback or blackboard
   changed (ticks with no change are skipped; ``tick`` numbers say which ones ran).
-  Each holds ``tick``, ``t`` (seconds since the start), ``nodes`` (every node's
-  ``name``, ``path``, ``status``, ``feedback``) and ``blackboard`` (key -> JSON view).
+  Each holds ``tick``, ``t`` (seconds since the start) and ``nodes`` (every node's
+  ``name``, ``path``, ``status``, ``feedback``); ``blackboard`` (key -> JSON view) is
+  written only when it changed, and holds until the next line that has one.
 * ``tree.json``: the tree's shape (each node's ``path``, ``name``, ``type``, ``depth``).
 * ``summary.json``: the outcome (see :class:`RunSummary`).
 """
@@ -53,7 +54,8 @@ class RunRecorder:
         ]
         (self.out_dir / TREE_FILE).write_text(json.dumps(shape, indent=1))
         self._ticks = open(self.out_dir / TICKS_FILE, "w")  # noqa: SIM115 - closed in close()
-        self._last: str | None = None
+        self._last_nodes: str | None = None
+        self._last_blackboard: str | None = None
 
     def record_tick(self, tick: int, seconds: float) -> None:
         nodes = [
@@ -67,11 +69,14 @@ class RunRecorder:
         ]
         storage = py_trees.blackboard.Blackboard.storage
         blackboard = {key: to_jsonable(storage[key]) for key in sorted(storage)}
-        content = json.dumps({"nodes": nodes, "blackboard": blackboard}, sort_keys=True)
-        if content == self._last:
+        nodes_text = json.dumps(nodes)
+        blackboard_text = json.dumps(blackboard, sort_keys=True)
+        if nodes_text == self._last_nodes and blackboard_text == self._last_blackboard:
             return
-        self._last = content
-        line = {"tick": tick, "t": round(seconds, 3), "nodes": nodes, "blackboard": blackboard}
+        line: dict[str, Any] = {"tick": tick, "t": round(seconds, 3), "nodes": nodes}
+        if blackboard_text != self._last_blackboard:
+            line["blackboard"] = blackboard
+        self._last_nodes, self._last_blackboard = nodes_text, blackboard_text
         self._ticks.write(json.dumps(line) + "\n")
         self._ticks.flush()
 
@@ -86,12 +91,18 @@ class RunRecorder:
 
 
 def load_ticks(run_dir: Path) -> list[dict[str, Any]]:
-    """The recorded ticks of a run, in order; a truncated last line is ignored."""
+    """The recorded ticks of a run, in order, each with the blackboard in force then.
+
+    A truncated last line (a run killed mid-write) is ignored.
+    """
     ticks = []
+    blackboard: dict[str, Any] = {}
     with open(Path(run_dir) / TICKS_FILE) as lines:
         for line in lines:
             try:
-                ticks.append(json.loads(line))
+                tick = json.loads(line)
             except json.JSONDecodeError:
                 break
+            blackboard = tick.setdefault("blackboard", blackboard)
+            ticks.append(tick)
     return ticks
