@@ -129,11 +129,12 @@ def test_interrupting_a_leaf_cancels_its_skill(leaf_class, skill, _):
     leaf.stop(Status.INVALID)
     assert leaf.status == Status.INVALID
     assert leaf.feedback_message == "cancelled"
+    if "cancel" not in skills.calls[skill][0][1]:
+        return  # a short skill with no cancel hook: the leaf only drops its result
     deadline = time.monotonic() + 2.0
     while skill not in skills.cancelled and time.monotonic() < deadline:
         time.sleep(0.01)
-    if "cancel" in skills.calls[skill][0][1]:
-        assert skill in skills.cancelled, "the skill did not see the cancel event"
+    assert skill in skills.cancelled, "the skill did not see the cancel event"
 
 
 @pytest.mark.parametrize(("leaf_class", "skill", "_"), LEAVES)
