@@ -5,14 +5,15 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
 from hardware.interfaces import Clock, Helper, Humanoid, ScanningArm, SeatingJudge, Speaker
 from hardware.sim.camera import CARMINE_INTRINSICS, T_HAND_CAMERA
 from hardware.sim.world import SimConfig, SimWorld
-from skills.arena import DEFAULT_ARENA
-from skills.geometry import transform_points, yaw_of
+from skills.arena import DEFAULT_ARENA, HUMANOID_TAG
+from skills.geometry import transform_points, wrap_angle, yaw_of
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 
@@ -96,3 +97,240 @@ def _distance_to_mesh(mesh, points: np.ndarray) -> np.ndarray:
         o3d.core.Tensor(np.asarray(mesh.faces, dtype=np.uint32)),
     )
     return scene.compute_distance(o3d.core.Tensor(points.astype(np.float32))).numpy()
+
+
+def _detect_tag(rgb: np.ndarray):
+    dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, HUMANOID_TAG.dictionary))
+    detector = cv2.aruco.ArucoDetector(dictionary, cv2.aruco.DetectorParameters())
+    corners, ids, _ = detector.detectMarkers(rgb)
+    return corners, ids
+
+
+def test_aruco_tag_on_the_head_is_detected_from_above(world):
+    from hardware.sim.camera import render_view
+    from hardware.sim.panda import look_at
+
+    T_world_tag = world.nao.T_world_link("aruco_tag")
+    assert T_world_tag[2, 3] == pytest.approx(HUMANOID_TAG.height_m, abs=0.005)
+    eye = T_world_tag[:3, 3] + np.array([0.3, 0.1, 0.8])
+    T_world_camera = look_at(eye, T_world_tag[:3, 3])
+    view = render_view(world._bullet, T_world_camera, CARMINE_INTRINSICS)
+    corners, ids = _detect_tag(view.rgb)
+    assert ids is not None and HUMANOID_TAG.marker_id in ids.ravel()
+    found = corners[list(ids.ravel()).index(HUMANOID_TAG.marker_id)][0]
+    half = HUMANOID_TAG.side_m / 2.0
+    object_points = np.array(
+        [[-half, half, 0], [half, half, 0], [half, -half, 0], [-half, -half, 0]], np.float32
+    )
+    ok, rvec, tvec = cv2.solvePnP(
+        object_points, found, CARMINE_INTRINSICS.matrix(), None, flags=cv2.SOLVEPNP_IPPE_SQUARE
+    )
+    assert ok
+    T_camera_tag = np.eye(4)
+    T_camera_tag[:3, :3] = cv2.Rodrigues(rvec)[0]
+    T_camera_tag[:3, 3] = tvec.ravel()
+    T_world_measured = T_world_camera @ T_camera_tag
+    assert np.linalg.norm(T_world_measured[:3, 3] - T_world_tag[:3, 3]) < 0.03
+    # The tag's x axis is the NAO's forward direction.
+    forward = world.nao.true_pose().theta
+    assert abs(wrap_angle(yaw_of(T_world_measured) - forward)) < math.radians(5)
+
+
+def _turn(world: SimWorld, sentence: str) -> tuple[float, float, bool]:
+    """Says a sentence; returns (yaw change deg, centre shift m, moving at mid-turn)."""
+    before = world.T_world_chair_true()
+    world.speaker.say(sentence)
+    world.clock.sleep(1.5)
+    mid = world.T_world_chair_true()
+    world.clock.sleep(4.0)
+    after = world.T_world_chair_true()
+    world.clock.sleep(0.5)
+    still = world.T_world_chair_true()
+    assert np.allclose(after, still, atol=1e-3), "the chair must be still after the turn"
+    moving = not np.allclose(mid, before, atol=1e-3) and not np.allclose(mid, after, atol=1e-3)
+    turned = math.degrees(wrap_angle(yaw_of(after) - yaw_of(before)))
+    shift = float(np.linalg.norm(after[:2, 3] - before[:2, 3]))
+    return turned, shift, moving
+
+
+SENTENCE = "Please rotate the chair about the vertical axis {} for {} degrees"
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_helper_obeys_within_ten_degrees(seed):
+    with SimWorld(SimConfig(seed=seed, helper="obeys", camera_noise=False)) as world:
+        turned, shift, moving = _turn(world, SENTENCE.format("counterclockwise", 60))
+        assert moving
+        assert 50.0 <= turned <= 70.0
+        assert shift <= 0.011
+        turned, _, _ = _turn(world, SENTENCE.format("clockwise", 90))
+        assert -100.0 <= turned <= -80.0
+        assert world.sitting_yaw_true() == pytest.approx(
+            wrap_angle(yaw_of(world.T_world_chair_true())), abs=1e-9
+        )
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_helper_disobeys_the_first_instruction_only(seed):
+    with SimWorld(SimConfig(seed=seed, helper="disobeys", camera_noise=False)) as world:
+        first, _, _ = _turn(world, SENTENCE.format("counterclockwise", 90))
+        assert first <= 10.0  # not at all, or the wrong way
+        second, _, _ = _turn(world, SENTENCE.format("counterclockwise", 90))
+        assert 80.0 <= second <= 100.0
+
+
+def test_helper_ignores():
+    with SimWorld(SimConfig(seed=0, helper="ignores", camera_noise=False)) as world:
+        for _ in range(2):
+            turned, shift, _ = _turn(world, SENTENCE.format("clockwise", 120))
+            assert abs(turned) < 0.5 and shift < 0.002
+        assert len(world.speaker.said) == 2
+
+
+def test_walking_moves_the_nao_and_odometry_drifts_little():
+    with SimWorld(SimConfig(seed=5, camera_noise=False)) as world:
+        start = world.nao.true_pose()
+        world.nao.set_velocity(0.3, 0.0, 0.0)  # clipped to 0.1 m/s
+        world.clock.sleep(5.0)
+        world.nao.stop()
+        world.clock.sleep(0.5)
+        end = world.nao.true_pose()
+        walked = start.distance_to(end)
+        assert 0.35 < walked < 0.55
+        heading = math.atan2(end.y - start.y, end.x - start.x)
+        assert abs(wrap_angle(heading - start.theta)) < math.radians(10)
+        odometry = world.nao.pose()
+        assert odometry.distance_to(end) < 0.05
+        # The carried bear came along.
+        bear = world.bear.T_world_bear()[:3, 3]
+        assert math.hypot(bear[0] - end.x, bear[1] - end.y) < 0.2
+        world.nao.set_velocity(0.0, 0.0, 0.5)
+        world.clock.sleep(2.0)
+        world.nao.stop()
+        turned = wrap_angle(world.nao.true_pose().theta - end.theta)
+        assert 0.6 < turned < 1.1
+
+
+def test_joint_trajectory_keeps_feet_on_the_floor():
+    with SimWorld(SimConfig(seed=0, camera_noise=False)) as world:
+        nao = world.nao
+        torso_before = nao.T_world_link("torso")[2, 3]
+        names = ["LHipPitch", "RHipPitch", "LKneePitch", "RKneePitch", "LAnklePitch", "RAnklePitch"]
+        squat = np.array([[-0.5, -0.5, 1.0, 1.0, -0.5, -0.5]])
+        start_s = world.clock.now()
+        nao.play_joint_trajectory(names, [1.0], squat)
+        assert world.clock.now() - start_s == pytest.approx(1.0, abs=0.06)
+        assert nao.joint_positions(["LKneePitch"])["LKneePitch"] == pytest.approx(1.0)
+        for sole in ("l_sole", "r_sole"):
+            T_world_sole = nao.T_world_link(sole)
+            assert abs(T_world_sole[2, 3]) < 0.003
+            assert T_world_sole[2, 2] > 0.999
+        assert nao.T_world_link("torso")[2, 3] < torso_before - 0.02
+        with pytest.raises(ValueError):
+            nao.play_joint_trajectory(["NoSuchJoint"], [1.0], np.zeros((1, 1)))
+        with pytest.raises(ValueError):
+            nao.play_joint_trajectory(["LKneePitch"], [1.0], np.array([[3.0]]))
+
+
+def test_judge_rejects_a_bear_on_the_floor_and_accepts_one_on_the_seat():
+    with SimWorld(SimConfig(seed=0, camera_noise=False)) as world:
+        world.nao.set_hands(True)
+        assert not world.bear.held
+        verdict = world.judge.judge(world.sitting_yaw_true(), settle_s=2.0)
+        assert not verdict.seated and not verdict.on_seat
+        assert "floor" in verdict.reason
+
+        # Put the bear by hand on the box chair's seat (0.24 m), facing the sitting direction.
+        T_world_chair = world.T_world_chair_true()
+        seat = T_world_chair @ np.array([-0.03, 0.0, 0.245, 1.0])
+        from skills.geometry import make_transform, rot_z
+
+        world.bear.set_T_world_bear(make_transform(rot_z(world.sitting_yaw_true()), seat[:3]))
+        verdict = world.judge.judge(world.sitting_yaw_true(), settle_s=2.0)
+        assert verdict.seated, verdict.reason
+        assert verdict.torso_tilt_deg < 10 and verdict.facing_error_deg < 10
+        verdict = world.judge.judge(wrap_angle(world.sitting_yaw_true() + math.pi), settle_s=0.1)
+        assert not verdict.seated and "facing" in verdict.reason
+
+
+@pytest.mark.parametrize("placement", ["accessible", "inaccessible"])
+def test_placement_sets_the_sitting_direction(placement):
+    for seed in range(4):
+        with SimWorld(SimConfig(seed=seed, placement=placement, camera_noise=False)) as world:
+            sitting = world.sitting_yaw_true()
+            centre = world.T_world_chair_true()[:3, 3]
+            start = DEFAULT_ARENA.humanoid_start
+            toward_humanoid = math.atan2(start.y - centre[1], start.x - centre[0])
+            off = abs(wrap_angle(sitting - toward_humanoid))
+            if placement == "accessible":
+                assert off <= math.radians(30.5)
+            else:
+                errors = [
+                    abs(wrap_angle(sitting - d)) for d in (math.pi, math.pi / 2, -math.pi / 2)
+                ]
+                assert min(errors) <= math.radians(30.5)
+
+
+def test_same_seed_same_world():
+    poses = []
+    for _ in range(2):
+        with SimWorld(SimConfig(seed=11)) as world:
+            frame = world.panda.capture()
+            poses.append((world.T_world_chair_true(), frame.depth_m))
+    np.testing.assert_array_equal(poses[0][0], poses[1][0])
+    np.testing.assert_array_equal(poses[0][1], poses[1][1])
+
+
+def test_test_built_box_chair_mesh_file_loads(tmp_path):
+    import trimesh
+
+    seat = trimesh.creation.box(extents=(0.3, 0.3, 0.04))
+    seat.apply_translation((0, 0, 0.25))
+    legs = [
+        trimesh.creation.box(extents=(0.03, 0.03, 0.23)).apply_translation((sx, sy, 0.115))
+        for sx in (-0.13, 0.13)
+        for sy in (-0.13, 0.13)
+    ]
+    back = trimesh.creation.box(extents=(0.03, 0.3, 0.3)).apply_translation((-0.135, 0, 0.42))
+    path = tmp_path / "chair.ply"
+    trimesh.util.concatenate([seat, *legs, back]).export(path)
+    with SimWorld(SimConfig(chair_path=path, front_yaw_deg=0.0, camera_noise=False)) as world:
+        world.clock.sleep(1.0)
+        mesh = world.chair_mesh_true
+        assert mesh.bounds[0, 2] == pytest.approx(0.0, abs=0.01)
+        assert mesh.bounds[1, 2] == pytest.approx(0.57, abs=0.01)
+
+
+def test_missing_chair_file_is_one_clear_error(tmp_path):
+    from skills.meshes import MeshLoadError
+
+    with pytest.raises(MeshLoadError, match="no such file"):
+        SimWorld(SimConfig(chair_path=tmp_path / "absent.obj"))
+
+
+@pytest.mark.shared
+@pytest.mark.slow
+def test_every_calibration_mesh_loads_into_the_world():
+    import json
+
+    if not (SHARED_CHAIRS / "manifest.json").exists():
+        pytest.skip(f"no calibration meshes at {SHARED_CHAIRS}")
+    manifest = json.loads((SHARED_CHAIRS / "manifest.json").read_text())
+    for entry in manifest["meshes"]:
+        config = SimConfig(
+            chair_path=SHARED_CHAIRS / entry["file"],
+            front_yaw_deg=entry["front_yaw_deg"],
+            camera_noise=False,
+            seed=1,
+        )
+        with SimWorld(config) as world:
+            T_start = world.T_world_chair_true()
+            world.clock.sleep(0.5)
+            T_end = world.T_world_chair_true()
+            mesh = world.chair_mesh_true
+            name = entry["file"]
+            assert mesh.bounds[0, 2] > -0.02, f"{name} sank into the floor"
+            assert np.linalg.norm(T_end[:3, 3] - T_start[:3, 3]) < 0.03, f"{name} jumped"
+            assert mesh.bounds[1, 2] == pytest.approx(entry["height_m"], abs=0.05), name
+            if entry["front_yaw_deg"] is not None:
+                assert world.sitting_yaw_true() is not None

@@ -230,6 +230,11 @@ class SimNao:
         with self._bullet.lock:
             if self._trajectory is trajectory:
                 self._trajectory = None
+                for name, value in zip(names, trajectory.positions[-1], strict=True):
+                    self._positions[name] = float(value)
+                self._apply_joints()
+                self._T_feet_base = None
+                self._place_body()
 
     def set_hands(self, open_hands: bool) -> None:
         """Opens or closes both hands; opening releases the bear if it is held."""
