@@ -171,3 +171,43 @@ def test_humanoid_pose_is_unchanged_type() -> None:
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0)
     result = _check(chair_mesh, sitting_pose)
     assert all(isinstance(w, SE2Pose) for w in result.path)
+
+
+def test_out_of_reach_preplan_slides_p_closer_and_retries(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A whole-body pre-plan stand-in that reaches only 0.22 m: p slides until it fits."""
+    import sys
+    import types
+
+    class InfeasibleSeating(ValueError):
+        def __init__(self, constraint: str, detail: str) -> None:
+            super().__init__(f"{constraint}: {detail}")
+            self.constraint = constraint
+
+    calls: list[float] = []
+    reach_m = [0.22]
+
+    def preplan_seating(chair_mesh, sitting_pose, se2_goal):
+        forward = math.hypot(
+            sitting_pose.position[0] - se2_goal.x, sitting_pose.position[1] - se2_goal.y
+        )
+        calls.append(forward)
+        if forward > reach_m[0]:
+            raise InfeasibleSeating("bear placement", f"out of reach: {forward:.2f} m forward")
+        return "plan"
+
+    module = types.ModuleType("skills.planning.wholebody")
+    module.preplan_seating = preplan_seating
+    module.InfeasibleSeating = InfeasibleSeating
+    monkeypatch.setitem(sys.modules, "skills.planning.wholebody", module)
+
+    chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0, seat_depth_m=0.4)
+    result = check_accessibility(chair_mesh, sitting_pose, START, DEFAULT_ARENA, seed=0)
+    assert result.accessible, result.reason
+    assert len(calls) >= 2 and calls[-1] <= 0.22 < calls[0]
+    assert result.sitting_pose.position[0] > sitting_pose.position[0]
+
+    # A seat too short to slide far enough: rejected with the pre-plan's reason.
+    reach_m[0] = 0.12
+    chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0, seat_depth_m=0.2)
+    result = check_accessibility(chair_mesh, sitting_pose, START, DEFAULT_ARENA, seed=0)
+    assert not result.accessible and "out of reach" in result.reason

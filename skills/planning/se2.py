@@ -46,13 +46,30 @@ REACH_SLACK_M = 0.005
 """p slides to this much inside the arms' reach, so the reach check is not a rounding call."""
 SEAT_HEIGHT_TOLERANCE_M = 0.03
 """How much the seat's height may change under p as it slides and still count as the seat."""
+MAX_SLIDE_RETRIES = 3
+SLIDE_RETRY_STEP_M = 0.03
+"""After a pre-plan finds the bear out of reach, p slides this much closer and it retries."""
 PLANNING_TIME_S = 1.0
 CHECK_RESOLUTION_M = 0.01
 """Spacing of validity checks along motions, metres (OMPL's resolution is relative)."""
 WAYPOINT_SPACING_M = 0.1
 
-SeatingValidator = Callable[[trimesh.Trimesh, SittingPose, SE2Pose], str]
-"""Returns why seating the bear from s_goal is infeasible, or "" when it is feasible."""
+
+class SeatingCheck(NamedTuple):
+    """A seating validator's verdict.
+
+    Attributes:
+        reason: why seating from s_goal is infeasible ("" when feasible).
+        bear_placement: the failure is about where the bear goes (reach), so sliding p
+            closer to the NAO may fix it.
+    """
+
+    reason: str = ""
+    bear_placement: bool = False
+
+
+SeatingValidator = Callable[[trimesh.Trimesh, SittingPose, SE2Pose], SeatingCheck]
+"""Checks seating the bear at g from s_goal (the whole-body pre-plan, or arm reach)."""
 
 
 class AccessibilityError(ValueError):
@@ -67,12 +84,14 @@ class GoalPlacement(NamedTuple):
         sitting_pose: g, possibly slid toward the NAO to be within its arms' reach.
         standoff_m: distance from the (slid) p to the NAO along the ray.
         reason: why there is no goal (empty when there is).
+        slide_m: how far p was moved toward the NAO.
     """
 
     se2_goal: SE2Pose | None
     sitting_pose: SittingPose
     standoff_m: float
     reason: str = ""
+    slide_m: float = 0.0
 
 
 def goal_on_ray(sitting_pose: SittingPose, distance_m: float) -> SE2Pose:
@@ -138,35 +157,46 @@ def place_se2_goal(
     reach_m = max_forward_reach(float(sitting_pose.position[2]))
     if distance <= reach_m or reach_m == 0.0:
         return GoalPlacement(se2_goal, sitting_pose, distance)
+    moved, slide = slide_on_seat(chair_mesh, sitting_pose, distance - (reach_m - REACH_SLACK_M))
+    return GoalPlacement(se2_goal, moved, distance - slide, slide_m=slide)
 
-    # Slide p toward the NAO, but only as far as the seat continues under it.
+
+def slide_on_seat(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, slide_m: float
+) -> tuple[SittingPose, float]:
+    """Moves p along the sitting direction by up to ``slide_m``, only as far as the seat
+    continues under it (its height within ``SEAT_HEIGHT_TOLERANCE_M`` of the seat under p).
+
+    Returns:
+        The moved sitting pose (its height follows the seat) and the distance moved, metres.
+    """
     direction = sitting_pose.direction()
-    needed = distance - (reach_m - REACH_SLACK_M)
-    slides = np.minimum(np.arange(0.0, needed + SEAT_STEP_M, SEAT_STEP_M), needed)
+    slides = np.minimum(np.arange(0.0, slide_m + SEAT_STEP_M, SEAT_STEP_M), slide_m)
     p = np.asarray(sitting_pose.position, dtype=float)
     heights = seat_support_heights(
         chair_mesh, p[:2] + slides[:, None] * direction, float(p[2]) + 0.02
     )
     if np.isnan(heights[0]):
         logger.warning("no seat found under the sitting position; p is not moved")
-        return GoalPlacement(se2_goal, sitting_pose, distance)
+        return sitting_pose, 0.0
     on_seat = np.abs(heights - heights[0]) <= SEAT_HEIGHT_TOLERANCE_M
     last = len(slides) - 1 if on_seat.all() else int(np.argmin(on_seat)) - 1
     slide = float(slides[last])
     moved = p.copy()
     moved[:2] += slide * direction
     moved[2] += heights[last] - heights[0]
-    return GoalPlacement(se2_goal, SittingPose(moved, sitting_pose.yaw), distance - slide)
+    return SittingPose(moved, sitting_pose.yaw), slide
 
 
 def reach_validator(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
-) -> str:
+) -> SeatingCheck:
     """Fallback validity check: the NAO's arms reach p from s_goal (:mod:`reach`)."""
     del chair_mesh
     offset = np.asarray(sitting_pose.position[:2], dtype=float) - (se2_goal.x, se2_goal.y)
     forward = float(offset @ (math.cos(se2_goal.theta), math.sin(se2_goal.theta)))
-    return check_reach(forward, float(sitting_pose.position[2])).reason
+    check = check_reach(forward, float(sitting_pose.position[2]))
+    return SeatingCheck(check.reason, forward > check.max_forward_m)
 
 
 def default_seating_validator() -> SeatingValidator:
@@ -184,12 +214,13 @@ def default_seating_validator() -> SeatingValidator:
 
     def wholebody_validator(
         chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
-    ) -> str:
+    ) -> SeatingCheck:
         try:
             preplan(chair_mesh, sitting_pose, se2_goal)
         except infeasible as error:
-            return f"seating pre-plan infeasible: {error}"
-        return ""
+            placement = getattr(error, "constraint", "") == "bear placement"
+            return SeatingCheck(f"seating pre-plan infeasible: {error}", placement)
+        return SeatingCheck()
 
     return wholebody_validator
 
@@ -337,6 +368,7 @@ def check_accessibility(
     if not all(math.isfinite(v) for v in humanoid_pose):
         raise AccessibilityError("the humanoid's pose is not finite")
 
+    original_pose = sitting_pose
     checker = NaoCollisionChecker(arena, chair_convex_pieces(chair_mesh))
     placement = place_se2_goal(chair_mesh, sitting_pose, checker)
     if placement.se2_goal is None:
@@ -347,9 +379,20 @@ def check_accessibility(
     if reason:
         return AccessibilityResult(False, se2_goal, sitting_pose, (), reason)
     validator = seating_validator or default_seating_validator()
-    reason = validator(chair_mesh, sitting_pose, se2_goal)
-    if reason:
-        return AccessibilityResult(False, se2_goal, sitting_pose, (), reason)
+    check = validator(chair_mesh, sitting_pose, se2_goal)
+    # The pre-plan knows the arm's workspace better than the reach model that set the
+    # first slide: while the bear is out of its reach, slide p closer, along the seat.
+    slide = placement.slide_m
+    for _ in range(MAX_SLIDE_RETRIES):
+        if not (check.reason and check.bear_placement):
+            break
+        moved, moved_m = slide_on_seat(chair_mesh, original_pose, slide + SLIDE_RETRY_STEP_M)
+        if moved_m <= slide + 1e-6:
+            break  # the seat ends here
+        slide, sitting_pose = moved_m, moved
+        check = validator(chair_mesh, sitting_pose, se2_goal)
+    if check.reason:
+        return AccessibilityResult(False, se2_goal, sitting_pose, (), check.reason)
 
     planned = plan_se2_path(
         checker, humanoid_pose, se2_goal, seed=seed, time_budget_s=time_budget_s
