@@ -8,10 +8,12 @@ import threading
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from skills.geometry import SE2Pose, SittingPose
 from skills.meshes import box_chair_mesh
 from skills.planning.wholebody import (
+    STANDING_POSTURE,
     InfeasibleSeating,
     SeatingCancelled,
     execute_seating,
@@ -20,11 +22,19 @@ from skills.planning.wholebody import (
     release_and_stand,
 )
 from skills.planning.wholebody.chair_profile import largest_horizontal_surface_height
-from skills.planning.wholebody.nao_model import DRIVEN_JOINTS, parse_urdf, planar_nao
+from skills.planning.wholebody.nao_model import (
+    DRIVEN_JOINTS,
+    joint_values,
+    link_transforms,
+    parse_urdf,
+    planar_nao,
+)
 from skills.planning.wholebody.optimisation import (
     BEAR_DEPTH_M,
     BEAR_HEIGHT_M,
     BEAR_TILT_GOAL_RAD,
+    CARRYING_POSTURE_RAD,
+    PALM_IN_WRIST_M,
     PLACEMENT_TOLERANCE_M,
     seating_problems,
 )
@@ -79,20 +89,40 @@ def _com_x(q: np.ndarray, bear_base_and_up: tuple[np.ndarray, np.ndarray] | None
             mass += link.mass_kg
     if bear_base_and_up is not None:
         base, up = bear_base_and_up
-        total += 0.2 * (base + 0.10 * up)[0]
+        total += 0.2 * (base + 0.09 * up)[0]
         mass += 0.2
     return total / mass
 
 
+def _hands_frame(frames: dict[str, np.ndarray]) -> np.ndarray:
+    """The simulator's rule: the palms' middle, the mean of both palms' orientations."""
+    palm = np.eye(4)
+    palm[:3, 3] = PALM_IN_WRIST_M
+    left, right = frames["l_wrist"] @ palm, frames["r_wrist"] @ palm
+    q_left = Rotation.from_matrix(left[:3, :3]).as_quat()
+    q_right = Rotation.from_matrix(right[:3, :3]).as_quat()
+    if q_left @ q_right < 0:
+        q_right = -q_right
+    hands = np.eye(4)
+    hands[:3, :3] = Rotation.from_quat(q_left + q_right).as_matrix()
+    hands[:3, 3] = (left[:3, 3] + right[:3, 3]) / 2
+    return hands
+
+
 def _bear(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(base, forward, up) of the held bear in the NAO's (x, z) plane."""
-    frames = _frames(q)
-    left = frames["l_gripper"][:3, 3][[0, 2]]
-    right = frames["r_gripper"][:3, 3][[0, 2]]
-    np.testing.assert_allclose(left, right, atol=1e-3)  # symmetric hands
-    forward = frames["l_wrist"][:3, 0][[0, 2]]
-    up = np.array([-forward[1], forward[0]])
-    return left - 0.10 * up, forward, up
+    """(base, forward, up) of the held bear in the NAO's (x, z) plane, in 3D.
+
+    The bear was handed over upright, 6.5 cm below the palms, in the carrying posture,
+    and stays rigidly attached to the hands frame.
+    """
+    carrying = _hands_frame(link_transforms(CARRYING_POSTURE_RAD))
+    T_carry_bear = np.eye(4)
+    T_carry_bear[:3, 3] = carrying[:3, 3] - [0.0, 0.0, 0.065]
+    T_hands_bear = np.linalg.inv(carrying) @ T_carry_bear
+    values = {name: float(v) for name, v in joint_values(q).items()}
+    T_bear = _hands_frame(link_transforms(values)) @ T_hands_bear
+    assert abs(T_bear[1, 3]) < 1e-6 and abs(T_bear[1, 0]) < 1e-6  # stays in the plane
+    return T_bear[[0, 2], 3], T_bear[[0, 2], 0], T_bear[[0, 2], 2]
 
 
 def _sample_points(q: np.ndarray) -> list[tuple[str, np.ndarray]]:
@@ -181,8 +211,16 @@ def test_trajectory_is_stable_and_within_velocity_limits(chair, plan):
         assert x_back <= com_x <= x_front
         for name, point in _sample_points(q):
             assert _chair_clearance(point, section) >= 0.015, name
-    # It starts at the carrying posture and ends at q_goal.
-    np.testing.assert_allclose(q_all[0], [-0.2, 0.4, -0.2, 0.3, 0.3])
+    # It starts standing with the bear where the carrying posture holds it.
+    np.testing.assert_allclose(q_all[0], STANDING_POSTURE)
+    carrying = _hands_frame(link_transforms(CARRYING_POSTURE_RAD))
+    base, _, _ = _bear(q_all[0])
+    np.testing.assert_allclose(base, carrying[[0, 2], 3] - [0.0, 0.065], atol=0.005)
+
+
+def test_carrying_posture_matches_the_simulator():
+    nao_sim = pytest.importorskip("hardware.sim.nao")
+    assert nao_sim.HOLDING_POSTURE_RAD.items() >= CARRYING_POSTURE_RAD.items()
 
 
 def test_retract_releases_upright_and_stable(chair, plan):
@@ -192,11 +230,13 @@ def test_retract_releases_upright_and_stable(chair, plan):
     x_back, x_front = planar_nao().support_x
     for q in q_all:
         assert x_back <= _com_x(q, None) <= x_front
-    # Hands first move back toward the NAO while the legs hold still.
-    frames_start = _frames(q_all[0])
-    frames_next = _frames(q_all[3])
-    assert frames_next["l_gripper"][0, 3] < frames_start["l_gripper"][0, 3]
-    np.testing.assert_allclose(q_all[3][:3], q_all[0][:3])
+    # The hands first withdraw back and up while the legs hold still.
+    legs_still = np.all(np.abs(q_all[:, :3] - q_all[0, :3]) < 1e-9, axis=1)
+    withdrawn = q_all[int(np.argmin(legs_still)) - 1]
+    hand_start = _frames(q_all[0])["l_gripper"][[0, 2], 3]
+    hand_withdrawn = _frames(withdrawn)["l_gripper"][[0, 2], 3]
+    assert hand_withdrawn[0] < hand_start[0] - 0.04
+    assert hand_withdrawn[1] > hand_start[1] + 0.02
     # Ends upright: torso pitch zero, arms down.
     assert abs(sum(q_all[-1][:3])) < 1e-6
     assert q_all[-1][3] > 1.0

@@ -8,15 +8,12 @@ pitch degrees of freedom of the paper, shared by both sides:
 
 and maps onto qibullet's joint names (both sides) as follows:
 
-===============  ====================================  ====================================
-planar variable  left joint                            right joint
-===============  ====================================  ====================================
-ankle  a         ``LAnklePitch = a``                   ``RAnklePitch = a``
-knee   k         ``LKneePitch = k``                    ``RKneePitch = k``
-hip    h         ``LHipPitch = h``                     ``RHipPitch = h``
-shoulder s       ``LShoulderPitch = s``                ``RShoulderPitch = s``
-elbow  e         ``LElbowYaw = -π/2``, ``LElbowRoll = -e``  ``RElbowYaw = +π/2``, ``RElbowRoll = +e``
-===============  ====================================  ====================================
+* ankle a:    ``LAnklePitch = RAnklePitch = a``
+* knee k:     ``LKneePitch = RKneePitch = k``
+* hip h:      ``LHipPitch = RHipPitch = h``
+* shoulder s: ``LShoulderPitch = RShoulderPitch = s``
+* elbow e:    ``LElbowYaw = -π/2, LElbowRoll = -e``; ``RElbowYaw = +π/2, RElbowRoll = +e``
+* wrists:     ``LWristYaw = +π/2``; ``RWristYaw = -π/2``
 
 Every pitch axis in the URDF is +y on both sides, so the pitch values are equal (not
 negated). The NAO's elbow has no pitch joint: ``ElbowRoll`` turns about the upper arm's
@@ -25,8 +22,10 @@ on the right, that z axis becomes the +y axis on the left and the -y axis on the
 and the URDF's roll limits (left [-1.54, -0.03], right [0.03, 1.54]) mirror each other.
 So ``e`` > 0 is elbow flexion in the sagittal plane: the forearm's pitch is
 ``torso pitch + s - e`` (positive pitch = pointing down). Shoulder roll, hip roll, ankle
-roll, hip yaw-pitch, head and wrists are held at zero, so the arms point straight ahead
-at ``s = 0`` and every motion is planar.
+roll, hip yaw-pitch and head are held at zero, so the arms point straight ahead
+at ``s = 0`` and every motion is planar. The wrist yaws (about the forearm) undo the
+elbow yaws (``LWristYaw = +π/2``, ``RWristYaw = -π/2``), so both palm frames are
+``R_y(torso pitch + s - e)``: x along the forearm, z up, the same on both sides.
 
 Frames: the NAO frame ``nao`` has its origin on the floor midway between the soles
 (below the ankles), x forward, z up. The feet are fixed flat on the floor, so the
@@ -187,6 +186,10 @@ def joint_values(q) -> dict[str, object]:
     values["RElbowYaw"] = ELBOW_YAW_RAD
     values["LElbowRoll"] = -elbow
     values["RElbowRoll"] = elbow
+    # Rolling the wrists back aligns both palm frames with the body (x forward, z up):
+    # the mean of the two palms' orientations (the hands frame) is then well defined.
+    values["LWristYaw"] = ELBOW_YAW_RAD
+    values["RWristYaw"] = -ELBOW_YAW_RAD
     return values
 
 
@@ -309,6 +312,45 @@ class PlanarNao:
             name: flat[16 * i : 16 * (i + 1)].reshape(4, 4, order="F")
             for i, name in enumerate(self._frame_names)
         }
+
+
+def link_transforms(
+    joint_angles: dict[str, float], urdf_path: str | None = None
+) -> dict[str, np.ndarray]:
+    """``T_nao_link`` (numpy 4x4) of every link for any joint angles (missing ones 0).
+
+    The NAO frame as in :class:`PlanarNao`: the left sole flat on the floor, the origin
+    half the stance to its right. Used for postures outside the planar family (the
+    carrying posture).
+    """
+    joints, _ = parse_urdf(urdf_path)
+    children: dict[str, list[UrdfJoint]] = {}
+    for joint in joints.values():
+        children.setdefault(joint.parent, []).append(joint)
+    T_torso: dict[str, np.ndarray] = {"torso": np.eye(4)}
+    stack = ["torso"]
+    while stack:
+        parent = stack.pop()
+        for joint in children.get(parent, []):
+            T = T_torso[parent].copy()
+            T_origin = np.eye(4)
+            T_origin[:3, :3] = _rpy_matrix(joint.rpy)
+            T_origin[:3, 3] = joint.xyz
+            T = T @ T_origin
+            if joint.kind in ("revolute", "continuous"):
+                T_joint = np.eye(4)
+                T_joint[:3, :3] = np.asarray(
+                    ca.DM(_axis_rotation(joint.axis, float(joint_angles.get(joint.name, 0.0))))
+                )
+                T = T @ T_joint
+            T_torso[joint.child] = T
+            stack.append(joint.child)
+    T_torso_nao = T_torso["l_sole"].copy()
+    T_torso_nao[:3, 3] += T_torso_nao[:3, :3] @ np.array(
+        [0.0, -float(joints["LHipYawPitch"].xyz[1]), 0.0]
+    )
+    T_nao_torso = np.linalg.inv(T_torso_nao)
+    return {name: T_nao_torso @ T for name, T in T_torso.items()}
 
 
 @lru_cache(maxsize=1)

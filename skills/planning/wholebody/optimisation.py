@@ -7,7 +7,7 @@ limits, whether the bear is held) is a parameter or a bound, never a rebuild.
 Posture constraints (one vector per posture, see :data:`CONSTRAINT_GROUPS`):
 
 * ``bear placement``: the bear's base b(q) at g within ``PLACEMENT_TOLERANCE_M``;
-* ``bear upright``: the forearms (hence the held bear) within a tilt of vertical;
+* ``bear upright``: the held bear within a tilt of vertical;
 * ``support polygon``: the centre of mass's x within the feet's support interval
   ``[x_back + margin, x_front - margin]`` (the motion is symmetric, so y is 0);
 * ``chair collision``: every sampled body point and the bear's outline clear the
@@ -25,22 +25,41 @@ from __future__ import annotations
 
 import math
 import threading
+from functools import lru_cache
 from typing import NamedTuple
 
 import casadi as ca
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from skills.planning.wholebody.nao_model import PlanarNao, planar_nao
+from skills.planning.wholebody.nao_model import PlanarNao, link_transforms, planar_nao
 
-# The bear, held upright between the hands, facing the NAO (its back to the chair).
+# The bear (0.25 m tall, 0.2 kg, its frame at its seat point: the bottom centre of its
+# torso) is held rigidly between the palms in the pose it had when handed over: upright,
+# its seat point BEAR_BELOW_PALMS_M below the palms' middle, with the NAO in
+# CARRYING_POSTURE_RAD. See :func:`carrying_grasp`.
 BEAR_HEIGHT_M = 0.25
-BEAR_DEPTH_M = 0.12
+BEAR_DEPTH_M = 0.10
+"""Fore-aft extent of the bear's outline (torso and head; its short legs are ignored)."""
 BEAR_MASS_KG = 0.2
-BEAR_GRIP_HEIGHT_M = 0.10
-"""The bear's base (its seat point: bottom centre) is this far below the grip point
-(midway between the fingertips), along the bear's up axis, which stays perpendicular to
-the forearms (a rigid grasp)."""
-BEAR_COM_HEIGHT_M = 0.10
+BEAR_COM_HEIGHT_M = 0.09
+BEAR_BELOW_PALMS_M = 0.065
+PALM_IN_WRIST_M = (0.045, 0.0, -0.008)
+"""The palm's centre in the ``l_wrist``/``r_wrist`` link frames (middle of the hand)."""
+CARRYING_POSTURE_RAD: dict[str, float] = {
+    "LShoulderPitch": 1.141,
+    "LShoulderRoll": 0.065,
+    "LElbowYaw": -1.033,
+    "LElbowRoll": -1.094,
+    "LWristYaw": 1.3,
+    "RShoulderPitch": 1.141,
+    "RShoulderRoll": -0.065,
+    "RElbowYaw": 1.033,
+    "RElbowRoll": 1.094,
+    "RWristYaw": -1.3,
+}
+"""The NAO's posture when it is handed the bear (standing straight, the other joints 0):
+the simulator's ``HOLDING_POSTURE_RAD`` (hardware/sim/nao.py), checked by a test."""
 
 PLACEMENT_TOLERANCE_M = 0.015
 BEAR_TILT_GOAL_RAD = math.radians(8.0)
@@ -64,7 +83,7 @@ LEG_TORSO_HEAD_POINTS = (
     ("torso", (0.045, 0.0, -0.05), 0.02, "belly"),
     ("torso", (0.045, 0.0, 0.02), 0.02, "chest"),
     ("torso", (0.045, 0.0, 0.09), 0.02, "upper chest"),
-    ("Head", (0.02, 0.0, 0.05), 0.065, "head"),
+    ("Head", (0.0, 0.0, 0.05), 0.055, "head"),
 )
 ARM_POINTS = (
     ("LBicep", (0.0, 0.0, 0.0), 0.03, "shoulder"),
@@ -83,6 +102,33 @@ BEAR_OUTLINE = (
     (0.0, 0.0, "bear bottom centre"),
     (0.0, BEAR_HEIGHT_M, "bear top centre"),
 )
+
+
+@lru_cache(maxsize=1)
+def carrying_grasp() -> tuple[float, np.ndarray]:
+    """The held bear in the hands frame: (ψ_c, (x, z) offset of its seat point).
+
+    The hands frame is the palms' middle with the mean of both palms' orientations; in a
+    mirror-symmetric posture that mean is a pure pitch ψ about y. When the bear is handed
+    over (NAO in :data:`CARRYING_POSTURE_RAD`), it is upright with its seat point
+    :data:`BEAR_BELOW_PALMS_M` below the palms' middle, so in the hands frame its
+    orientation is a pitch of -ψ_c and its seat point is ``R_y(-ψ_c) (0, -0.065)``.
+    """
+    frames = link_transforms(CARRYING_POSTURE_RAD)
+    T_palm = frames["l_wrist"].copy()
+    T_palm[:3, 3] = T_palm[:3, :3] @ np.asarray(PALM_IN_WRIST_M) + T_palm[:3, 3]
+    mirror = np.diag([1.0, -1.0, 1.0])
+    left = Rotation.from_matrix(T_palm[:3, :3]).as_quat()
+    right = Rotation.from_matrix(mirror @ T_palm[:3, :3] @ mirror).as_quat()
+    if np.dot(left, right) < 0.0:
+        right = -right
+    mean = Rotation.from_quat(left + right).as_matrix()
+    pitch = math.atan2(-mean[2, 0], mean[0, 0])
+    c, s = math.cos(pitch), math.sin(pitch)
+    # World (x, z) = R_y(ψ) (x, z)_hands with R_y(ψ)(x, z) = (c x + s z, -s x + c z).
+    below = np.array([0.0, -BEAR_BELOW_PALMS_M])
+    offset = np.array([c * below[0] - s * below[1], s * below[0] + c * below[1]])
+    return pitch, offset
 
 
 class ConstraintRow(NamedTuple):
@@ -150,11 +196,17 @@ class SeatingProblems:
         nao = self.nao
         frames = nao.frames(q)
         nao_com, nao_mass = nao.centre_of_mass(frames)
-        grip = nao.point(frames, "l_gripper")
+        # The hands frame (the palms' middle, their mean orientation: a pure pitch ψ by
+        # symmetry) and the bear rigidly attached to it as in the carrying posture.
+        palm = nao.point(frames, "l_wrist", PALM_IN_WRIST_M)
         rot = frames["l_wrist"][:3, :3]
-        forward = ca.vertcat(rot[0, 0], rot[2, 0])  # the forearm's direction in (x, z)
-        up = ca.vertcat(-forward[1], forward[0])
-        bear_base = grip - BEAR_GRIP_HEIGHT_M * up
+        hands_x = ca.vertcat(rot[0, 0], rot[2, 0])
+        hands_z = ca.vertcat(-hands_x[1], hands_x[0])
+        grasp_pitch, grasp_offset = carrying_grasp()
+        bear_base = palm + grasp_offset[0] * hands_x + grasp_offset[1] * hands_z
+        c, s = math.cos(grasp_pitch), math.sin(grasp_pitch)
+        forward = c * hands_x + s * hands_z
+        up = -s * hands_x + c * hands_z
         bear_com = bear_base + BEAR_COM_HEIGHT_M * up
         bear_mass = BEAR_MASS_KG * bear_held
         com = (nao_mass * nao_com + bear_mass * bear_com) / (nao_mass + bear_mass)
@@ -182,7 +234,7 @@ class SeatingProblems:
         # Placement and uprightness get their bounds at solve time (goal vs motion).
         add("bear placement", "forward", bear_base[0], -math.inf, math.inf)
         add("bear placement", "height", bear_base[1], -math.inf, math.inf)
-        add("bear upright", "forearm tilt", forward[1] * bear_held, -math.inf, math.inf)
+        add("bear upright", "bear tilt", forward[1] * bear_held, -math.inf, math.inf)
         add(
             "support polygon",
             "centre of mass",

@@ -11,8 +11,9 @@ The plan (the paper, "Motion Planning"):
 3. The trajectory from :data:`STANDING_POSTURE` to q_goal minimises
    Σ ½‖q(k) − q_goal‖² under joint velocity limits, with the same stability and
    collision constraints at every knot. Knots after the goal is reached are dropped.
-4. The retract motion, with the bear released: the legs hold still while the elbows
-   fold the hands back and up out of the bear, then the body stands up to
+4. The retract motion, with the bear released: the legs hold still while the arms
+   withdraw the hands back (toward the NAO) and a little up beside the bear,
+   then the body stands up to
    :data:`REST_POSTURE`; both are solved by the same trajectory problem.
 
 Every solution is re-checked numerically against the exact (non-smoothed) constraints
@@ -28,6 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 import trimesh
+from scipy.optimize import least_squares
 
 from hardware.interfaces import Humanoid
 from skills.geometry import SE2Pose, SittingPose, transform_points, wrap_angle
@@ -48,16 +50,25 @@ from skills.planning.wholebody.optimisation import (
 )
 from skills.results import SeatingPlan
 
-STANDING_POSTURE = np.array([-0.2, 0.4, -0.2, 0.3, 0.3])
-"""q = (ankle, knee, hip, shoulder, elbow) while carrying the bear: knees slightly bent,
-torso upright, forearms horizontal with the bear in front of the chest."""
-REST_POSTURE = np.array([-0.2, 0.4, -0.2, 1.4, 0.4])
-"""q after the retract: standing, arms down along the body."""
+STANDING_POSTURE = np.array([0.0, 0.0, 0.0, 1.2396, 1.1377])
+"""q = (ankle, knee, hip, shoulder, elbow) that starts the seating motion: standing
+straight, the palms where the carrying posture (:data:`CARRYING_POSTURE_RAD`) has them
+(within 3 mm and 1.5 deg), so the bear barely moves when the arms switch to the planar
+posture during the lead-in."""
+REST_POSTURE = np.array([0.0, 0.0, 0.0, 1.4, 0.4])
+"""q after the retract: standing straight, arms down along the body."""
+LEAD_IN_S = 1.0
+"""Time of the seating motion's first knot: the robot moves from whatever posture it
+holds (the carrying posture) to it."""
+RETRACT_LEAD_IN_S = 0.3
+"""Time of the retract's first knot (q_goal, where the robot already is)."""
 
 PLANNING_VELOCITY_RADPS = 0.3
 """Joint speed limit of the quasi-static motion (well under the URDF's 6-8 rad/s)."""
-RETRACT_ELBOW_RAD = 1.45
-"""Elbow flexion that folds the hands back and up out of the released bear."""
+RETRACT_BACK_M = 0.05
+"""After release the hands first withdraw this far back (toward the NAO) ..."""
+RETRACT_UP_M = 0.03
+"""... and this far up from where they let go, beside the bear."""
 LATERAL_TOLERANCE_M = 0.05
 """How far g may lie beside the NAO's sagittal plane (the planar motion cannot reach it)."""
 FACING_TOLERANCE_RAD = math.radians(20.0)
@@ -343,6 +354,26 @@ def solve_trajectory(
     return np.arange(len(knots)) * dt, knots
 
 
+def withdrawn_hands_posture(problems: SeatingProblems, q_goal: np.ndarray) -> np.ndarray:
+    """q_goal with the arms moved so the hands withdraw back and up from the bear.
+
+    The legs keep their goal angles; shoulder and elbow are found by least squares on
+    the hands' (x, z) target, within their joint limits.
+    """
+    nao = problems.nao
+
+    def hand(q: np.ndarray) -> np.ndarray:
+        return nao.numeric_frames(q)["l_gripper"][[0, 2], 3]
+
+    target = hand(q_goal) + np.array([-RETRACT_BACK_M, RETRACT_UP_M])
+
+    def residual(arms: np.ndarray) -> np.ndarray:
+        return hand(np.r_[q_goal[:3], arms]) - target
+
+    fit = least_squares(residual, q_goal[3:], bounds=(nao.q_lower[3:], nao.q_upper[3:]))
+    return np.r_[q_goal[:3], fit.x]
+
+
 def plan_seating(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, humanoid_pose: SE2Pose
 ) -> SeatingPlan:
@@ -374,8 +405,7 @@ def plan_seating(
     )
     trajectory_s = time.perf_counter() - started
     started = time.perf_counter()
-    q_folded = q_goal.copy()
-    q_folded[4] = RETRACT_ELBOW_RAD
+    q_folded = withdrawn_hands_posture(problems, q_goal)
     fold_times, fold = solve_trajectory(
         problems,
         scene.profile,
@@ -398,9 +428,9 @@ def plan_seating(
     retract_times = np.r_[fold_times, fold_times[-1] + stand_times[1:]]
     return SeatingPlan(
         joint_names=DRIVEN_JOINTS,
-        times_s=times,
+        times_s=LEAD_IN_S + times,
         positions_rad=to_joint_positions(knots),
-        retract_times_s=retract_times,
+        retract_times_s=RETRACT_LEAD_IN_S + retract_times,
         retract_positions_rad=to_joint_positions(retract_knots),
         seconds={"goal": goal_s, "trajectory": trajectory_s, "retract": retract_s},
     )
