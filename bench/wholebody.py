@@ -1,0 +1,237 @@
+"""Whole-body seating figures: solve times, and seating success in the simulated world.
+
+    python bench/wholebody.py                  # solve times over chairs and stances
+    python bench/wholebody.py --sim --runs 10  # plan, execute, release, judge (box chair)
+    python bench/wholebody.py --sim --calibration --runs 20
+
+Solve times: the box chair and the calibration chairs (../shared/chairs, skipped when
+absent) with the sitting pose at their true seat (the seat height is the height of the
+mesh's largest horizontal surface; the point is that surface's area centroid, 2 cm up),
+the NAO facing it on the sitting ray at stances 0.22 to 0.36 m. Prints the median and
+spread of the goal posture, trajectory and retract solve times and the feasible stances.
+
+Simulation: the chair is placed in front of the NAO's start pose (sitting direction
+toward the NAO) at the nearest feasible stance; the plan is played through
+``SimNao.play_joint_trajectory``, the bear released and the judge asked. The simulator
+hands the bear over facing the NAO's forward direction, which puts it on the seat
+facing the backrest; with ``--bear-faces-nao`` (the default, as in the paper) the bear
+is turned to face the NAO before the run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from skills.geometry import SE2Pose, SittingPose, make_transform, rot_z, wrap_angle
+from skills.meshes import box_chair_mesh, load_mesh
+from skills.planning.wholebody import InfeasibleSeating, plan_seating, preplan_seating
+from skills.planning.wholebody.chair_profile import (
+    HORIZONTAL_NORMAL_Z,
+    largest_horizontal_surface_height,
+)
+
+CHAIRS_DIR = Path(__file__).resolve().parents[2] / "shared" / "chairs"
+STANCES_M = (0.22, 0.24, 0.26, 0.28, 0.30, 0.32, 0.34, 0.36)
+
+
+def true_seat_point(chair_mesh: trimesh.Trimesh) -> np.ndarray:
+    """The seat's area centroid at the largest horizontal surface's height, 2 cm up."""
+    seat_z = largest_horizontal_surface_height(chair_mesh)
+    up = chair_mesh.face_normals[:, 2] >= HORIZONTAL_NORMAL_Z
+    centres = chair_mesh.triangles_center
+    on_seat = up & (np.abs(centres[:, 2] - seat_z) <= 0.01)
+    xy = np.average(centres[on_seat, :2], axis=0, weights=chair_mesh.area_faces[on_seat])
+    return np.array([xy[0], xy[1], seat_z + 0.02])
+
+
+def calibration_chairs() -> list[tuple[str, Path, float]]:
+    """(name, path, front yaw in degrees) of the calibration chairs with a known front."""
+    manifest = CHAIRS_DIR / "manifest.json"
+    if not manifest.exists():
+        return []
+    entries = json.loads(manifest.read_text())["meshes"]
+    return [
+        (entry["file"], CHAIRS_DIR / entry["file"], float(entry["front_yaw_deg"]))
+        for entry in entries
+        if entry["kind"] == "chair" and entry["front_yaw_deg"] is not None
+    ]
+
+
+def stance_pose(sitting_pose: SittingPose, distance_m: float) -> SE2Pose:
+    """The NAO on the sitting ray, ``distance_m`` from p, facing the chair."""
+    x, y = sitting_pose.position[:2] + distance_m * sitting_pose.direction()
+    return SE2Pose(float(x), float(y), wrap_angle(sitting_pose.yaw + math.pi))
+
+
+def solve_times(chairs: list[tuple[str, trimesh.Trimesh, float]]) -> None:
+    """Prints solve-time statistics and feasible stances per chair."""
+    goal_s: list[float] = []
+    trajectory_s: list[float] = []
+    retract_s: list[float] = []
+    together: list[float] = []
+    failures: dict[str, int] = {}
+    for name, mesh, front_yaw_deg in chairs:
+        sitting_pose = SittingPose(true_seat_point(mesh), math.radians(front_yaw_deg))
+        feasible = []
+        for distance in STANCES_M:
+            try:
+                plan = preplan_seating(mesh, sitting_pose, stance_pose(sitting_pose, distance))
+            except InfeasibleSeating as error:
+                failures[error.constraint] = failures.get(error.constraint, 0) + 1
+                continue
+            feasible.append(distance)
+            goal_s.append(plan.seconds["goal"])
+            trajectory_s.append(plan.seconds["trajectory"])
+            retract_s.append(plan.seconds["retract"])
+            together.append(plan.seconds["goal"] + plan.seconds["trajectory"])
+        stances = ", ".join(f"{d:.2f}" for d in feasible) or "none"
+        print(
+            f"  {name:24s} seat {sitting_pose.position[2] - 0.02:.3f} m  feasible stances: {stances}"
+        )
+    if not together:
+        print("no feasible plan")
+        return
+
+    def stats(values: list[float]) -> str:
+        q = np.percentile(values, [10, 50, 90])
+        return f"median {q[1]:.3f} s (p10 {q[0]:.3f}, p90 {q[2]:.3f}, max {max(values):.3f})"
+
+    print(f"plans: {len(together)} feasible, {sum(failures.values())} infeasible {failures}")
+    print(f"goal posture: {stats(goal_s)}")
+    print(f"trajectory:   {stats(trajectory_s)}")
+    print(f"retract:      {stats(retract_s)}")
+    print(f"goal + trajectory: {stats(together)} (target: median <= 1 s)")
+
+
+def sim_run(
+    chair_path: Path | None, front_yaw_deg: float, seed: int, bear_faces_nao: bool
+) -> tuple[bool, str]:
+    """One simulated seating: returns (seated, description)."""
+    from hardware.sim.world import SimConfig, SimWorld
+
+    config = SimConfig(
+        chair_path=chair_path,
+        seed=seed,
+        camera_noise=False,
+        front_yaw_deg=None if chair_path is None else front_yaw_deg,
+    )
+    with SimWorld(config) as world:
+        nao_pose = world.nao.true_pose()
+        sitting_yaw = wrap_angle(nao_pose.theta + math.pi)
+        chair_yaw = wrap_angle(sitting_yaw - math.radians(front_yaw_deg))
+        T = make_transform(rot_z(chair_yaw), np.array([nao_pose.x - 0.5, nao_pose.y, 0.0]))
+        T_base = world.chair.T_world_chair()
+        T[2, 3] = T_base[2, 3]
+        world.chair.set_T_world_chair(T)
+        seat = true_seat_point(world.chair_mesh_true)
+        rng = np.random.default_rng(seed)
+        lateral = rng.uniform(-0.02, 0.02)
+        sitting_pose = SittingPose(seat, sitting_yaw)
+        distance = None
+        for candidate in STANCES_M:
+            try:
+                preplan_seating(
+                    world.chair_mesh_true, sitting_pose, stance_pose(sitting_pose, candidate)
+                )
+            except InfeasibleSeating:
+                continue
+            distance = candidate
+            break
+        if distance is None:
+            return False, "no feasible stance"
+        # Move the chair so that g lies ``distance`` ahead of the NAO (small lateral error).
+        forward = np.array([math.cos(nao_pose.theta), math.sin(nao_pose.theta)])
+        side = np.array([-forward[1], forward[0]])
+        target = np.array([nao_pose.x, nao_pose.y]) + distance * forward + lateral * side
+        T[:2, 3] += target - seat[:2]
+        world.chair.set_T_world_chair(T)
+        world.clock.sleep(0.3)
+        if bear_faces_nao:
+            T_bear = world.bear.T_world_bear()
+            T_bear[:3, :3] = T_bear[:3, :3] @ rot_z(math.pi)
+            world.bear.release()
+            world.bear.set_T_world_bear(T_bear)
+            world.bear.hold(world.hands_frame, world.nao.body)
+        chair_mesh = world.chair_mesh_true
+        sitting_pose = SittingPose(true_seat_point(chair_mesh), sitting_yaw)
+        plan = plan_seating(chair_mesh, sitting_pose, world.nao.pose())
+        from skills.planning.wholebody import execute_seating, release_and_stand
+
+        execute_seating(world.nao, plan)
+        release_and_stand(world.nao, plan)
+        verdict = world.judge.judge(sitting_yaw)
+        bear = world.bear.T_world_bear()[:3, 3]
+        return verdict.seated, (
+            f"stance {distance:.2f} m, tilt {verdict.torso_tilt_deg:.0f} deg, facing "
+            f"{verdict.facing_error_deg:.0f} deg, bear at height {bear[2]:.3f} m"
+            + (f" ({verdict.reason})" if verdict.reason else "")
+        )
+
+
+def main() -> None:
+    """Parses the options and prints the figures."""
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawTextHelpFormatter
+    )
+    parser.add_argument("--sim", action="store_true", help="run seatings in the simulated world")
+    parser.add_argument("--calibration", action="store_true", help="use the calibration chairs")
+    parser.add_argument("--runs", type=int, default=10, help="simulated runs")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--bear-faces-simulator-default",
+        action="store_true",
+        help="keep the simulator's bear orientation (facing the NAO's forward)",
+    )
+    args = parser.parse_args()
+
+    started = time.perf_counter()
+    from skills.planning.wholebody.optimisation import seating_problems
+
+    seating_problems()
+    print(f"problems built in {time.perf_counter() - started:.2f} s (once per process)")
+    # The machine is shared: these timings include contention from other processes.
+    if not args.sim:
+        chairs = [("box chair", box_chair_mesh(), 0.0)]
+        for name, path, front in calibration_chairs():
+            chairs.append((name, load_mesh(path), front))
+        if len(chairs) == 1:
+            print(f"(no calibration chairs at {CHAIRS_DIR}: box chair only)")
+        solve_times(chairs)
+        return
+
+    runs: list[tuple[Path | None, float, str]]
+    if args.calibration:
+        listed = calibration_chairs()
+        if not listed:
+            sys.exit(f"no calibration chairs at {CHAIRS_DIR}")
+        runs = [(path, front, name) for name, path, front in listed]
+    else:
+        runs = [(None, 0.0, "box chair")]
+    seated = 0
+    for i in range(args.runs):
+        path, front, name = runs[i % len(runs)]
+        seed = args.seed + i
+        began = time.perf_counter()
+        try:
+            ok, description = sim_run(path, front, seed, not args.bear_faces_simulator_default)
+        except InfeasibleSeating as error:
+            ok, description = False, f"infeasible: {error}"
+        seated += ok
+        print(
+            f"  run {i:2d} {name:24s} seed {seed:3d}: {'SEATED' if ok else 'not seated'}  "
+            f"{description}  [{time.perf_counter() - began:.1f} s]",
+            flush=True,
+        )
+    print(f"seated {seated}/{args.runs} ({100.0 * seated / args.runs:.0f} %)")
+
+
+if __name__ == "__main__":
+    main()
