@@ -64,7 +64,10 @@ def test_rotation_toward_wraps_across_plus_minus_180() -> None:
         (90.0, "Please rotate the chair about the vertical axis clockwise for 90 degrees"),
         (-90.0, "Please rotate the chair about the vertical axis counterclockwise for 90 degrees"),
         (180.0, "Please rotate the chair about the vertical axis clockwise for 180 degrees"),
-        (-135.0, "Please rotate the chair about the vertical axis counterclockwise for 150 degrees"),
+        (
+            -135.0,
+            "Please rotate the chair about the vertical axis counterclockwise for 150 degrees",
+        ),
         (3.0, "Please rotate the chair about the vertical axis clockwise for 0 degrees"),
     ],
 )

@@ -96,14 +96,19 @@ def test_goal_is_pushed_out_along_the_ray_to_the_first_free_spot() -> None:
     placement = place_se2_goal(chair_mesh, sitting_pose, checker, l_init_m=0.05)
     goal = placement.se2_goal
     assert not checker.collides_with_chair(goal)
-    offset = np.array([goal.x, goal.y]) - placement.sitting_pose.position[:2]
-    along = offset @ sitting_pose.direction()
-    assert abs(offset @ [-sitting_pose.direction()[1], sitting_pose.direction()[0]]) < 1e-9
-    assert along == pytest.approx(placement.standoff_m)
+    direction = sitting_pose.direction()
+    offset = np.array([goal.x, goal.y]) - sitting_pose.position[:2]
+    along = float(offset @ direction)
+    assert abs(offset @ [-direction[1], direction[0]]) < 1e-9  # on the ray from the first p
+    assert along == pytest.approx(placement.standoff_m + placement.slide_m)
     # One step closer collides: the push stopped at the first free spot.
     assert checker.collides_with_chair(goal_on_ray(sitting_pose, along - PUSH_STEP_M))
-    # The seat front edge is 0.14 m ahead of p and the ellipsoid reaches 0.16 m forward.
-    assert 0.29 <= along <= 0.32
+    # The seat's front edge is 0.14 m ahead of p; the ellipsoid reaches ~0.20 m forward.
+    assert 0.32 <= along <= 0.36
+    # p slid toward the NAO along the same ray, within its arms' reach.
+    slid = placement.sitting_pose.position[:2] - sitting_pose.position[:2]
+    assert float(slid @ direction) == pytest.approx(placement.slide_m)
+    assert placement.standoff_m <= max_forward_reach(0.29)
 
 
 def test_far_sitting_position_slides_toward_the_nao_on_the_seat() -> None:

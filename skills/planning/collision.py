@@ -5,11 +5,15 @@ it with FCL against the scene. Here the scene is the planning arena's walls (box
 outside its edges), its fixed obstacles (the arm's base) and the chair as its convex
 pieces (V-HACD, :func:`skills.meshes.convex_pieces`), all in the world frame.
 
-The NAO ellipsoid (body frame: x forward, y left, z up, centred on the robot's vertical
-axis) has semi-axes :data:`NAO_SEMI_AXES_M`:
+The NAO ellipsoid (body frame: x forward, y left, z up) has semi-axes
+:data:`NAO_SEMI_AXES_M` and its centre :data:`NAO_CENTRE_FORWARD_M` ahead of the robot's
+vertical axis, :data:`NAO_CENTRE_HEIGHT_M` above the floor:
 
-* forward 0.16 m: the NAO V6 is 0.311 m deep with its arms forward holding the bear
-  (datasheet 574 x 275 x 311 mm), plus 5 mm of clearance;
+* forward 0.165 m, centre 0.035 m ahead: it spans 0.13 m behind the axis (the NAO's back)
+  to 0.20 m ahead of it. The NAO V6 is 0.311 m deep with its arms forward (datasheet
+  574 x 275 x 311 mm); the held bear's back reaches 0.185 m ahead of the axis at 0.25 m
+  height in the whole-body planner's carrying posture (skills.planning.wholebody), and
+  the ellipsoid must cover it there (0.196 m at that height);
 * lateral 0.14 m: 0.275 m wide across the shoulders, plus 2.5 mm;
 * vertical 0.29 m: 0.574 m tall; the centre is 0.29 m above the floor.
 """
@@ -27,8 +31,11 @@ from skills.arena import Arena, Box2D
 from skills.geometry import SE2Pose, rot_z
 from skills.meshes import convex_pieces, mesh_digest
 
-NAO_SEMI_AXES_M = (0.16, 0.14, 0.29)
+NAO_SEMI_AXES_M = (0.165, 0.14, 0.29)
 """Semi-axes (forward, lateral, vertical) of the NAO's enclosing ellipsoid, metres."""
+
+NAO_CENTRE_FORWARD_M = 0.035
+"""How far the ellipsoid's centre is ahead of the NAO's vertical axis (the held bear)."""
 
 NAO_CENTRE_HEIGHT_M = 0.29
 """Height of the ellipsoid's centre above the floor, metres."""
@@ -49,7 +56,11 @@ def nao_geometry() -> fcl.Ellipsoid:
 
 def nao_transform(pose: SE2Pose) -> fcl.Transform:
     """``T_world_ellipsoid`` for the NAO standing at ``pose``."""
-    return fcl.Transform(rot_z(pose.theta), np.array([pose.x, pose.y, NAO_CENTRE_HEIGHT_M]))
+    c, s = math.cos(pose.theta), math.sin(pose.theta)
+    centre = np.array(
+        [pose.x + NAO_CENTRE_FORWARD_M * c, pose.y + NAO_CENTRE_FORWARD_M * s, NAO_CENTRE_HEIGHT_M]
+    )
+    return fcl.Transform(rot_z(pose.theta), centre)
 
 
 def chair_convex_pieces(chair_mesh: trimesh.Trimesh) -> list[trimesh.Trimesh]:
@@ -198,10 +209,3 @@ class NaoCollisionChecker:
             or self._obstacles.collides(probe)
             or self._chair.collides(probe)
         )
-
-
-def ellipsoid_footprint_radius(theta_rel: float) -> float:
-    """Horizontal extent (metres) of the ellipsoid's equator in a direction ``theta_rel``
-    relative to the NAO's heading: r = ab / sqrt((b cos φ)² + (a sin φ)²)."""
-    a, b, _ = NAO_SEMI_AXES_M
-    return a * b / math.hypot(b * math.cos(theta_rel), a * math.sin(theta_rel))

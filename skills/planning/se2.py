@@ -46,7 +46,7 @@ REACH_SLACK_M = 0.005
 """p slides to this much inside the arms' reach, so the reach check is not a rounding call."""
 SEAT_HEIGHT_TOLERANCE_M = 0.03
 """How much the seat's height may change under p as it slides and still count as the seat."""
-MAX_SLIDE_RETRIES = 3
+MAX_SLIDE_RETRIES = 4
 SLIDE_RETRY_STEP_M = 0.03
 """After a pre-plan finds the bear out of reach, p slides this much closer and it retries."""
 PLANNING_TIME_S = 1.0
