@@ -316,6 +316,7 @@ def test_every_calibration_mesh_loads_into_the_world():
     if not (SHARED_CHAIRS / "manifest.json").exists():
         pytest.skip(f"no calibration meshes at {SHARED_CHAIRS}")
     manifest = json.loads((SHARED_CHAIRS / "manifest.json").read_text())
+    problems = []
     for entry in manifest["meshes"]:
         config = SimConfig(
             chair_path=SHARED_CHAIRS / entry["file"],
@@ -324,13 +325,23 @@ def test_every_calibration_mesh_loads_into_the_world():
             seed=1,
         )
         with SimWorld(config) as world:
+            world.clock.sleep(0.5)
             T_start = world.T_world_chair_true()
             world.clock.sleep(0.5)
             T_end = world.T_world_chair_true()
             mesh = world.chair_mesh_true
             name = entry["file"]
-            assert mesh.bounds[0, 2] > -0.02, f"{name} sank into the floor"
-            assert np.linalg.norm(T_end[:3, 3] - T_start[:3, 3]) < 0.03, f"{name} jumped"
-            assert mesh.bounds[1, 2] == pytest.approx(entry["height_m"], abs=0.05), name
-            if entry["front_yaw_deg"] is not None:
-                assert world.sitting_yaw_true() is not None
+            footprint = np.ptp(world.chair.mesh_local.vertices[:, :2], axis=0)
+            if mesh.bounds[0, 2] < -0.02:
+                problems.append(f"{name} sank into the floor")
+            if np.linalg.norm(T_end[:3, 3] - T_start[:3, 3]) > 0.01:
+                problems.append(f"{name} still moving after 1 s")
+            # Sofas and big tables do not fit between the arena's walls and get pushed.
+            fits = float(np.hypot(*footprint)) < 1.0
+            if fits and abs(mesh.bounds[1, 2] - entry["height_m"]) > 0.03:
+                problems.append(
+                    f"{name} top at {mesh.bounds[1, 2]:.3f} m, not upright on the floor"
+                )
+            if (entry["front_yaw_deg"] is None) != (world.sitting_yaw_true() is None):
+                problems.append(f"{name}: sitting direction known iff the manifest gives it")
+    assert not problems, "; ".join(problems)
