@@ -235,7 +235,7 @@ def test_retract_releases_upright_and_stable(chair, plan):
     withdrawn = q_all[int(np.argmin(legs_still)) - 1]
     hand_start = _frames(q_all[0])["l_gripper"][[0, 2], 3]
     hand_withdrawn = _frames(withdrawn)["l_gripper"][[0, 2], 3]
-    assert hand_withdrawn[0] < hand_start[0] - 0.04
+    assert hand_withdrawn[0] < hand_start[0] - 0.03
     assert hand_withdrawn[1] > hand_start[1] + 0.02
     # Ends upright: torso pitch zero, arms down.
     assert abs(sum(q_all[-1][:3])) < 1e-6

@@ -28,8 +28,9 @@ import trimesh
 
 from skills.geometry import transform_points
 
-BAND_HALF_WIDTH_M = 0.13
-"""Half-width of the lateral band the planar motion sweeps (arms at |y| ~ 0.11 m)."""
+BAND_HALF_WIDTH_M = 0.11
+"""Half-width of the lateral band the planar motion sweeps (the hands' centres at
+|y| = 0.105 m; wider bands put many armrests in the way of the bear)."""
 
 HORIZONTAL_NORMAL_Z = 0.95
 """A surface sample with |n_z| at least this belongs to a horizontal surface."""

@@ -211,7 +211,7 @@ class PlanarNao:
         velocity_limit: (5,) URDF velocity limits of q (rad/s).
         total_mass_kg: the NAO's mass.
         support_x: (x_back, x_front) of the feet's support polygon along x in the NAO
-            frame: the force sensors' extent (the conservative sole).
+            frame: from the rear force sensors to the front bumpers (inside the sole).
     """
 
     def __init__(self, urdf_path: str | None = None) -> None:
@@ -221,10 +221,13 @@ class PlanarNao:
             self._children.setdefault(joint.parent, []).append(joint)
         self.q_lower, self.q_upper, self.velocity_limit = self._planar_limits()
         self.total_mass_kg = sum(link.mass_kg for link in self.links.values())
-        fsr_x = [
-            j.xyz[0] for j in self.joints.values() if j.parent == "l_ankle" and "FSR" in j.name
+        # The sole's extent: from the rear force sensors to the front bumpers.
+        foot_x = [
+            j.xyz[0]
+            for j in self.joints.values()
+            if j.parent == "l_ankle" and ("FSR" in j.name or "Bumper" in j.name)
         ]
-        self.support_x = (float(min(fsr_x)), float(max(fsr_x)))
+        self.support_x = (float(min(foot_x)), float(max(foot_x)))
         self._q = ca.SX.sym("q", 5)
         self._frames = self._forward(self._q)
         self._frame_function = ca.Function(

@@ -370,7 +370,9 @@ def withdrawn_hands_posture(problems: SeatingProblems, q_goal: np.ndarray) -> np
     def residual(arms: np.ndarray) -> np.ndarray:
         return hand(np.r_[q_goal[:3], arms]) - target
 
-    fit = least_squares(residual, q_goal[3:], bounds=(nao.q_lower[3:], nao.q_upper[3:]))
+    lower, upper = nao.q_lower[3:], nao.q_upper[3:]
+    start = np.clip(q_goal[3:], lower + 1e-6, upper - 1e-6)
+    fit = least_squares(residual, start, bounds=(lower, upper))
     return np.r_[q_goal[:3], fit.x]
 
 
