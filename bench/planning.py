@@ -37,7 +37,8 @@ from skills.arena import DEFAULT_ARENA, Arena
 from skills.assistance import compose_instruction
 from skills.geometry import SittingPose, yaw_transform
 from skills.meshes import box_chair_mesh, load_mesh
-from skills.planning.se2 import check_accessibility, seat_support_heights
+from skills.planning.se2 import check_accessibility, reach_validator, seat_support_heights
+from skills.results import AccessibilityResult
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 PELVIS_ABOVE_SEAT_M = 0.05
@@ -114,7 +115,7 @@ def bench_accessible(chairs: list[Chair], arena: Arena, runs: int, seed: int) ->
         yaw = toward_nao(centre, arena) + math.radians(rng.uniform(-30.0, 30.0))
         mesh, sitting = place(chair, centre, yaw)
         began = time.perf_counter()
-        result = check_accessibility(mesh, sitting, arena.humanoid_start, arena, seed=seed + run)
+        result = _check(mesh, sitting, arena, seed + run)
         total_s.append(time.perf_counter() - began)
         plan_s.append(result.seconds)
         found += result.accessible
@@ -133,6 +134,23 @@ def bench_accessible(chairs: list[Chair], arena: Arena, runs: int, seed: int) ->
     )
     for reason in reasons[:5]:
         print(f"    not found: {reason}")
+
+
+VALIDATOR: list = [None]  # None: the default (whole-body pre-plan when available)
+
+
+def _check(
+    mesh: trimesh.Trimesh, sitting: SittingPose, arena: Arena, seed: int
+) -> AccessibilityResult:
+    """check_accessibility, with an error in another module counted instead of fatal."""
+    try:
+        return check_accessibility(
+            mesh, sitting, arena.humanoid_start, arena, seed=seed, seating_validator=VALIDATOR[0]
+        )
+    except Exception as error:
+        return AccessibilityResult(
+            False, None, sitting, (), f"error: {type(error).__name__}: {error}"
+        )
 
 
 def _turn_about_centre(mesh: trimesh.Trimesh, sitting: SittingPose, angle_rad: float):
@@ -156,7 +174,7 @@ def assistance_trial(
     the last reason it was not accessible."""
     reason = ""
     for rotation in range(MAX_ROTATIONS + 1):
-        result = check_accessibility(mesh, sitting, arena.humanoid_start, arena, seed=seed)
+        result = _check(mesh, sitting, arena, seed)
         if result.accessible:
             return rotation, reason
         reason = result.reason
@@ -203,7 +221,7 @@ def bench_inaccessible(chairs: list[Chair], arena: Arena, trials: int, seed: int
             )
             continue
         needing_help += 1
-        initial = check_accessibility(mesh, sitting, arena.humanoid_start, arena, seed=seed)
+        initial = _check(mesh, sitting, arena, seed)
         initial_reasons[_short(initial.reason)] += 1
         obeyed_first += obeyed == 1
         if obeyed != 1:
@@ -245,7 +263,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--y-half", type=float, default=DEFAULT_ARENA.y_max, help="arena half width, m"
     )
+    parser.add_argument(
+        "--validator",
+        choices=("default", "reach"),
+        default="default",
+        help="seat pre-plan: the whole-body planner when available, or the arm-reach model",
+    )
     args = parser.parse_args(argv)
+    VALIDATOR[0] = reach_validator if args.validator == "reach" else None
+    print(f"validator: {args.validator}")
     arena = DEFAULT_ARENA._replace(x_min=args.x_min, y_min=-args.y_half, y_max=args.y_half)
     print(
         f"arena x [{arena.x_min}, {arena.x_max}] y [{arena.y_min}, {arena.y_max}]; timings on a shared machine"
