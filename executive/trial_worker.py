@@ -1,0 +1,95 @@
+"""One trial of a campaign, in its own process: ``python -m executive.trial_worker '<json>'``.
+
+The JSON is ``executive.trials.protocol.TrialSpec.to_payload``: chair_path, placement,
+helper, seed, trial_index, out_dir, timeout_s. The worker runs the whole mission in the
+simulated world (``executive.mission.run_in_simulation``), which writes the run record
+into out_dir, keeps the robot's reconstructed chair (``chair_reconstructed.ply``) for the
+imagined-pose picture, and prints one line ``BEARCHAIR-TRIAL-RESULT {...}`` on stdout
+for the harness. Exit status: 0 the mission ended (success or failure), 3 an exception.
+"""
+
+from __future__ import annotations
+
+import faulthandler
+import json
+import sys
+import traceback
+from pathlib import Path
+from typing import Any
+
+from executive.trials.worker_process import RESULT_MARKER
+
+MISSION_TIMEOUT_MARGIN_S = 30.0
+"""The mission stops itself this long before the harness would kill the worker, so a
+slow trial still ends with a full run record."""
+
+
+class ChairKeeper:
+    """Keeps the last reconstructed chair and sitting pose seen on the blackboard.
+
+    Both are in the world frame at the same moment (the mission moves them together
+    when the helper turns the chair), so they can be drawn together afterwards.
+    """
+
+    def __init__(self) -> None:
+        self.chair_mesh: Any = None
+
+    def __call__(self, runner: Any) -> None:
+        import py_trees
+
+        from behaviours import keys
+
+        storage = py_trees.blackboard.Blackboard.storage
+        mesh = storage.get(keys.CHAIR_MESH)
+        if mesh is not None:
+            self.chair_mesh = mesh
+
+    def save(self, out_dir: Path) -> None:
+        if self.chair_mesh is not None:
+            self.chair_mesh.export(out_dir / "chair_reconstructed.ply")
+
+
+def mission_timeout_s(harness_timeout_s: float) -> float:
+    """The mission's own timeout: a margin before the harness's kill."""
+    return max(harness_timeout_s - MISSION_TIMEOUT_MARGIN_S, 0.8 * harness_timeout_s)
+
+
+def main(argv: list[str] | None = None) -> int:
+    faulthandler.enable()  # a segfault leaves "Fatal Python error" in worker.log
+    argv = sys.argv[1:] if argv is None else argv
+    if len(argv) != 1:
+        print("usage: python -m executive.trial_worker '<trial json>'", file=sys.stderr)
+        return 2
+    try:
+        payload = json.loads(argv[0])
+        from executive.config import RunConfig
+        from executive.mission import run_in_simulation
+
+        out_dir = Path(payload["out_dir"])
+        config = RunConfig(
+            chair_path=Path(payload["chair_path"]) if payload.get("chair_path") else None,
+            placement=payload["placement"],
+            helper=payload["helper"],
+            seed=int(payload["seed"]),
+            gui=False,
+            out_dir=out_dir,
+            mute=True,
+            timeout_s=mission_timeout_s(float(payload["timeout_s"])),
+        )
+        keeper = ChairKeeper()
+        summary = run_in_simulation(config, on_tick=keeper)
+        try:
+            keeper.save(out_dir)
+        except Exception as error:  # the picture is optional, the result is not
+            print(f"could not save the reconstructed chair: {error}", file=sys.stderr)
+    except Exception as error:
+        traceback.print_exc()
+        message = {"error": f"{type(error).__name__}: {error}".splitlines()[0][:300]}
+        print(RESULT_MARKER + json.dumps(message), flush=True)
+        return 3
+    print(RESULT_MARKER + json.dumps({"summary": summary}, default=str), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,97 @@
+"""A campaign: run every unfinished trial, record each one as soon as it ends.
+
+The records (SQLite) are the single source of truth: the table and the report are
+computed from them, so a campaign interrupted and resumed gives the same table as one
+run straight through with the same seed.
+"""
+
+from __future__ import annotations
+
+import shutil
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, NamedTuple
+
+from executive.trials.backends import Backend
+from executive.trials.progress import Progress
+from executive.trials.protocol import TrialSpec
+from executive.trials.store import TrialStore, record_from_error, record_from_summary
+from executive.trials.worker_process import WorkerOutcome
+
+
+class CampaignResult(NamedTuple):
+    """How a campaign call went.
+
+    Attributes:
+        ran: trials finished (and recorded) by this call.
+        already_done: trials skipped because the records already held them.
+        interrupted: Ctrl-C stopped it; the unfinished trials run on the next call.
+    """
+
+    ran: int
+    already_done: int
+    interrupted: bool
+
+
+def run_campaign(
+    specs: list[TrialSpec],
+    store: TrialStore,
+    backend: Backend,
+    runs_dir: Path,
+    timeout_s: float,
+    progress: Progress | None = None,
+    on_record: Callable[[dict[str, Any]], None] | None = None,
+) -> CampaignResult:
+    """Runs the trials the records do not hold yet, recording each as it ends.
+
+    Args:
+        specs: the campaign's trials (``expand_protocol``).
+        store: the records; each finished trial is committed at once.
+        backend: where the trial subprocesses run.
+        runs_dir: each trial's run record goes to ``runs_dir / spec.run_dir_name()``.
+        timeout_s: per-trial wall time, given to the worker (its mission stops earlier).
+        progress: the progress bar (optional).
+        on_record: called after each record is committed (tests use it to interrupt).
+
+    Returns:
+        What ran; ``interrupted`` when Ctrl-C stopped it (finished trials are kept).
+    """
+    finished = store.finished_keys()
+    todo = [spec for spec in specs if spec.key not in finished]
+    already_done = len(specs) - len(todo)
+    jobs = []
+    for spec in todo:
+        run_dir = runs_dir / spec.run_dir_name()
+        if run_dir.exists():  # left by an interrupted run: start clean
+            shutil.rmtree(run_dir)
+        jobs.append((spec, spec.to_payload(run_dir, timeout_s)))
+    ran = 0
+
+    def record(spec: TrialSpec, outcome: WorkerOutcome) -> None:
+        nonlocal ran
+        if outcome.cancelled:
+            return
+        run_dir = str(runs_dir / spec.run_dir_name())
+        if outcome.summary is not None:
+            row = record_from_summary(spec, outcome.summary, outcome.wall_seconds, run_dir)
+        else:
+            row = record_from_error(
+                spec, outcome.error or "unknown error", outcome.wall_seconds, run_dir
+            )
+        store.add(row)
+        ran += 1
+        if progress is not None:
+            progress.update(row)
+        if on_record is not None:
+            on_record(row)
+
+    if progress is not None:
+        progress.start()
+    try:
+        backend.run(jobs, record)
+    except KeyboardInterrupt:
+        return CampaignResult(ran, already_done, interrupted=True)
+    finally:
+        if progress is not None:
+            progress.finish()
+    return CampaignResult(ran, already_done, interrupted=False)

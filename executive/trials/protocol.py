@@ -1,0 +1,216 @@
+"""Which trials a campaign runs: the chairs of a folder and the paper's protocol.
+
+The paper (Table 1) tests each chair in 6 trials: 3 accessible placements, 2
+inaccessible placements with a helper who obeys, and 1 inaccessible placement with a
+helper who disobeys the first instruction. Each trial's seed is derived from the
+campaign seed, the chair's file name and the trial's index with SHA-256, so it is the
+same in every process and on every machine (Python's ``hash()`` is salted per process).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+from typing import Any, NamedTuple
+
+from skills.meshes import SUPPORTED_SUFFIXES
+
+EXPERIMENTS = ("accessible", "inaccessible_obeys", "inaccessible_disobeys")
+"""The three experiments of the paper's Table 1, in its row order."""
+
+EXPERIMENT_LABELS = {
+    "accessible": "Accessible",
+    "inaccessible_obeys": "Inaccessible + Human Obeys",
+    "inaccessible_disobeys": "Inaccessible + Human Disobeys",
+}
+
+EXPERIMENT_SETTINGS = {
+    "accessible": ("accessible", "obeys"),
+    "inaccessible_obeys": ("inaccessible", "obeys"),
+    "inaccessible_disobeys": ("inaccessible", "disobeys"),
+}
+"""Experiment -> (placement, helper) given to the simulated world."""
+
+PROTOCOLS: dict[str, tuple[str, ...]] = {
+    "paper": ("accessible",) * 3 + ("inaccessible_obeys",) * 2 + ("inaccessible_disobeys",),
+}
+"""Protocol name -> the experiment of each trial index, per chair."""
+
+
+class ChairSetError(ValueError):
+    """The chairs folder is missing, unreadable or holds no usable mesh."""
+
+
+class ChairEntry(NamedTuple):
+    """A chair that takes part in the campaign.
+
+    Attributes:
+        path: the mesh file.
+        kind: the manifest's kind ("chair", "stool", ...), "unknown" without a manifest.
+        front_yaw_deg: the manifest's sitting direction in the mesh frame (degrees), if any.
+    """
+
+    path: Path
+    kind: str
+    front_yaw_deg: float | None
+
+    @property
+    def name(self) -> str:
+        return self.path.name
+
+
+class SkippedChair(NamedTuple):
+    """A mesh of the folder that does not take part, and why."""
+
+    name: str
+    reason: str
+
+
+class TrialSpec(NamedTuple):
+    """One trial of a campaign.
+
+    Attributes:
+        chair: the chair's file name (the records' chair column).
+        chair_path: the mesh file.
+        trial_index: the trial's index for this chair (0..5 in the paper protocol).
+        experiment: one of :data:`EXPERIMENTS`.
+        placement: "accessible" or "inaccessible".
+        helper: "obeys" or "disobeys".
+        seed: the trial's seed (world and skills).
+    """
+
+    chair: str
+    chair_path: Path
+    trial_index: int
+    experiment: str
+    placement: str
+    helper: str
+    seed: int
+
+    @property
+    def key(self) -> tuple[str, str, str, int, int]:
+        """What identifies a finished trial in the records (resume skips it)."""
+        return (self.chair, self.placement, self.helper, self.trial_index, self.seed)
+
+    @property
+    def label(self) -> str:
+        return f"{self.chair} #{self.trial_index} {self.experiment} seed {self.seed}"
+
+    def run_dir_name(self) -> str:
+        """The trial's run record directory, relative to the campaign's runs folder."""
+        return f"{Path(self.chair).stem}/t{self.trial_index}-{self.experiment}-seed{self.seed}"
+
+    def to_payload(self, out_dir: Path, timeout_s: float) -> dict[str, Any]:
+        """The JSON the trial worker gets on its command line."""
+        return {
+            "chair_path": str(self.chair_path),
+            "placement": self.placement,
+            "helper": self.helper,
+            "seed": self.seed,
+            "trial_index": self.trial_index,
+            "out_dir": str(out_dir),
+            "timeout_s": timeout_s,
+        }
+
+
+def trial_seed(campaign_seed: int, chair_name: str, trial_index: int) -> int:
+    """A 31-bit seed from SHA-256 of ``"<campaign_seed>/<chair_name>/<trial_index>"``."""
+    text = f"{campaign_seed}/{chair_name}/{trial_index}".encode()
+    return int.from_bytes(hashlib.sha256(text).digest()[:4], "big") & 0x7FFFFFFF
+
+
+def read_manifest(chairs_dir: Path) -> dict[str, dict[str, Any]] | None:
+    """``manifest.json``'s entries by file name, or None when the folder has none.
+
+    Raises:
+        ChairSetError: the manifest exists but is not valid JSON of the expected shape.
+    """
+    manifest_path = chairs_dir / "manifest.json"
+    if not manifest_path.is_file():
+        return None
+    try:
+        entries = json.loads(manifest_path.read_text())["meshes"]
+        return {str(entry["file"]): entry for entry in entries}
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise ChairSetError(f"{manifest_path}: unreadable manifest ({error})") from error
+
+
+def discover_chairs(
+    chairs_dir: Path, max_chairs: int | None = None
+) -> tuple[list[ChairEntry], list[SkippedChair]]:
+    """The chairs of a folder that take part, in sorted file order, and those skipped.
+
+    Every file with a supported mesh suffix is a candidate. With a ``manifest.json``,
+    only meshes with a front (``front_yaw_deg`` not null) take part: the simulated world
+    needs it to place the chair accessibly or not. ``max_chairs`` keeps the first N that
+    take part (deterministic), the rest are listed as skipped.
+
+    Raises:
+        ChairSetError: the folder is missing or holds no supported mesh, or none takes part.
+    """
+    if not chairs_dir.exists():
+        raise ChairSetError(f"{chairs_dir}: no such directory")
+    if not chairs_dir.is_dir():
+        raise ChairSetError(f"{chairs_dir}: not a directory")
+    meshes = sorted(
+        p for p in chairs_dir.iterdir() if p.is_file() and p.suffix.lower() in SUPPORTED_SUFFIXES
+    )
+    if not meshes:
+        raise ChairSetError(
+            f"{chairs_dir}: no chair meshes ({', '.join(SUPPORTED_SUFFIXES)}) in this directory"
+        )
+    manifest = read_manifest(chairs_dir)
+    chosen: list[ChairEntry] = []
+    skipped: list[SkippedChair] = []
+    for path in meshes:
+        if manifest is None:
+            entry = ChairEntry(path, "unknown", None)
+        elif path.name not in manifest:
+            skipped.append(SkippedChair(path.name, "not in manifest.json"))
+            continue
+        else:
+            info = manifest[path.name]
+            front = info.get("front_yaw_deg")
+            kind = str(info.get("kind", "unknown"))
+            if front is None:
+                skipped.append(
+                    SkippedChair(path.name, f"{kind} without a front (front_yaw_deg null)")
+                )
+                continue
+            entry = ChairEntry(path, kind, float(front))
+        if max_chairs is not None and len(chosen) >= max_chairs:
+            skipped.append(SkippedChair(path.name, f"beyond --max-chairs {max_chairs}"))
+            continue
+        chosen.append(entry)
+    if not chosen:
+        raise ChairSetError(f"{chairs_dir}: none of its {len(meshes)} meshes has a front")
+    return chosen, skipped
+
+
+def expand_protocol(
+    chairs: list[ChairEntry], protocol: str = "paper", campaign_seed: int = 0
+) -> list[TrialSpec]:
+    """Every trial of the campaign, chair by chair, in trial-index order.
+
+    Raises:
+        ValueError: unknown protocol.
+    """
+    if protocol not in PROTOCOLS:
+        raise ValueError(f"unknown protocol {protocol!r} (known: {', '.join(PROTOCOLS)})")
+    trials = []
+    for chair in chairs:
+        for index, experiment in enumerate(PROTOCOLS[protocol]):
+            placement, helper = EXPERIMENT_SETTINGS[experiment]
+            trials.append(
+                TrialSpec(
+                    chair=chair.name,
+                    chair_path=chair.path,
+                    trial_index=index,
+                    experiment=experiment,
+                    placement=placement,
+                    helper=helper,
+                    seed=trial_seed(campaign_seed, chair.name, index),
+                )
+            )
+    return trials

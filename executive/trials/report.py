@@ -1,0 +1,242 @@
+"""The campaign's summary, computed from the records alone: the paper's Table 1 and more.
+
+Table 1 of the paper has two parts. (1) Seating bear success by experiment: trials and
+successes. (2) Chair accessible after human assistance, over the trials in which an
+instruction was given (the paper disregards trials where imagination failed and no
+instruction was said). Here a trial is a success when the simulated judge says the bear
+is seated, and the chair is accessible after assistance when the mission's last
+accessibility check said so. Added: the median time of each stage and the causes of
+failure.
+"""
+
+from __future__ import annotations
+
+import statistics
+from collections import Counter
+from typing import Any, NamedTuple
+
+from executive.trials.pictures import trial_picture_name
+from executive.trials.protocol import EXPERIMENT_LABELS, EXPERIMENTS, SkippedChair
+
+STAGE_ORDER = (
+    "ScanChair",
+    "ImagineSitting",
+    "MakeChairAccessible",
+    "WalkToChair",
+    "SeatBear",
+    "ReleaseAndStand",
+)
+
+
+class RateRow(NamedTuple):
+    """One row of a table: a count out of a number of trials."""
+
+    label: str
+    n: int
+    count: int
+
+    @property
+    def rate(self) -> float | None:
+        return self.count / self.n if self.n else None
+
+
+class TrialsTable(NamedTuple):
+    """The paper's Table 1 from the records.
+
+    Attributes:
+        seating: (1) rows Accessible, Inaccessible + Human Obeys, ... , Total: trials, successes.
+        assistance: (2) rows Obeys, Disobeys, Total: trials with an instruction, accessible after.
+        stage_median_s: stage name -> (median seconds, trials where it ran).
+        trial_median_s: median wall time of a whole trial (its subprocess), if any.
+        failure_causes: (cause, count), most frequent first.
+        errors: trials that crashed or hung.
+        assisted_accessible_trials: accessible placements that were nevertheless assisted.
+    """
+
+    seating: list[RateRow]
+    assistance: list[RateRow]
+    stage_median_s: dict[str, tuple[float, int]]
+    trial_median_s: float | None
+    failure_causes: list[tuple[str, int]]
+    errors: int
+    assisted_accessible_trials: int
+
+
+def compute_table(records: list[dict[str, Any]]) -> TrialsTable:
+    """Table 1, stage medians and failure causes from records of ``executive.trials.store``."""
+    seating = []
+    for experiment in EXPERIMENTS:
+        rows = [r for r in records if r["experiment"] == experiment]
+        successes = sum(r["outcome"] == "success" for r in rows)
+        seating.append(RateRow(EXPERIMENT_LABELS[experiment], len(rows), successes))
+    seating.append(RateRow("Total", len(records), sum(r["outcome"] == "success" for r in records)))
+
+    assistance = []
+    for experiment, label in (
+        ("inaccessible_obeys", "Obeys"),
+        ("inaccessible_disobeys", "Disobeys"),
+    ):
+        assisted = [
+            r for r in records if r["experiment"] == experiment and (r.get("instructions") or 0) > 0
+        ]
+        accessible = sum(bool(r.get("accessible_after_assistance")) for r in assisted)
+        assistance.append(RateRow(label, len(assisted), accessible))
+    assistance.append(
+        RateRow("Total", sum(r.n for r in assistance), sum(r.count for r in assistance))
+    )
+
+    durations: dict[str, list[float]] = {}
+    for record in records:
+        for stage, seconds in (record.get("stage_seconds") or {}).items():
+            durations.setdefault(stage, []).append(float(seconds))
+    ordered = [s for s in STAGE_ORDER if s in durations] + sorted(
+        s for s in durations if s not in STAGE_ORDER
+    )
+    stage_median_s = {
+        stage: (statistics.median(durations[stage]), len(durations[stage])) for stage in ordered
+    }
+    walls = [r["wall_seconds"] for r in records if r.get("wall_seconds") is not None]
+
+    causes = Counter(failure_cause(r) for r in records if r["outcome"] != "success")
+    return TrialsTable(
+        seating=seating,
+        assistance=assistance,
+        stage_median_s=stage_median_s,
+        trial_median_s=statistics.median(walls) if walls else None,
+        failure_causes=sorted(causes.items(), key=lambda item: (-item[1], item[0])),
+        errors=sum(bool(r.get("error")) for r in records),
+        assisted_accessible_trials=sum(
+            r["experiment"] == "accessible" and (r.get("instructions") or 0) > 0 for r in records
+        ),
+    )
+
+
+def failure_cause(record: dict[str, Any]) -> str:
+    """``failed_stage: reason`` (the reason without its leaf prefix), or the crash error."""
+    if record.get("error") and not record.get("failed_stage"):
+        return f"harness: {record['error']}"
+    stage = record.get("failed_stage") or "unknown stage"
+    reason = (record.get("reason") or "").strip()
+    # summarise() writes "<leaf name>: <message>": the leaf is often the stage itself.
+    if reason.startswith(f"{stage}: "):
+        reason = reason[len(stage) + 2 :]
+    return f"{stage}: {reason or 'no reason given'}"
+
+
+def _rate(row: RateRow) -> str:
+    return "-" if row.rate is None else f"{100.0 * row.rate:.1f}%"
+
+
+def format_table(table: TrialsTable) -> str:
+    """Table 1 and the extras as plain text for the terminal."""
+    width = max(len(row.label) for row in table.seating) + 2
+    lines = [
+        "(1) Seating bear success",
+        f"{'Experiment':<{width}}{'Trials':>7}{'Success':>9}{'Rate':>8}",
+    ]
+    for row in table.seating:
+        lines.append(f"{row.label:<{width}}{row.n:>7}{row.count:>9}{_rate(row):>8}")
+    lines += ["", "(2) Chair accessible after human assistance"]
+    lines.append(f"{'Helper':<{width}}{'Assist.':>7}{'Access.':>9}{'Rate':>8}")
+    for row in table.assistance:
+        lines.append(f"{row.label:<{width}}{row.n:>7}{row.count:>9}{_rate(row):>8}")
+    if table.assisted_accessible_trials:
+        lines.append(
+            f"(and {table.assisted_accessible_trials} accessible placement(s) judged inaccessible "
+            "and assisted)"
+        )
+    lines += ["", "Median time per stage"]
+    for stage, (median, n) in table.stage_median_s.items():
+        lines.append(f"  {stage:<22}{median:>8.1f} s  (n={n})")
+    if table.trial_median_s is not None:
+        lines.append(f"  {'whole trial (wall)':<22}{table.trial_median_s:>8.1f} s")
+    lines += ["", "Causes of failure"]
+    if not table.failure_causes:
+        lines.append("  none")
+    for cause, count in table.failure_causes:
+        lines.append(f"  {count:>3} x {cause}")
+    return "\n".join(lines)
+
+
+def markdown_report(
+    table: TrialsTable,
+    records: list[dict[str, Any]],
+    skipped: list[SkippedChair] | None = None,
+    title: str = "Trials",
+    settings: dict[str, Any] | None = None,
+    chair_pictures: dict[str, str] | None = None,
+) -> str:
+    """The campaign report in Markdown: Table 1, stage medians, failures, every trial."""
+    out = [f"# {title}", ""]
+    if settings:
+        out += [", ".join(f"{k}: {v}" for k, v in settings.items()), ""]
+    out += [
+        "## (1) Seating bear success",
+        "",
+        "| Experiment | Trial num. | Successes | Rate |",
+        "|---|---:|---:|---:|",
+    ]
+    out += [f"| {r.label} | {r.n} | {r.count} | {_rate(r)} |" for r in table.seating]
+    out += [
+        "",
+        "## (2) Chair accessible after human assistance",
+        "",
+        "| Experiment | Assist. num. | Accessible num. | Rate |",
+        "|---|---:|---:|---:|",
+    ]
+    out += [f"| {r.label} | {r.n} | {r.count} | {_rate(r)} |" for r in table.assistance]
+    out += [
+        "",
+        "Assist. num. counts the trials in which at least one instruction was given; a chair "
+        "is accessible after assistance when the mission's last accessibility check said so.",
+    ]
+    if table.assisted_accessible_trials:
+        out.append(
+            f"{table.assisted_accessible_trials} accessible placement(s) were judged "
+            "inaccessible and assisted (not counted above)."
+        )
+    out += [
+        "",
+        "## Median time per stage",
+        "",
+        "| Stage | Median (s) | Trials |",
+        "|---|---:|---:|",
+    ]
+    out += [f"| {s} | {m:.1f} | {n} |" for s, (m, n) in table.stage_median_s.items()]
+    if table.trial_median_s is not None:
+        out.append(f"| whole trial (wall) | {table.trial_median_s:.1f} | {len(records)} |")
+    out += ["", "## Causes of failure", ""]
+    if not table.failure_causes:
+        out.append("None.")
+    out += [f"- {count} x {_md(cause)}" for cause, count in table.failure_causes]
+    if skipped:
+        out += ["", "## Meshes not in the campaign", ""]
+        out += [f"- {s.name}: {s.reason}" for s in skipped]
+    out += [
+        "",
+        "## Trials",
+        "",
+        "| Chair | # | Experiment | Seed | Outcome | Failed stage | Rotations | Accessible after | "
+        "Facing err. (deg) | Wall (s) | Scene |",
+        "|---|---:|---|---:|---|---|---:|---|---:|---:|---|",
+    ]
+    for r in records:
+        picture = f"trials/{trial_picture_name(r)}"
+        facing = r.get("facing_error_deg")
+        after = r.get("accessible_after_assistance")
+        out.append(
+            f"| {r['chair']} | {r['trial_index']} | {r['experiment']} | {r['seed']} | "
+            f"{r['outcome']} | {_md(r.get('failed_stage') or ('error' if r.get('error') else ''))} | "
+            f"{'' if r.get('rotations') is None else r['rotations']} | "
+            f"{'' if after is None else ('yes' if after else 'no')} | "
+            f"{'' if facing is None else f'{facing:.1f}'} | {r.get('wall_seconds') or 0:.1f} | "
+            f"[png]({picture}) |"
+        )
+    if chair_pictures:
+        out += ["", "## Imagined sitting poses", ""]
+        out += [f"![{chair}]({path})" for chair, path in sorted(chair_pictures.items())]
+    return "\n".join(out) + "\n"
+
+
+def _md(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")

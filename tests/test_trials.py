@@ -1,0 +1,515 @@
+"""The trials harness, with a fake trial worker (no physics): protocol, records, resume,
+crashes and hangs, Ctrl-C, Table 1 and the report."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from executive import cli
+from executive.trials.backends import LocalBackend
+from executive.trials.campaign import run_campaign
+from executive.trials.pictures import copy_trial_scenes, render_chair_pictures
+from executive.trials.progress import Progress, format_duration
+from executive.trials.protocol import (
+    ChairEntry,
+    ChairSetError,
+    discover_chairs,
+    expand_protocol,
+    trial_seed,
+)
+from executive.trials.report import compute_table, format_table, markdown_report
+from executive.trials.store import TrialStore, record_from_error, record_from_summary
+
+REPO = Path(__file__).resolve().parents[1]
+
+# The fake worker speaks the real worker's protocol. Its summary depends only on the
+# trial's seed and placement, so the same campaign seed gives the same records. Chairs
+# named "crash*" segfault on trial 1, "hang*" sleep forever on trial 2; FAKE_SLEEP_S
+# slows every trial; every start is appended to FAKE_LOG.
+FAKE_WORKER = textwrap.dedent(
+    """
+    import json, os, signal, sys, time
+    from pathlib import Path
+    payload = json.loads(sys.argv[-1])
+    out = Path(payload["out_dir"]); out.mkdir(parents=True, exist_ok=True)
+    chair = Path(payload["chair_path"]).name
+    index, seed = payload["trial_index"], payload["seed"]
+    with open(os.environ["FAKE_LOG"], "a") as log:
+        log.write(f"{chair} {index} {seed}\\n")
+    time.sleep(float(os.environ.get("FAKE_SLEEP_S", "0")))
+    if chair.startswith("crash") and index == 1:
+        os.kill(os.getpid(), signal.SIGSEGV)
+    if chair.startswith("hang") and index == 2:
+        time.sleep(1000)
+    inaccessible = payload["placement"] == "inaccessible"
+    success = seed % 4 != 0
+    accessible = seed % 7 != 0
+    failed = None if success else ("ReleaseAndStand" if seed % 3 else "ImagineSitting")
+    stages = [{"name": n, "status": "SUCCESS", "seconds": round(1 + (seed % 10) / 10 * k, 3),
+               "message": ""} for k, n in enumerate(["ScanChair", "ImagineSitting", "WalkToChair"], 1)]
+    summary = {
+        "outcome": "success" if success else "failure", "failed_stage": failed,
+        "reason": "" if success else f"{failed}: fake failure {seed % 3}",
+        "stages": stages, "sitting_pose": {"position_m": [0.8, 0.0, 0.3], "yaw_deg": 10.0},
+        "instructions": ["turn the chair"] * (2 if inaccessible else 0),
+        "rotations": 2 if inaccessible else 0, "accessible": accessible,
+        "judgement": {"seated": success, "on_seat": True, "torso_tilt_deg": 3.0,
+                      "facing_error_deg": float(seed % 50), "reason": ""},
+        "wall_seconds": 12.5, "interrupted": False,
+    }
+    (out / "summary.json").write_text(json.dumps(summary))
+    scene = os.environ.get("FAKE_SCENE")
+    if scene:
+        (out / "final_scene.png").write_bytes(Path(scene).read_bytes())
+        (out / "chair_reconstructed.ply").write_bytes(Path(os.environ["FAKE_PLY"]).read_bytes())
+    print("noise on stdout")
+    print("BEARCHAIR-TRIAL-RESULT " + json.dumps({"summary": summary}), flush=True)
+    """
+)
+
+
+def write_chairs(folder: Path, names: list[str], manifest: dict | None = None) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    box = trimesh.creation.box((0.4, 0.4, 0.5))
+    for name in names:
+        box.export(folder / name)
+    if manifest is not None:
+        (folder / "manifest.json").write_text(json.dumps(manifest))
+    return folder
+
+
+@pytest.fixture
+def fake_worker(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    script = tmp_path / "fake_worker.py"
+    script.write_text(FAKE_WORKER)
+    monkeypatch.setenv("FAKE_LOG", str(tmp_path / "fake_worker.log"))
+    return [sys.executable, str(script)]
+
+
+def worker_starts(tmp_path: Path) -> list[str]:
+    log = tmp_path / "fake_worker.log"
+    return log.read_text().splitlines() if log.exists() else []
+
+
+def entries(names: list[str], folder: Path = Path("/chairs")) -> list[ChairEntry]:
+    return [ChairEntry(folder / name, "chair", 90.0) for name in names]
+
+
+def table_without_timing(records: list[dict]) -> tuple:
+    table = compute_table(records)
+    return table.seating, table.assistance, table.failure_causes, table.stage_median_s
+
+
+# --- protocol ------------------------------------------------------------------------
+
+
+def test_paper_protocol_is_six_trials_per_chair_and_72_for_12():
+    chairs = entries([f"chair-{i:02d}.obj" for i in range(12)])
+    trials = expand_protocol(chairs, "paper", campaign_seed=3)
+    assert len(trials) == 72
+    first = [t for t in trials if t.chair == "chair-00.obj"]
+    assert [(t.placement, t.helper) for t in first] == [
+        ("accessible", "obeys"),
+        ("accessible", "obeys"),
+        ("accessible", "obeys"),
+        ("inaccessible", "obeys"),
+        ("inaccessible", "obeys"),
+        ("inaccessible", "disobeys"),
+    ]
+    assert sum(t.experiment == "accessible" for t in trials) == 36
+    assert sum(t.experiment == "inaccessible_obeys" for t in trials) == 24
+    assert sum(t.experiment == "inaccessible_disobeys" for t in trials) == 12
+    assert len({t.key for t in trials}) == 72
+    assert len({t.seed for t in trials}) == 72
+
+
+def test_trial_seeds_are_deterministic_across_processes_and_depend_on_the_campaign_seed():
+    chairs = entries(["a.obj", "b.obj"])
+    assert expand_protocol(chairs, "paper", 7) == expand_protocol(chairs, "paper", 7)
+    assert [t.seed for t in expand_protocol(chairs, "paper", 7)] != [
+        t.seed for t in expand_protocol(chairs, "paper", 8)
+    ]
+    # Another interpreter (another hash salt) derives the same seed.
+    code = "from executive.trials.protocol import trial_seed; print(trial_seed(7, 'a.obj', 4))"
+    other = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=REPO
+    )
+    assert int(other.stdout) == trial_seed(7, "a.obj", 4)
+    with pytest.raises(ValueError, match="unknown protocol"):
+        expand_protocol(chairs, "nope", 0)
+
+
+def test_manifest_keeps_meshes_with_a_front_in_sorted_order(tmp_path: Path):
+    manifest = {
+        "meshes": [
+            {"file": "c-chair.obj", "kind": "chair", "front_yaw_deg": 90.0},
+            {"file": "a-chair.stl", "kind": "chair", "front_yaw_deg": 10.0},
+            {"file": "b-table.obj", "kind": "table", "front_yaw_deg": None},
+            {"file": "d-chair.ply", "kind": "chair", "front_yaw_deg": 0.0},
+        ]
+    }
+    folder = write_chairs(
+        tmp_path / "chairs",
+        ["c-chair.obj", "a-chair.stl", "b-table.obj", "d-chair.ply", "e-extra.obj"],
+        manifest,
+    )
+    (folder / "notes.txt").write_text("not a mesh")
+    chosen, skipped = discover_chairs(folder)
+    assert [c.name for c in chosen] == ["a-chair.stl", "c-chair.obj", "d-chair.ply"]
+    assert chosen[2].front_yaw_deg == 0.0  # a front of 0 deg is a front
+    reasons = dict(skipped)
+    assert "front_yaw_deg null" in reasons["b-table.obj"]
+    assert "not in manifest" in reasons["e-extra.obj"]
+    chosen, skipped = discover_chairs(folder, max_chairs=2)
+    assert [c.name for c in chosen] == ["a-chair.stl", "c-chair.obj"]
+    assert "--max-chairs 2" in dict(skipped)["d-chair.ply"]
+
+
+def test_without_manifest_every_mesh_takes_part(tmp_path: Path):
+    folder = write_chairs(tmp_path / "chairs", ["b.obj", "a.off"])
+    chosen, skipped = discover_chairs(folder)
+    assert [c.name for c in chosen] == ["a.off", "b.obj"] and skipped == []
+    with pytest.raises(ChairSetError, match="no chair meshes"):
+        discover_chairs(write_chairs(tmp_path / "empty", []))
+    with pytest.raises(ChairSetError, match="no such directory"):
+        discover_chairs(tmp_path / "missing")
+
+
+def test_shared_chairs_give_72_trials_on_12_chairs_with_a_front(shared_chairs, shared_manifest):
+    chosen, skipped = discover_chairs(shared_chairs, max_chairs=12)
+    assert len(chosen) == 12 and all(c.front_yaw_deg is not None for c in chosen)
+    assert len(expand_protocol(chosen, "paper", 0)) == 72
+    no_front = {e["file"] for e in shared_manifest if e["front_yaw_deg"] is None}
+    assert no_front <= {s.name for s in skipped}
+
+
+# --- bad arguments -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        ([], "no such directory"),
+        (["--workers", "0"], "--workers"),
+        (["--timeout", "-1"], "--timeout"),
+    ],
+)
+def test_bad_arguments_give_one_line_and_status_2(tmp_path, capsys, extra, message):
+    chairs = tmp_path / "missing" if not extra else write_chairs(tmp_path / "c", ["a.obj"])
+    status = cli.main(["trials", "--chairs", str(chairs), "--out", str(tmp_path / "o"), *extra])
+    err = capsys.readouterr().err.strip()
+    assert status == 2
+    assert message in err and len(err.splitlines()) == 1 and err.startswith("bearchair trials:")
+
+
+def test_a_folder_without_meshes_is_a_user_error(tmp_path, capsys):
+    folder = tmp_path / "nothing"
+    folder.mkdir()
+    (folder / "readme.txt").write_text("hello")
+    assert cli.main(["trials", "--chairs", str(folder)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "no chair meshes" in err and len(err.splitlines()) == 1
+
+
+def test_ray_backend_without_ray_says_how_to_install(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray -> ImportError
+    folder = write_chairs(tmp_path / "c", ["a.obj"])
+    assert cli.main(["trials", "--chairs", str(folder), "--backend", "ray"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "pip install 'bearchair[ray]'" in err and len(err.splitlines()) == 1
+
+
+# --- records, resume, crashes, hangs ---------------------------------------------------
+
+
+def test_records_are_committed_and_a_rerun_skips_finished_trials(tmp_path, fake_worker):
+    specs = expand_protocol(entries(["a.obj", "b.obj"], tmp_path), "paper", 1)
+    backend = LocalBackend(workers=2, timeout_s=30, command=fake_worker)
+    with TrialStore(tmp_path / "t.sqlite") as store:
+        first = run_campaign(specs, store, backend, tmp_path / "runs", 30)
+    assert first == (12, 0, False)
+    assert len(worker_starts(tmp_path)) == 12
+    # Another connection sees every row: each was committed.
+    rows = sqlite3.connect(tmp_path / "t.sqlite").execute("SELECT COUNT(*) FROM trials").fetchone()
+    assert rows[0] == 12
+    with TrialStore(tmp_path / "t.sqlite") as store:
+        second = run_campaign(specs, store, backend, tmp_path / "runs", 30)
+        records = store.records(specs)
+    assert second == (0, 12, False)
+    assert len(worker_starts(tmp_path)) == 12  # nothing ran again
+    record = records[3]
+    assert record["experiment"] == "inaccessible_obeys" and record["rotations"] == 2
+    assert set(record["stage_seconds"]) == {"ScanChair", "ImagineSitting", "WalkToChair"}
+    assert record["sitting_pose"]["yaw_deg"] == 10.0
+    assert record["torso_tilt_deg"] == 3.0 and record["mission_seconds"] == 12.5
+    assert records[0]["accessible_after_assistance"] is None  # no instruction given
+    # A different campaign seed is a different campaign: its trials are not skipped.
+    other = expand_protocol(entries(["a.obj"], tmp_path), "paper", 2)
+    with TrialStore(tmp_path / "t.sqlite") as store:
+        assert run_campaign(other, store, backend, tmp_path / "runs", 30).ran == 6
+
+
+def test_a_crashing_and_a_hanging_trial_are_failures_and_the_harness_goes_on(tmp_path, fake_worker):
+    specs = expand_protocol(entries(["crash.obj", "hang.obj"], tmp_path), "paper", 0)
+    backend = LocalBackend(workers=2, timeout_s=3.0, command=fake_worker)
+    start = time.monotonic()
+    with TrialStore(tmp_path / "t.sqlite") as store:
+        result = run_campaign(specs, store, backend, tmp_path / "runs", 3.0)
+        records = {(r["chair"], r["trial_index"]): r for r in store.records()}
+    assert result.ran == 12 and len(records) == 12
+    assert time.monotonic() - start < 25
+    crashed = records[("crash.obj", 1)]
+    assert crashed["outcome"] == "failure" and "SIGSEGV" in crashed["error"]
+    assert "Fatal Python error" in crashed["error"] or "crashed" in crashed["error"]
+    hung = records[("hang.obj", 2)]
+    assert hung["outcome"] == "failure" and "timed out after 3 s" in hung["error"]
+    assert hung["wall_seconds"] >= 3.0
+    others = [r for key, r in records.items() if key not in {("crash.obj", 1), ("hang.obj", 2)}]
+    assert all(r["error"] is None for r in others)
+    causes = dict(compute_table(list(records.values())).failure_causes)
+    assert any(cause.startswith("harness: worker crashed") for cause in causes)
+    assert any(cause.startswith("harness: timed out") for cause in causes)
+
+
+def test_interrupted_then_resumed_gives_the_same_table_as_uninterrupted(tmp_path, fake_worker):
+    specs = expand_protocol(entries(["a.obj", "b.obj", "c.obj"], tmp_path), "paper", 5)
+    backend = LocalBackend(workers=2, timeout_s=30, command=fake_worker)
+    with TrialStore(tmp_path / "straight.sqlite") as store:
+        run_campaign(specs, store, backend, tmp_path / "runs-a", 30)
+        straight = store.records(specs)
+
+    def interrupt_after_five(record: dict) -> None:
+        if interrupt_after_five.count == 4:
+            raise KeyboardInterrupt
+        interrupt_after_five.count += 1
+
+    interrupt_after_five.count = 0
+    with TrialStore(tmp_path / "resumed.sqlite") as store:
+        stopped = run_campaign(
+            specs, store, backend, tmp_path / "runs-b", 30, on_record=interrupt_after_five
+        )
+        assert stopped.interrupted and stopped.ran == 5
+        assert len(store.records()) == 5
+        resumed = run_campaign(specs, store, backend, tmp_path / "runs-b", 30)
+        assert resumed == (13, 5, False)
+        records = store.records(specs)
+    assert len(records) == 18
+    assert table_without_timing(records) == table_without_timing(straight)
+
+
+def test_ctrl_c_on_the_cli_keeps_finished_trials_and_says_how_to_resume(tmp_path, fake_worker):
+    folder = write_chairs(tmp_path / "chairs", ["a.obj", "b.obj"])
+    out = tmp_path / "out"
+    command = [
+        sys.executable, "-m", "executive.cli", "trials", "--chairs", str(folder),
+        "--out", str(out), "--seed", "9", "--worker-cmd", " ".join(fake_worker),
+    ]  # fmt: skip
+    env = {**os.environ, "FAKE_SLEEP_S": "0.4"}
+    harness = subprocess.Popen(
+        command, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    db = out / "trials.sqlite"
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        if db.exists():
+            try:
+                rows = sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0]
+            except sqlite3.OperationalError:
+                rows = 0
+            if rows >= 3:
+                break
+        time.sleep(0.1)
+    harness.send_signal(signal.SIGINT)
+    _, err = harness.communicate(timeout=30)
+    assert harness.returncode == 130, err
+    assert "Resume with:" in err and "--seed 9" in err
+    kept = sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0]
+    assert 3 <= kept < 12
+    env["FAKE_SLEEP_S"] = "0"
+    finished = subprocess.run(command, cwd=REPO, env=env, capture_output=True, text=True)
+    assert finished.returncode == 0, finished.stderr
+    assert len(worker_starts(tmp_path)) <= 12 + 1  # at most the interrupted trial ran twice
+    assert "(1) Seating bear success" in finished.stdout
+    assert (out / "report.md").is_file()
+    with TrialStore(db) as store:
+        assert len(store.records()) == 12
+
+
+# --- Table 1 and the report ------------------------------------------------------------
+
+
+def make_record(experiment, outcome, instructions=0, accessible=True, **extra):
+    placement = "accessible" if experiment == "accessible" else "inaccessible"
+    record = {
+        "chair": extra.pop("chair", "a.obj"),
+        "trial_index": extra.pop("trial_index", 0),
+        "seed": extra.pop("seed", 1),
+        "experiment": experiment,
+        "placement": placement,
+        "helper": "disobeys" if experiment.endswith("disobeys") else "obeys",
+        "outcome": outcome,
+        "instructions": instructions,
+        "accessible_after_assistance": accessible if instructions else None,
+        "failed_stage": None if outcome == "success" else "ReleaseAndStand",
+        "reason": "" if outcome == "success" else "ReleaseAndStand: bear not seated",
+        "stage_seconds": {},
+        "wall_seconds": 40.0,
+        "error": None,
+    }
+    record.update(extra)
+    return record
+
+
+def test_table_1_numbers_from_known_records():
+    records = (
+        [make_record("accessible", "success")] * 34
+        + [make_record("accessible", "failure")] * 2
+        + [make_record("inaccessible_obeys", "success", 1)] * 22
+        + [make_record("inaccessible_obeys", "failure", 2, accessible=False)]
+        + [
+            make_record(
+                "inaccessible_obeys",
+                "failure",
+                0,
+                failed_stage="ImagineSitting",
+                reason="ImagineSitting: no correct sitting",
+            )
+        ]
+        + [make_record("inaccessible_disobeys", "success", 2)] * 11
+        + [
+            make_record(
+                "inaccessible_disobeys",
+                "failure",
+                0,
+                error="timed out after 300 s",
+                failed_stage=None,
+            )
+        ]
+    )
+    table = compute_table(records)
+    assert [(r.label, r.n, r.count) for r in table.seating] == [
+        ("Accessible", 36, 34),
+        ("Inaccessible + Human Obeys", 24, 22),
+        ("Inaccessible + Human Disobeys", 12, 11),
+        ("Total", 72, 67),
+    ]
+    assert table.seating[3].rate == pytest.approx(67 / 72)
+    assert [(r.label, r.n, r.count) for r in table.assistance] == [
+        ("Obeys", 23, 22),
+        ("Disobeys", 11, 11),
+        ("Total", 34, 33),
+    ]
+    assert dict(table.failure_causes) == {
+        "ReleaseAndStand: bear not seated": 3,
+        "ImagineSitting: no correct sitting": 1,
+        "harness: timed out after 300 s": 1,
+    }
+    assert table.errors == 1 and table.trial_median_s == 40.0
+    text = format_table(table)
+    assert "Total" in text and "93.1%" in text and "97.1%" in text
+    markdown = markdown_report(table, records)
+    assert "| Total | 72 | 67 | 93.1% |" in markdown
+    assert "| Total | 34 | 33 | 97.1% |" in markdown
+
+
+def test_stage_medians_over_the_trials_where_the_stage_ran():
+    records = [
+        make_record("accessible", "success", stage_seconds={"ScanChair": s, "SeatBear": 2 * s})
+        for s in (1.0, 2.0, 9.0)
+    ] + [make_record("accessible", "failure", stage_seconds={"ScanChair": 4.0})]
+    medians = compute_table(records).stage_median_s
+    assert medians["ScanChair"] == (3.0, 4)
+    assert medians["SeatBear"] == (4.0, 3)
+    assert list(medians) == ["ScanChair", "SeatBear"]  # mission order
+
+
+def test_records_from_a_summary_and_from_an_error():
+    spec = expand_protocol(entries(["a.obj"]), "paper", 0)[5]
+    summary = {
+        "outcome": "failure",
+        "failed_stage": "WalkToChair",
+        "reason": "WalkToChair: lost",
+        "stages": [
+            {"name": "ScanChair", "status": "SUCCESS", "seconds": 7.1, "message": ""},
+            {"name": "WalkToChair", "status": "FAILURE", "seconds": 20.0, "message": ""},
+            {"name": "SeatBear", "status": "INVALID", "seconds": 0.0, "message": ""},
+        ],
+        "instructions": ["turn it", "turn it more"],
+        "rotations": 2,
+        "accessible": True,
+        "judgement": None,
+        "wall_seconds": 55.1,
+    }
+    record = record_from_summary(spec, summary, 61.0, "/runs/x")
+    assert record["stage_seconds"] == {"ScanChair": 7.1, "WalkToChair": 20.0}
+    assert record["accessible_after_assistance"] is True and record["instructions"] == 2
+    assert record["seated"] is None and record["error"] is None
+    assert record["helper"] == "disobeys" and record["wall_seconds"] == 61.0
+    failed = record_from_error(spec, "worker crashed: killed by SIGSEGV", 3.0, None)
+    assert failed["outcome"] == "failure" and failed["error"].endswith("SIGSEGV")
+
+
+def test_report_folder_has_a_picture_per_chair_and_per_trial(tmp_path, fake_worker, monkeypatch):
+    scene = tmp_path / "scene.png"
+    from PIL import Image
+
+    Image.new("RGB", (8, 8), (200, 10, 10)).save(scene)
+    ply = tmp_path / "chair.ply"
+    trimesh.creation.box((0.4, 0.4, 0.5)).apply_translation((0.8, 0.0, 0.25)).export(ply)
+    monkeypatch.setenv("FAKE_SCENE", str(scene))
+    monkeypatch.setenv("FAKE_PLY", str(ply))
+    folder = write_chairs(tmp_path / "chairs", ["a.obj", "b.obj"])
+    out = tmp_path / "out"
+    status = cli.main(
+        ["trials", "--chairs", str(folder), "--out", str(out), "--workers", "3",
+         "--worker-cmd", " ".join(fake_worker)]
+    )  # fmt: skip
+    assert status == 0
+    assert sorted(p.name for p in (out / "chairs").iterdir()) == ["a.png", "b.png"]
+    assert len(list((out / "trials").glob("*.png"))) == 12
+    picture = np.asarray(Image.open(out / "chairs" / "a.png"))
+    assert picture.shape[0] > 200 and picture.std() > 5  # something was drawn
+    report = (out / "report.md").read_text()
+    assert "## (1) Seating bear success" in report and "chairs/a.png" in report
+    with TrialStore(out / "trials.sqlite") as store:
+        records = store.records()
+    assert copy_trial_scenes(records, tmp_path / "again") == 12
+    assert set(render_chair_pictures(records, tmp_path / "again-chairs")) == {"a.obj", "b.obj"}
+
+
+def test_progress_lines_and_eta():
+    class Stream:
+        def __init__(self):
+            self.text = ""
+
+        def write(self, text):
+            self.text += text
+
+        def flush(self):
+            pass
+
+    now = [100.0]
+    stream = Stream()
+    progress = Progress(10, already_done=2, workers=1, stream=stream, clock=lambda: now[0])
+    assert progress.eta_seconds() is None
+    now[0] += 30.0
+    progress.update(make_record("accessible", "success", trial_index=2))
+    now[0] += 30.0
+    progress.update(make_record("accessible", "failure", trial_index=3))
+    assert progress.eta_seconds() == pytest.approx(30.0 * 6)
+    lines = stream.text.splitlines()
+    assert len(lines) == 2 and "\r" not in stream.text  # not a terminal: a line per trial
+    assert "4/10" in lines[-1] and "ETA 3m00s" in lines[-1] and "at ReleaseAndStand" in lines[-1]
+    assert format_duration(3725) == "1h02m" and format_duration(42) == "42s"
