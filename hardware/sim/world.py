@@ -229,10 +229,10 @@ class SimWorld:
 
     def _bear_in_hands(self) -> np.ndarray:
         middle = self.hands_frame()[:3, 3]
-        T_world_feet = self.nao.T_world_feet()
-        return make_transform(
-            T_world_feet[:3, :3], middle - np.array([0.0, 0.0, BEAR_SEAT_BELOW_HANDS_M])
-        )
+        # As in the paper, the bear is handed over facing the NAO: when the NAO stands in
+        # front of the chair facing it, the bear then faces the sitting direction.
+        facing = self.nao.true_pose().theta + math.pi
+        return make_transform(rot_z(facing), middle - np.array([0.0, 0.0, BEAR_SEAT_BELOW_HANDS_M]))
 
     def _on_hands(self, open_hands: bool) -> None:
         if open_hands:
