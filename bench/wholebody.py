@@ -12,10 +12,8 @@ spread of the goal posture, trajectory and retract solve times and the feasible 
 
 Simulation: the chair is placed in front of the NAO's start pose (sitting direction
 toward the NAO) at the nearest feasible stance; the plan is played through
-``SimNao.play_joint_trajectory``, the bear released and the judge asked. The simulator
-hands the bear over facing the NAO's forward direction, which puts it on the seat
-facing the backrest; with ``--bear-faces-nao`` (the default, as in the paper) the bear
-is turned to face the NAO before the run.
+``SimNao.play_joint_trajectory``, the bear released and the judge asked (the simulator
+hands the bear over facing the NAO, as in the paper).
 """
 
 from __future__ import annotations
@@ -111,9 +109,7 @@ def solve_times(chairs: list[tuple[str, trimesh.Trimesh, float]]) -> None:
     print(f"goal + trajectory: {stats(together)} (target: median <= 1 s)")
 
 
-def sim_run(
-    chair_path: Path | None, front_yaw_deg: float, seed: int, bear_faces_nao: bool
-) -> tuple[bool, str]:
+def sim_run(chair_path: Path | None, front_yaw_deg: float, seed: int) -> tuple[bool, str]:
     """One simulated seating: returns (seated, description)."""
     from hardware.sim.world import SimConfig, SimWorld
 
@@ -154,12 +150,6 @@ def sim_run(
         T[:2, 3] += target - seat[:2]
         world.chair.set_T_world_chair(T)
         world.clock.sleep(0.3)
-        if bear_faces_nao:
-            T_bear = world.bear.T_world_bear()
-            T_bear[:3, :3] = T_bear[:3, :3] @ rot_z(math.pi)
-            world.bear.release()
-            world.bear.set_T_world_bear(T_bear)
-            world.bear.hold(world.hands_frame, world.nao.body)
         chair_mesh = world.chair_mesh_true
         sitting_pose = SittingPose(true_seat_point(chair_mesh), sitting_yaw)
         plan = plan_seating(chair_mesh, sitting_pose, world.nao.pose())
@@ -185,11 +175,6 @@ def main() -> None:
     parser.add_argument("--calibration", action="store_true", help="use the calibration chairs")
     parser.add_argument("--runs", type=int, default=10, help="simulated runs")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument(
-        "--bear-faces-simulator-default",
-        action="store_true",
-        help="keep the simulator's bear orientation (facing the NAO's forward)",
-    )
     args = parser.parse_args()
 
     started = time.perf_counter()
@@ -221,7 +206,7 @@ def main() -> None:
         seed = args.seed + i
         began = time.perf_counter()
         try:
-            ok, description = sim_run(path, front, seed, not args.bear_faces_simulator_default)
+            ok, description = sim_run(path, front, seed)
         except InfeasibleSeating as error:
             ok, description = False, f"infeasible: {error}"
         seated += ok
