@@ -513,3 +513,74 @@ def test_progress_lines_and_eta():
     assert len(lines) == 2 and "\r" not in stream.text  # not a terminal: a line per trial
     assert "4/10" in lines[-1] and "ETA 3m00s" in lines[-1] and "at ReleaseAndStand" in lines[-1]
     assert format_duration(3725) == "1h02m" and format_duration(42) == "42s"
+
+
+class FakeRay:
+    """The few Ray calls the backend makes, on threads (Ray itself is an optional extra)."""
+
+    def __init__(self):
+        from concurrent.futures import ThreadPoolExecutor
+
+        self.pool = ThreadPoolExecutor(max_workers=4)
+        self.init_kwargs = None
+        self.remote_options = None
+
+    def init(self, **kwargs):
+        self.init_kwargs = kwargs
+
+    def remote(self, **options):
+        self.remote_options = options
+        fake = self
+
+        def decorate(function):
+            class Task:
+                @staticmethod
+                def remote(*args):
+                    return fake.pool.submit(function, *args)
+
+            return Task
+
+        return decorate
+
+    def wait(self, refs, num_returns=1):
+        from concurrent.futures import FIRST_COMPLETED, wait
+
+        done, _ = wait(refs, return_when=FIRST_COMPLETED)
+        ready = list(done)[:num_returns]
+        return ready, [r for r in refs if r not in ready]
+
+    def get(self, ref):
+        return ref.result()
+
+    def cancel(self, ref, force=False):
+        ref.cancel()
+
+
+def test_ray_backend_runs_the_same_trials_with_the_same_records(tmp_path, fake_worker, monkeypatch):
+    fake_ray = FakeRay()
+    monkeypatch.setitem(sys.modules, "ray", fake_ray)
+    folder = write_chairs(tmp_path / "chairs", ["a.obj", "crash.obj"])
+    out = tmp_path / "out"
+    status = cli.main(
+        ["trials", "--chairs", str(folder), "--out", str(out), "--backend", "ray",
+         "--address", "ray://head:10001", "--workers", "3", "--worker-cmd", " ".join(fake_worker)]
+    )  # fmt: skip
+    assert status == 0
+    assert fake_ray.init_kwargs["address"] == "ray://head:10001"
+    assert fake_ray.remote_options["max_retries"] == 0
+    with TrialStore(out / "trials.sqlite") as store:
+        ray_records = store.records()
+    assert len(ray_records) == 12
+    assert (
+        "SIGSEGV"
+        in next(r for r in ray_records if r["chair"] == "crash.obj" and r["trial_index"] == 1)[
+            "error"
+        ]
+    )
+    status = cli.main(
+        ["trials", "--chairs", str(folder), "--out", str(tmp_path / "local"),
+         "--worker-cmd", " ".join(fake_worker)]
+    )  # fmt: skip
+    with TrialStore(tmp_path / "local" / "trials.sqlite") as store:
+        local_records = store.records()
+    assert table_without_timing(ray_records) == table_without_timing(local_records)

@@ -55,24 +55,20 @@ class LocalBackend:
         group = ProcessGroup()
         pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="trial")
         pending = {
-            pool.submit(run_worker, self.command, payload, self.timeout_s, group): spec
-            for spec, payload in jobs
+            pool.submit(run_worker, self.command, payload, self.timeout_s, group): (index, spec)
+            for index, (spec, payload) in enumerate(jobs)
         }
         try:
             while pending:
                 done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for future in sorted(done, key=lambda f: _job_order(pending[f], jobs)):
-                    spec = pending.pop(future)
+                for future in sorted(done, key=lambda f: pending[f][0]):
+                    _, spec = pending.pop(future)
                     on_result(spec, future.result())
         except BaseException:
             group.stop_all()
             pool.shutdown(wait=True, cancel_futures=True)
             raise
         pool.shutdown(wait=True)
-
-
-def _job_order(spec: TrialSpec, jobs: Sequence[Job]) -> int:
-    return next(i for i, (s, _) in enumerate(jobs) if s == spec)
 
 
 def _ray_trial(

@@ -1,8 +1,8 @@
 """A plain-text progress bar with an ETA, on stderr.
 
 On a terminal the line is redrawn in place (``\\r``); otherwise (a log file, CI) one
-line per finished trial. The ETA is the mean wall time of the trials finished in this
-session times the trials left, divided by the workers running at once.
+line per finished trial. The ETA is the session's elapsed time per trial finished in
+this session, times the trials left (so trials running side by side are accounted for).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ class Progress:
     Args:
         total: trials in the campaign.
         already_done: trials found finished in the records (resume).
-        workers: trials running at once (for the ETA).
+        workers: trials running at once (shown in the header line only).
         stream: where to print; default stderr.
         clock: monotonic time source (tests).
     """

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import statistics
 from collections import Counter
+from pathlib import Path
 from typing import Any, NamedTuple
 
 from executive.trials.pictures import trial_picture_name
@@ -221,7 +222,10 @@ def markdown_report(
         "|---|---:|---|---:|---|---|---:|---|---:|---:|---|",
     ]
     for r in records:
-        picture = f"trials/{trial_picture_name(r)}"
+        scene = Path(r.get("run_dir") or "") / "final_scene.png"
+        picture = (
+            f"[png](trials/{trial_picture_name(r)})" if r.get("run_dir") and scene.is_file() else ""
+        )
         facing = r.get("facing_error_deg")
         after = r.get("accessible_after_assistance")
         out.append(
@@ -230,7 +234,7 @@ def markdown_report(
             f"{'' if r.get('rotations') is None else r['rotations']} | "
             f"{'' if after is None else ('yes' if after else 'no')} | "
             f"{'' if facing is None else f'{facing:.1f}'} | {r.get('wall_seconds') or 0:.1f} | "
-            f"[png]({picture}) |"
+            f"{picture} |"
         )
     if chair_pictures:
         out += ["", "## Imagined sitting poses", ""]
