@@ -1,7 +1,13 @@
 """The workspace layout shared by the planner and the simulated world.
 
-The arm stands just behind the arena's back wall (x = ``x_min``) and scans the chair
-area in front of it; the humanoid starts at the far end, facing the arm. Every number
+The arm scans the chair area in front of it; the humanoid walks inside the planning
+arena, a rectangle marked on the floor (the paper's red dashed lines), and starts at its
+far end, facing the arm. The arena's back edge runs through the chair area, so a chair
+whose sitting direction points at the arm or at a side edge leaves no room in front of it
+for the humanoid: those are the inaccessible placements. (Measured with
+``bench/planning.py``: with the back edge at 0.15 m and the sides at ±0.75 m, 4-8 of 20
+placements facing the arm and all facing a side edge were still reachable; with 0.5 m
+and ±0.45 m, none facing the arm and at most 1 of 20 facing a side.) Every number
 is in metres or radians, world frame, z up.
 """
 
@@ -26,7 +32,7 @@ class Arena(NamedTuple):
     """The rectangle the humanoid may walk in, the chair area and fixed obstacles.
 
     Attributes:
-        x_min, x_max, y_min, y_max: walls of the planning arena (metres).
+        x_min, x_max, y_min, y_max: edges of the planning arena (metres).
         chair_area: where the chair's centre is placed for scanning (0.5 x 0.5 m).
         arm_base_xy: the scanning arm's base position.
         obstacles: other fixed footprints the humanoid must avoid (the arm's base).
@@ -51,10 +57,10 @@ class Arena(NamedTuple):
 
 
 DEFAULT_ARENA = Arena(
-    x_min=0.15,
+    x_min=0.5,
     x_max=2.2,
-    y_min=-0.75,
-    y_max=0.75,
+    y_min=-0.45,
+    y_max=0.45,
     chair_area=Box2D(0.35, 0.85, -0.25, 0.25),
     arm_base_xy=(0.0, 0.0),
     obstacles=(Box2D(-0.15, 0.15, -0.15, 0.15, height=0.9),),

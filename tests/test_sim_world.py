@@ -252,7 +252,13 @@ def test_judge_rejects_a_bear_on_the_floor_and_accepts_one_on_the_seat():
         verdict = world.judge.judge(world.sitting_yaw_true(), settle_s=2.0)
         assert verdict.seated, verdict.reason
         assert verdict.torso_tilt_deg < 10 and verdict.facing_error_deg < 10
+        # The judge holds the bear to the chair's true sitting direction, not to what the
+        # mission imagined: a wrong imagination cannot pass its own exam.
         verdict = world.judge.judge(wrap_angle(world.sitting_yaw_true() + math.pi), settle_s=0.1)
+        assert verdict.seated and verdict.facing_error_deg < 10
+        backwards = make_transform(rot_z(world.sitting_yaw_true() + math.pi), seat[:3])
+        world.bear.set_T_world_bear(backwards)
+        verdict = world.judge.judge(world.sitting_yaw_true(), settle_s=1.0)
         assert not verdict.seated and "facing" in verdict.reason
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -23,22 +24,33 @@ class SimJudge:
         * on_seat: the bear touches the chair and does not touch the floor;
         * torso tilt: angle between the bear's z axis and the world's z axis;
         * facing error: angle between the bear's x axis projected on the floor and the
-          sitting direction;
+          sitting direction: the chair's TRUE one when the world knows it (so that a wrong
+          imagination cannot pass its own exam), else the one the mission imagined;
     seated = on_seat, tilt <= 30 deg and facing error <= 45 deg.
     """
 
     def __init__(
-        self, bullet: LockedBullet, clock: SimClock, bear: SimBear, chair_body: int, floor_body: int
+        self,
+        bullet: LockedBullet,
+        clock: SimClock,
+        bear: SimBear,
+        chair_body: int,
+        floor_body: int,
+        true_sitting_yaw: Callable[[], float | None] = lambda: None,
     ) -> None:
         self._bullet = bullet
         self._clock = clock
         self._bear = bear
         self._chair_body = chair_body
         self._floor_body = floor_body
+        self._true_sitting_yaw = true_sitting_yaw
 
     def judge(self, sitting_yaw_rad: float, settle_s: float = 2.0) -> SeatingJudgement:
         """Lets the scene settle for ``settle_s`` seconds, then judges the bear."""
         self._clock.sleep(settle_s)
+        true_yaw = self._true_sitting_yaw()
+        if true_yaw is not None:
+            sitting_yaw_rad = true_yaw
         with self._bullet.lock:
             on_chair = bool(self._bullet.getContactPoints(self._bear.body, self._chair_body))
             on_floor = bool(self._bullet.getContactPoints(self._bear.body, self._floor_body))

@@ -40,8 +40,10 @@ from skills.meshes import box_chair_mesh, load_mesh
 
 log = logging.getLogger(__name__)
 
-WALL_HEIGHT_M = 0.1
-WALL_THICKNESS_M = 0.02
+TAPE_HEIGHT_M = 0.002
+TAPE_WIDTH_M = 0.03
+"""The arena's boundary is tape on the floor, as in the paper's lab (red dashed lines): the
+planner keeps the humanoid inside it, but the chair may stand across it."""
 PLACEMENT_TOLERANCE_DEG = 30.0
 SETTLE_S = 0.5
 BEAR_SEAT_BELOW_HANDS_M = 0.065
@@ -143,7 +145,14 @@ class SimWorld:
                 self.nao.on_hands = self._on_hands
                 self.helper = SimHelper(self.clock, self.chair, config.helper, helper_rng)
                 self.speaker = SimSpeaker(self.helper, config.voice)
-                self.judge = SimJudge(bullet, self.clock, self.bear, self.chair.body, self.floor)
+                self.judge = SimJudge(
+                    bullet,
+                    self.clock,
+                    self.bear,
+                    self.chair.body,
+                    self.floor,
+                    true_sitting_yaw=self.sitting_yaw_true,
+                )
             self.clock.sleep(SETTLE_S)
         except BaseException:
             bullet.disconnect_once()
@@ -263,20 +272,21 @@ class SimWorld:
         return make_transform(rot_z(placement_yaw), np.array([x, y, 0.0]))
 
     def _build_walls(self, arena: Arena) -> list[int]:
+        """The arena's boundary tape (visual only) and its solid obstacles."""
         bullet = self._bullet
         bodies = []
-        half_t = WALL_THICKNESS_M / 2.0
-        length_x = arena.x_max - arena.x_min + WALL_THICKNESS_M
-        length_y = arena.y_max - arena.y_min + WALL_THICKNESS_M
+        half_w = TAPE_WIDTH_M / 2.0
+        length_x = arena.x_max - arena.x_min + TAPE_WIDTH_M
+        length_y = arena.y_max - arena.y_min + TAPE_WIDTH_M
         mid_x = (arena.x_min + arena.x_max) / 2.0
         mid_y = (arena.y_min + arena.y_max) / 2.0
-        walls = [
-            ((length_x, WALL_THICKNESS_M), (mid_x, arena.y_min - half_t)),
-            ((length_x, WALL_THICKNESS_M), (mid_x, arena.y_max + half_t)),
-            ((WALL_THICKNESS_M, length_y), (arena.x_min - half_t, mid_y)),
-            ((WALL_THICKNESS_M, length_y), (arena.x_max + half_t, mid_y)),
+        tapes = [
+            ((length_x, TAPE_WIDTH_M), (mid_x, arena.y_min - half_w)),
+            ((length_x, TAPE_WIDTH_M), (mid_x, arena.y_max + half_w)),
+            ((TAPE_WIDTH_M, length_y), (arena.x_min - half_w, mid_y)),
+            ((TAPE_WIDTH_M, length_y), (arena.x_max + half_w, mid_y)),
         ]
-        boxes = [((sx, sy, WALL_HEIGHT_M), (cx, cy)) for (sx, sy), (cx, cy) in walls]
+        boxes = [((sx, sy, TAPE_HEIGHT_M), (cx, cy), False) for (sx, sy), (cx, cy) in tapes]
         for obstacle in arena.obstacles:
             base_x, base_y = arena.arm_base_xy
             if (
@@ -284,27 +294,27 @@ class SimWorld:
                 and obstacle.y_min <= base_y <= obstacle.y_max
             ):
                 continue  # the arm's own footprint: the Panda itself stands there
-            boxes.append(
-                (
-                    (
-                        obstacle.x_max - obstacle.x_min,
-                        obstacle.y_max - obstacle.y_min,
-                        obstacle.height,
-                    ),
-                    (
-                        (obstacle.x_min + obstacle.x_max) / 2.0,
-                        (obstacle.y_min + obstacle.y_max) / 2.0,
-                    ),
-                )
+            size = (
+                obstacle.x_max - obstacle.x_min,
+                obstacle.y_max - obstacle.y_min,
+                obstacle.height,
             )
-        for (sx, sy, sz), (cx, cy) in boxes:
-            collision = bullet.createCollisionShape(
-                pybullet.GEOM_BOX, halfExtents=[sx / 2.0, sy / 2.0, sz / 2.0]
+            centre = (
+                (obstacle.x_min + obstacle.x_max) / 2.0,
+                (obstacle.y_min + obstacle.y_max) / 2.0,
+            )
+            boxes.append((size, centre, True))
+        for (sx, sy, sz), (cx, cy), solid in boxes:
+            half_extents = [sx / 2.0, sy / 2.0, sz / 2.0]
+            collision = (
+                bullet.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half_extents)
+                if solid
+                else -1
             )
             visual = bullet.createVisualShape(
                 pybullet.GEOM_BOX,
-                halfExtents=[sx / 2.0, sy / 2.0, sz / 2.0],
-                rgbaColor=[0.3, 0.45, 0.7, 1.0],
+                halfExtents=half_extents,
+                rgbaColor=[0.3, 0.45, 0.7, 1.0] if solid else [0.85, 0.15, 0.1, 1.0],
             )
             bodies.append(
                 bullet.createMultiBody(
