@@ -10,8 +10,12 @@ written to ``OUT/report.md`` with ``OUT/chairs/*.png`` (imagined pose per chair)
 from __future__ import annotations
 
 import argparse
+import contextlib
 import shlex
+import signal
 import sys
+import threading
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +70,24 @@ def resume_command(args: argparse.Namespace) -> str:
     return shlex.join(words)
 
 
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM stops the campaign like Ctrl-C: the trial workers run in their own
+    sessions, so the harness must stop them itself rather than die and orphan them."""
+
+    def interrupt(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def _db_path(args: argparse.Namespace) -> Path:
     return args.db or args.out / "trials.sqlite"
 
@@ -114,11 +136,12 @@ def run(args: argparse.Namespace) -> int:
             f"{len(skipped)} mesh(es) skipped; backend {args.backend}, {args.workers} worker(s)",
             file=sys.stderr,
         )
-        progress = Progress(len(specs), done_before, args.workers)
+        progress = Progress(len(specs), done_before)
         try:
-            result = run_campaign(
-                specs, store, backend, args.out / "runs", args.timeout, progress=progress
-            )
+            with _sigterm_as_interrupt():
+                result = run_campaign(
+                    specs, store, backend, args.out / "runs", args.timeout, progress=progress
+                )
         except BackendUnavailableError as error:
             raise CliError(f"bearchair trials: {error}") from error
         records = store.records(specs)

@@ -47,7 +47,7 @@ FAKE_WORKER = textwrap.dedent(
     chair = Path(payload["chair_path"]).name
     index, seed = payload["trial_index"], payload["seed"]
     with open(os.environ["FAKE_LOG"], "a") as log:
-        log.write(f"{chair} {index} {seed}\\n")
+        log.write(f"{chair} {index} {seed} {os.getpid()}\\n")
     time.sleep(float(os.environ.get("FAKE_SLEEP_S", "0")))
     if chair.startswith("crash") and index == 1:
         os.kill(os.getpid(), signal.SIGSEGV)
@@ -101,6 +101,19 @@ def fake_worker(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> list[str]:
 def worker_starts(tmp_path: Path) -> list[str]:
     log = tmp_path / "fake_worker.log"
     return log.read_text().splitlines() if log.exists() else []
+
+
+def worker_pids(tmp_path: Path) -> list[int]:
+    return [int(line.split()[3]) for line in worker_starts(tmp_path)]
+
+
+def process_alive(pid: int) -> bool:
+    """Running (a zombie waiting for its reaper counts as gone)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    return "State:\tZ" not in status
 
 
 def entries(names: list[str], folder: Path = Path("/chairs")) -> list[ChairEntry]:
@@ -309,7 +322,10 @@ def test_interrupted_then_resumed_gives_the_same_table_as_uninterrupted(tmp_path
     assert table_without_timing(records) == table_without_timing(straight)
 
 
-def test_ctrl_c_on_the_cli_keeps_finished_trials_and_says_how_to_resume(tmp_path, fake_worker):
+@pytest.mark.parametrize("stop_signal", [signal.SIGINT, signal.SIGTERM])
+def test_ctrl_c_on_the_cli_keeps_finished_trials_and_says_how_to_resume(
+    tmp_path, fake_worker, stop_signal
+):
     folder = write_chairs(tmp_path / "chairs", ["a.obj", "b.obj"])
     out = tmp_path / "out"
     command = [
@@ -331,10 +347,11 @@ def test_ctrl_c_on_the_cli_keeps_finished_trials_and_says_how_to_resume(tmp_path
             if rows >= 3:
                 break
         time.sleep(0.1)
-    harness.send_signal(signal.SIGINT)
+    harness.send_signal(stop_signal)
     _, err = harness.communicate(timeout=30)
     assert harness.returncode == 130, err
     assert "Resume with:" in err and "--seed 9" in err
+    assert not [pid for pid in worker_pids(tmp_path) if process_alive(pid)]  # none orphaned
     kept = sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0]
     assert 3 <= kept < 12
     env["FAKE_SLEEP_S"] = "0"
@@ -416,6 +433,7 @@ def test_table_1_numbers_from_known_records():
         "ImagineSitting: no correct sitting": 1,
         "harness: timed out after 300 s": 1,
     }
+    assert table.failure_stages == [("ReleaseAndStand", 3), ("ImagineSitting", 1), ("harness", 1)]
     assert table.errors == 1 and table.trial_median_s == 40.0
     text = format_table(table)
     assert "Total" in text and "93.1%" in text and "97.1%" in text
@@ -502,7 +520,7 @@ def test_progress_lines_and_eta():
 
     now = [100.0]
     stream = Stream()
-    progress = Progress(10, already_done=2, workers=1, stream=stream, clock=lambda: now[0])
+    progress = Progress(10, already_done=2, stream=stream, clock=lambda: now[0])
     assert progress.eta_seconds() is None
     now[0] += 30.0
     progress.update(make_record("accessible", "success", trial_index=2))

@@ -32,7 +32,6 @@ class Progress:
     Args:
         total: trials in the campaign.
         already_done: trials found finished in the records (resume).
-        workers: trials running at once (shown in the header line only).
         stream: where to print; default stderr.
         clock: monotonic time source (tests).
     """
@@ -41,13 +40,11 @@ class Progress:
         self,
         total: int,
         already_done: int = 0,
-        workers: int = 1,
         stream: TextIO | None = None,
         clock: Any = time.monotonic,
     ) -> None:
         self.total = total
         self.done = already_done
-        self.workers = max(1, workers)
         self.successes = 0
         self.failures = 0
         self._stream = stream or sys.stderr

@@ -49,6 +49,8 @@ class TrialsTable(NamedTuple):
         assistance: (2) rows Obeys, Disobeys, Total: trials with an instruction, accessible after.
         stage_median_s: stage name -> (median seconds, trials where it ran).
         trial_median_s: median wall time of a whole trial (its subprocess), if any.
+        failure_stages: (failed stage, count), most frequent first ("harness" for crashes
+            and timeouts).
         failure_causes: (cause, count), most frequent first.
         errors: trials that crashed or hung.
         assisted_accessible_trials: accessible placements that were nevertheless assisted.
@@ -58,6 +60,7 @@ class TrialsTable(NamedTuple):
     assistance: list[RateRow]
     stage_median_s: dict[str, tuple[float, int]]
     trial_median_s: float | None
+    failure_stages: list[tuple[str, int]]
     failure_causes: list[tuple[str, int]]
     errors: int
     assisted_accessible_trials: int
@@ -98,12 +101,15 @@ def compute_table(records: list[dict[str, Any]]) -> TrialsTable:
     }
     walls = [r["wall_seconds"] for r in records if r.get("wall_seconds") is not None]
 
-    causes = Counter(failure_cause(r) for r in records if r["outcome"] != "success")
+    failed = [r for r in records if r["outcome"] != "success"]
+    causes = Counter(failure_cause(r) for r in failed)
+    stages = Counter(failure_cause(r).split(":", 1)[0] for r in failed)
     return TrialsTable(
         seating=seating,
         assistance=assistance,
         stage_median_s=stage_median_s,
         trial_median_s=statistics.median(walls) if walls else None,
+        failure_stages=sorted(stages.items(), key=lambda item: (-item[1], item[0])),
         failure_causes=sorted(causes.items(), key=lambda item: (-item[1], item[0])),
         errors=sum(bool(r.get("error")) for r in records),
         assisted_accessible_trials=sum(
@@ -154,6 +160,8 @@ def format_table(table: TrialsTable) -> str:
     lines += ["", "Causes of failure"]
     if not table.failure_causes:
         lines.append("  none")
+    else:
+        lines.append("  by stage: " + ", ".join(f"{s} {n}" for s, n in table.failure_stages))
     for cause, count in table.failure_causes:
         lines.append(f"  {count:>3} x {cause}")
     return "\n".join(lines)
@@ -209,6 +217,10 @@ def markdown_report(
     out += ["", "## Causes of failure", ""]
     if not table.failure_causes:
         out.append("None.")
+    else:
+        out += ["| Failed stage | Trials |", "|---|---:|"]
+        out += [f"| {s} | {n} |" for s, n in table.failure_stages]
+        out.append("")
     out += [f"- {count} x {_md(cause)}" for cause, count in table.failure_causes]
     if skipped:
         out += ["", "## Meshes not in the campaign", ""]
