@@ -56,6 +56,7 @@ def run_campaign(
     Returns:
         What ran; ``interrupted`` when Ctrl-C stopped it (finished trials are kept).
     """
+    runs_dir = Path(runs_dir).resolve()  # records stay valid from any working directory
     finished = store.finished_keys()
     todo = [spec for spec in specs if spec.key not in finished]
     already_done = len(specs) - len(todo)

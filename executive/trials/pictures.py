@@ -124,13 +124,15 @@ def render_imagined_pose(
     top.annotate(
         "",
         xy=tuple(position[:2] + 0.25 * forward),
+        annotation_clip=False,
         xytext=tuple(position[:2]),
         arrowprops={"arrowstyle": "->", "color": "tab:red", "lw": 2},
     )
     top.set_title("from above (world x, y)")
     top.set_xlabel("x (m)")
     top.set_ylabel("y (m)")
-    _fit(top, np.vstack([triangles[:, :, :2].reshape(-1, 2), sitter[:, :2]]))
+    arrow_tip = position[:2] + 0.25 * forward
+    _fit(top, np.vstack([triangles[:, :, :2].reshape(-1, 2), sitter[:, :2], arrow_tip]))
 
     # Side view: horizontal axis along the sitting direction, vertical = z.
     def along(points: np.ndarray) -> np.ndarray:
