@@ -58,7 +58,8 @@ class SimConfig:
         chair_path: a chair mesh (OBJ, PLY, STL, OFF, GLB); None for the box chair.
         placement: "accessible": the chair's sitting direction is within ±30 deg of the
             direction from the chair to the humanoid's start; "inaccessible": it points
-            toward the arm (-x) or a side wall (±y), ±30 deg, chosen by the seed.
+            toward the arm (-x) or the nearer side edge of the arena (±y), ±30 deg, chosen
+            by the seed.
         helper: how the helper reacts to instructions.
         seed: seeds every random choice.
         gui: open pybullet's GUI (paced to wall-clock time) instead of DIRECT.
@@ -257,7 +258,10 @@ class SimWorld:
             start = config.arena.humanoid_start
             sitting_yaw = math.atan2(start.y - y, start.x - x) + offset
         else:
-            sitting_yaw = float(rng.choice([math.pi, math.pi / 2.0, -math.pi / 2.0])) + offset
+            # Toward the arm, or toward the side edge nearer the chair: the far side would
+            # leave room in front of the chair inside the arena.
+            toward_side = math.copysign(math.pi / 2.0, y)
+            sitting_yaw = float(rng.choice([math.pi, toward_side])) + offset
         if self.front_yaw_rad is None:
             placement_yaw = rng.uniform(-math.pi, math.pi)
             log.warning(
