@@ -12,6 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from skills.geometry import SE2Pose, SittingPose
 from skills.meshes import box_chair_mesh
+from skills.nao_carrying import BEAR_SEAT_BELOW_HANDS_M
 from skills.planning.wholebody import (
     STANDING_POSTURE,
     InfeasibleSeating,
@@ -117,7 +118,7 @@ def _bear(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
     carrying = _hands_frame(link_transforms(CARRYING_POSTURE_RAD))
     T_carry_bear = np.eye(4)
-    T_carry_bear[:3, 3] = carrying[:3, 3] - [0.0, 0.0, 0.065]
+    T_carry_bear[:3, 3] = carrying[:3, 3] - [0.0, 0.0, BEAR_SEAT_BELOW_HANDS_M]
     T_hands_bear = np.linalg.inv(carrying) @ T_carry_bear
     values = {name: float(v) for name, v in joint_values(q).items()}
     T_bear = _hands_frame(link_transforms(values)) @ T_hands_bear
@@ -215,7 +216,9 @@ def test_trajectory_is_stable_and_within_velocity_limits(chair, plan):
     np.testing.assert_allclose(q_all[0], STANDING_POSTURE)
     carrying = _hands_frame(link_transforms(CARRYING_POSTURE_RAD))
     base, _, _ = _bear(q_all[0])
-    np.testing.assert_allclose(base, carrying[[0, 2], 3] - [0.0, 0.065], atol=0.005)
+    np.testing.assert_allclose(
+        base, carrying[[0, 2], 3] - [0.0, BEAR_SEAT_BELOW_HANDS_M], atol=0.005
+    )
 
 
 def test_carrying_posture_matches_the_simulator():

@@ -190,6 +190,25 @@ class SimBear:
                     )
                     self._ignored.append((holder_body, holder_link))
 
+    def follow_anchor(self) -> None:
+        """Teleports a held bear to its place on the anchor (after the holder teleported).
+
+        Does nothing when the bear is not held.
+        """
+        with self._bullet.lock:
+            if self._constraint is None or self._anchor is None:
+                return
+            T_world_bear = self._anchor() @ self._T_anchor_bear
+            self.set_T_world_bear(T_world_bear)
+            self._bullet.resetBaseVelocity(self.body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+            position, orientation = matrix_to_pose(T_world_bear @ self._T_bear_base)
+            self._bullet.changeConstraint(
+                self._constraint,
+                jointChildPivot=position,
+                jointChildFrameOrientation=orientation,
+                maxForce=HOLD_FORCE_N,
+            )
+
     def release(self) -> None:
         """Removes the holding constraint; the bear then falls or settles under physics.
 

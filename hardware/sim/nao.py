@@ -29,6 +29,7 @@ from hardware.sim.bullet import (
 from hardware.sim.clock import SimClock
 from hardware.sim.nao_model import SOLE_TO_TORSO_M, TAG_LINK
 from skills.geometry import SE2Pose, make_transform, rot_z, wrap_angle
+from skills.nao_carrying import CARRYING_POSTURE_RAD
 
 log = logging.getLogger(__name__)
 
@@ -39,22 +40,8 @@ TRANSLATION_SCALE_SIGMA = 0.03
 TURN_SCALE_SIGMA = 0.03
 YAW_DRIFT_SIGMA_RADPS = 0.01
 
-HOLDING_POSTURE_RAD: dict[str, float] = {
-    "LShoulderPitch": 1.141,
-    "LShoulderRoll": 0.065,
-    "LElbowYaw": -1.033,
-    "LElbowRoll": -1.094,
-    "LWristYaw": 1.3,
-    "RShoulderPitch": 1.141,
-    "RShoulderRoll": -0.065,
-    "RElbowYaw": 1.033,
-    "RElbowRoll": 1.094,
-    "RWristYaw": -1.3,
-    "LHand": 0.0,
-    "RHand": 0.0,
-}
-"""Standing straight, both palms about 8 cm either side of the mid-plane, 13 cm in front
-of the ankles and 32 cm above the soles: the bear sits between them."""
+HOLDING_POSTURE_RAD: dict[str, float] = {**CARRYING_POSTURE_RAD, "LHand": 0.0, "RHand": 0.0}
+"""Standing straight, carrying the bear (:mod:`skills.nao_carrying`), the hands closed."""
 
 
 class _Trajectory:
@@ -255,6 +242,23 @@ class SimNao:
             self._trajectory = None
 
     # --- ground truth and helpers --------------------------------------------------------
+    def place(self, pose: SE2Pose) -> None:
+        """Teleports the standing NAO to a planar pose (benchmarks and tests only).
+
+        Stops walking and any trajectory; the true pose and the odometry both become
+        ``pose`` (the feet frame: on the floor midway between the soles, x forward). The
+        joint angles are kept. A held bear must be moved with it (see
+        :meth:`hardware.sim.world.SimWorld.place_nao`).
+        """
+        values = np.array([pose.x, pose.y, pose.theta], dtype=float)
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"NAO pose must be finite, got {pose}")
+        self.stop()
+        with self._bullet.lock:
+            self._true = values.copy()
+            self._odometry = values.copy()
+            self._place_body()
+
     def true_pose(self) -> SE2Pose:
         """Ground-truth planar pose of the feet frame (tests and benchmarks only)."""
         with self._bullet.lock:

@@ -35,8 +35,9 @@ from hardware.sim.nao_model import nao_urdf
 from hardware.sim.panda import SimPanda
 from hardware.sim.tag import tag_assets
 from skills.arena import DEFAULT_ARENA, HUMANOID_TAG, Arena
-from skills.geometry import make_transform, rot_z, wrap_angle, yaw_of
+from skills.geometry import SE2Pose, make_transform, rot_z, wrap_angle, yaw_of
 from skills.meshes import box_chair_mesh, load_mesh
+from skills.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, PALM_IN_WRIST_M
 
 log = logging.getLogger(__name__)
 
@@ -46,8 +47,6 @@ TAPE_WIDTH_M = 0.03
 planner keeps the humanoid inside it, but the chair may stand across it."""
 PLACEMENT_TOLERANCE_DEG = 30.0
 SETTLE_S = 0.5
-BEAR_SEAT_BELOW_HANDS_M = 0.065
-"""The bear is held with its torso's middle between the palms."""
 
 
 @dataclass(frozen=True)
@@ -182,6 +181,16 @@ class SimWorld:
         if self.front_yaw_rad is None:
             return None
         return wrap_angle(self.front_yaw_rad + yaw_of(self.T_world_chair_true()))
+
+    def place_nao(self, pose: SE2Pose) -> None:
+        """Teleports the NAO (feet frame) to ``pose``, with the bear if it holds it.
+
+        For benchmarks and tests that start a motion at a chosen stance: the true pose
+        and the odometry become ``pose``, the posture is kept and a held bear keeps its
+        place in the hands.
+        """
+        self.nao.place(pose)
+        self.bear.follow_anchor()
 
     # --- pictures -----------------------------------------------------------------------
     def render_png(self, path: Path, view: Literal["top", "perspective"] = "perspective") -> None:
@@ -331,5 +340,5 @@ class SimWorld:
         return bodies
 
 
-_PALM = make_transform(np.eye(3), np.array([0.045, 0.0, -0.008]))
-"""The palm centre in the NAO's wrist link frame (the middle of the hand box)."""
+_PALM = make_transform(np.eye(3), np.asarray(PALM_IN_WRIST_M))
+"""The palm centre in the NAO's wrist link frames (:mod:`skills.nao_carrying`)."""

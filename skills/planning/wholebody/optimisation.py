@@ -32,34 +32,19 @@ import casadi as ca
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from skills.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, CARRYING_POSTURE_RAD, PALM_IN_WRIST_M
 from skills.planning.wholebody.nao_model import PlanarNao, link_transforms, planar_nao
 
 # The bear (0.25 m tall, 0.2 kg, its frame at its seat point: the bottom centre of its
 # torso) is held rigidly between the palms in the pose it had when handed over: upright,
-# its seat point BEAR_BELOW_PALMS_M below the palms' middle, with the NAO in
-# CARRYING_POSTURE_RAD. See :func:`carrying_grasp`.
+# its seat point BEAR_SEAT_BELOW_HANDS_M below the palms' middle, with the NAO in
+# CARRYING_POSTURE_RAD (both from skills.nao_carrying, shared with the simulator). See
+# :func:`carrying_grasp`.
 BEAR_HEIGHT_M = 0.25
 BEAR_DEPTH_M = 0.10
 """Fore-aft extent of the bear's outline (torso and head; its short legs are ignored)."""
 BEAR_MASS_KG = 0.2
 BEAR_COM_HEIGHT_M = 0.09
-BEAR_BELOW_PALMS_M = 0.065
-PALM_IN_WRIST_M = (0.045, 0.0, -0.008)
-"""The palm's centre in the ``l_wrist``/``r_wrist`` link frames (middle of the hand)."""
-CARRYING_POSTURE_RAD: dict[str, float] = {
-    "LShoulderPitch": 1.141,
-    "LShoulderRoll": 0.065,
-    "LElbowYaw": -1.033,
-    "LElbowRoll": -1.094,
-    "LWristYaw": 1.3,
-    "RShoulderPitch": 1.141,
-    "RShoulderRoll": -0.065,
-    "RElbowYaw": 1.033,
-    "RElbowRoll": 1.094,
-    "RWristYaw": -1.3,
-}
-"""The NAO's posture when it is handed the bear (standing straight, the other joints 0):
-the simulator's ``HOLDING_POSTURE_RAD`` (hardware/sim/nao.py), checked by a test."""
 
 PLACEMENT_TOLERANCE_M = 0.015
 BEAR_TILT_GOAL_RAD = math.radians(8.0)
@@ -111,8 +96,8 @@ def carrying_grasp() -> tuple[float, np.ndarray]:
     The hands frame is the palms' middle with the mean of both palms' orientations; in a
     mirror-symmetric posture that mean is a pure pitch ψ about y. When the bear is handed
     over (NAO in :data:`CARRYING_POSTURE_RAD`), it is upright with its seat point
-    :data:`BEAR_BELOW_PALMS_M` below the palms' middle, so in the hands frame its
-    orientation is a pitch of -ψ_c and its seat point is ``R_y(-ψ_c) (0, -0.065)``.
+    :data:`BEAR_SEAT_BELOW_HANDS_M` (b) below the palms' middle, so in the hands frame its
+    orientation is a pitch of -ψ_c and its seat point is ``R_y(-ψ_c) (0, -b)``.
     """
     frames = link_transforms(CARRYING_POSTURE_RAD)
     T_palm = frames["l_wrist"].copy()
@@ -126,7 +111,7 @@ def carrying_grasp() -> tuple[float, np.ndarray]:
     pitch = math.atan2(-mean[2, 0], mean[0, 0])
     c, s = math.cos(pitch), math.sin(pitch)
     # World (x, z) = R_y(ψ) (x, z)_hands with R_y(ψ)(x, z) = (c x + s z, -s x + c z).
-    below = np.array([0.0, -BEAR_BELOW_PALMS_M])
+    below = np.array([0.0, -BEAR_SEAT_BELOW_HANDS_M])
     offset = np.array([c * below[0] - s * below[1], s * below[0] + c * below[1]])
     return pitch, offset
 

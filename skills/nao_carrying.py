@@ -1,0 +1,48 @@
+"""How the NAO carries the bear: the one definition shared by the planner and the simulator.
+
+The NAO is handed the bear standing straight with its arms in
+:data:`CARRYING_POSTURE_RAD`; the bear is upright, faces the NAO and is held between the
+palms with its seat point (the bottom centre of its torso) :data:`BEAR_SEAT_BELOW_HANDS_M`
+below the palms' middle. From then on the bear moves rigidly with the hands frame.
+
+Frames:
+
+* palm: the centre of the hand, :data:`PALM_IN_WRIST_M` in the ``l_wrist`` / ``r_wrist``
+  link frames of qibullet's ``nao.urdf`` (x along the hand, z out of its back);
+* hands frame: the two palms' middle, oriented as the mean (normalised quaternion sum)
+  of the two palms' orientations.
+
+Where the carrying posture holds the bear (standing straight, the NAO frame on the floor
+between the soles, x forward, z up; computed from the URDF and checked by
+tests/test_wholebody.py): the palms' middle about 0.156 m ahead of the ankles and
+0.388 m above the soles, so the bear's seat point is about 0.323 m above the floor
+(high enough to carry it over seats up to about 0.30 m) and its ears, at 0.573 m, stay
+below the head's ArUco tag (0.58 m). The palms are about 7 cm either side of the
+mid-plane, squeezing the bear's torso (0.10 m wide). The centre of mass with the bear
+stays about 2 cm ahead of the ankles, well inside the feet.
+"""
+
+from __future__ import annotations
+
+CARRYING_POSTURE_RAD: dict[str, float] = {
+    "LShoulderPitch": 0.8,
+    "LShoulderRoll": 0.065,
+    "LElbowYaw": -1.033,
+    "LElbowRoll": -1.3,
+    "LWristYaw": 1.3,
+    "RShoulderPitch": 0.8,
+    "RShoulderRoll": -0.065,
+    "RElbowYaw": 1.033,
+    "RElbowRoll": 1.3,
+    "RWristYaw": -1.3,
+}
+"""qibullet joint angles (radians) of the arms while carrying; every other joint is 0
+(standing straight). Mirror-symmetric: the right side's rolls and yaws are the left's
+negated. Within the URDF's joint limits."""
+
+BEAR_SEAT_BELOW_HANDS_M = 0.065
+"""Height (metres) of the palms' middle above the bear's seat point when it is handed
+over: the palms hold the middle of the bear's torso."""
+
+PALM_IN_WRIST_M: tuple[float, float, float] = (0.045, 0.0, -0.008)
+"""The palm's centre (metres) in the ``l_wrist`` / ``r_wrist`` link frames."""
