@@ -5,13 +5,15 @@
     python bench/wholebody.py --sim --calibration --runs 20
 
 Solve times: the box chair and the calibration chairs (../shared/chairs, skipped when
-absent) with the sitting pose at their true seat (the seat height is the height of the
-mesh's largest horizontal surface; the point is that surface's area centroid, 2 cm up),
-the NAO facing it on the sitting ray at stances 0.22 to 0.36 m. Prints the median and
-spread of the goal posture, trajectory and retract solve times and the feasible stances.
+absent) with the sitting pose at their true seat (above the area centroid of the mesh's
+largest horizontal surface, 2 cm over the chair's top there: a cushion counts), the NAO
+facing it on the sitting ray at stances 0.22 to 0.36 m. Prints the median and spread of
+the goal posture, trajectory and retract solve times and the feasible stances.
 
-Simulation: the chair is placed in front of the NAO's start pose (sitting direction
-toward the NAO) at the nearest feasible stance; the plan is played through
+Simulation: the chair is placed 0.5 m in front of the NAO's start pose (sitting
+direction toward the NAO) and settles; the NAO is placed (``SimWorld.place_nao``) at the
+nearest stance with a feasible pre-plan, p sliding along the seat on "bear placement"
+failures as the accessibility check does; the plan is played through
 ``SimNao.play_joint_trajectory``, the bear released and the judge asked (the simulator
 hands the bear over facing the NAO, as in the paper).
 """
@@ -30,6 +32,12 @@ import trimesh
 
 from skills.geometry import SE2Pose, SittingPose, make_transform, rot_z, wrap_angle
 from skills.meshes import box_chair_mesh, load_mesh
+from skills.planning.se2 import (
+    MAX_SLIDE_RETRIES,
+    SLIDE_RETRY_STEP_M,
+    seat_support_heights,
+    slide_on_seat,
+)
 from skills.planning.wholebody import InfeasibleSeating, plan_seating, preplan_seating
 from skills.planning.wholebody.chair_profile import (
     HORIZONTAL_NORMAL_Z,
@@ -41,13 +49,20 @@ STANCES_M = (0.22, 0.24, 0.26, 0.28, 0.30, 0.32, 0.34, 0.36)
 
 
 def true_seat_point(chair_mesh: trimesh.Trimesh) -> np.ndarray:
-    """The seat's area centroid at the largest horizontal surface's height, 2 cm up."""
+    """Where a sitter rests: above the seat's area centroid, 2 cm over the seat's top.
+
+    The seat is the largest horizontal surface; its area centroid gives (x, y). The height
+    is the highest chair surface straight below that point (a cushion or a dished seat
+    rises above the seat's largest flat part), found within 8 cm above that part so that
+    nothing overhanging (a backrest's top) counts.
+    """
     seat_z = largest_horizontal_surface_height(chair_mesh)
     up = chair_mesh.face_normals[:, 2] >= HORIZONTAL_NORMAL_Z
     centres = chair_mesh.triangles_center
     on_seat = up & (np.abs(centres[:, 2] - seat_z) <= 0.01)
     xy = np.average(centres[on_seat, :2], axis=0, weights=chair_mesh.area_faces[on_seat])
-    return np.array([xy[0], xy[1], seat_z + 0.02])
+    top = seat_support_heights(chair_mesh, xy[None, :], seat_z + 0.08)[0]
+    return np.array([xy[0], xy[1], (seat_z if np.isnan(top) else max(top, seat_z)) + 0.02])
 
 
 def calibration_chairs() -> list[tuple[str, Path, float]]:
@@ -109,9 +124,42 @@ def solve_times(chairs: list[tuple[str, trimesh.Trimesh, float]]) -> None:
     print(f"goal + trajectory: {stats(together)} (target: median <= 1 s)")
 
 
+def feasible_stance(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose
+) -> tuple[float, SittingPose] | None:
+    """The nearest stance with a feasible pre-plan, sliding p as the mission does.
+
+    As :func:`skills.planning.se2.check_accessibility` does, a pre-plan that finds the
+    bear out of place ("bear placement") slides p toward the NAO along the seat, in
+    steps of ``SLIDE_RETRY_STEP_M``, up to ``MAX_SLIDE_RETRIES`` times.
+    """
+    for distance in STANCES_M:
+        slide, pose = 0.0, sitting_pose
+        for _ in range(MAX_SLIDE_RETRIES + 1):
+            try:
+                preplan_seating(chair_mesh, pose, stance_pose(pose, distance))
+            except InfeasibleSeating as error:
+                if error.constraint != "bear placement":
+                    break
+                moved, moved_m = slide_on_seat(chair_mesh, sitting_pose, slide + SLIDE_RETRY_STEP_M)
+                if moved_m <= slide + 1e-6:
+                    break
+                slide, pose = moved_m, moved
+                continue
+            return distance, pose
+    return None
+
+
 def sim_run(chair_path: Path | None, front_yaw_deg: float, seed: int) -> tuple[bool, str]:
-    """One simulated seating: returns (seated, description)."""
+    """One simulated seating: returns (seated, description).
+
+    The chair stands 0.5 m in front of the NAO's start, its sitting direction toward the
+    NAO, and settles; the NAO is then placed at the nearest feasible stance on the
+    sitting ray (with a lateral error of up to 2 cm), plans from its own pose, plays the
+    motion, releases the bear, stands up and the judge decides.
+    """
     from hardware.sim.world import SimConfig, SimWorld
+    from skills.planning.wholebody import execute_seating, release_and_stand
 
     config = SimConfig(
         chair_path=chair_path,
@@ -124,44 +172,29 @@ def sim_run(chair_path: Path | None, front_yaw_deg: float, seed: int) -> tuple[b
         sitting_yaw = wrap_angle(nao_pose.theta + math.pi)
         chair_yaw = wrap_angle(sitting_yaw - math.radians(front_yaw_deg))
         T = make_transform(rot_z(chair_yaw), np.array([nao_pose.x - 0.5, nao_pose.y, 0.0]))
-        T_base = world.chair.T_world_chair()
-        T[2, 3] = T_base[2, 3]
-        world.chair.set_T_world_chair(T)
-        seat = true_seat_point(world.chair_mesh_true)
-        rng = np.random.default_rng(seed)
-        lateral = rng.uniform(-0.02, 0.02)
-        sitting_pose = SittingPose(seat, sitting_yaw)
-        distance = None
-        for candidate in STANCES_M:
-            try:
-                preplan_seating(
-                    world.chair_mesh_true, sitting_pose, stance_pose(sitting_pose, candidate)
-                )
-            except InfeasibleSeating:
-                continue
-            distance = candidate
-            break
-        if distance is None:
-            return False, "no feasible stance"
-        # Move the chair so that g lies ``distance`` ahead of the NAO (small lateral error).
-        forward = np.array([math.cos(nao_pose.theta), math.sin(nao_pose.theta)])
-        side = np.array([-forward[1], forward[0]])
-        target = np.array([nao_pose.x, nao_pose.y]) + distance * forward + lateral * side
-        T[:2, 3] += target - seat[:2]
+        T[2, 3] = world.chair.T_world_chair()[2, 3]
         world.chair.set_T_world_chair(T)
         world.clock.sleep(0.3)
         chair_mesh = world.chair_mesh_true
-        sitting_pose = SittingPose(true_seat_point(chair_mesh), sitting_yaw)
+        rng = np.random.default_rng(seed)
+        lateral = rng.uniform(-0.02, 0.02)
+        found = feasible_stance(chair_mesh, SittingPose(true_seat_point(chair_mesh), sitting_yaw))
+        if found is None:
+            return False, "no feasible stance"
+        distance, sitting_pose = found
+        stance = stance_pose(sitting_pose, distance)
+        side = np.array([-math.sin(stance.theta), math.cos(stance.theta)])
+        world.place_nao(SE2Pose(*(np.array([stance.x, stance.y]) + lateral * side), stance.theta))
+        world.clock.sleep(0.2)
         plan = plan_seating(chair_mesh, sitting_pose, world.nao.pose())
-        from skills.planning.wholebody import execute_seating, release_and_stand
-
         execute_seating(world.nao, plan)
         release_and_stand(world.nao, plan)
         verdict = world.judge.judge(sitting_yaw)
         bear = world.bear.T_world_bear()[:3, 3]
+        slid = np.linalg.norm(sitting_pose.position[:2] - true_seat_point(chair_mesh)[:2])
         return verdict.seated, (
-            f"stance {distance:.2f} m, tilt {verdict.torso_tilt_deg:.0f} deg, facing "
-            f"{verdict.facing_error_deg:.0f} deg, bear at height {bear[2]:.3f} m"
+            f"stance {distance:.2f} m, p slid {slid:.2f} m, tilt {verdict.torso_tilt_deg:.0f} "
+            f"deg, facing {verdict.facing_error_deg:.0f} deg, bear at height {bear[2]:.3f} m"
             + (f" ({verdict.reason})" if verdict.reason else "")
         )
 
