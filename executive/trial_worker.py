@@ -55,7 +55,6 @@ def mission_timeout_s(harness_timeout_s: float) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
-    faulthandler.enable()  # a segfault leaves "Fatal Python error" in worker.log
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) != 1:
         print("usage: python -m executive.trial_worker '<trial json>'", file=sys.stderr)
@@ -92,4 +91,5 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    faulthandler.enable()  # a segfault leaves "Fatal Python error" in worker.log
     sys.exit(main())

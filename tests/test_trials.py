@@ -602,3 +602,24 @@ def test_ray_backend_runs_the_same_trials_with_the_same_records(tmp_path, fake_w
     with TrialStore(tmp_path / "local" / "trials.sqlite") as store:
         local_records = store.records()
     assert table_without_timing(ray_records) == table_without_timing(local_records)
+
+
+def test_the_real_worker_reports_an_unusable_chair_as_an_error(tmp_path, capsys):
+    from executive import trial_worker
+    from executive.trials.worker_process import RESULT_MARKER
+
+    payload = {
+        "chair_path": str(tmp_path / "missing.obj"),
+        "placement": "accessible",
+        "helper": "obeys",
+        "seed": 1,
+        "trial_index": 0,
+        "out_dir": str(tmp_path / "run"),
+        "timeout_s": 300,
+    }
+    assert trial_worker.main([json.dumps(payload)]) == 3
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    assert line.startswith(RESULT_MARKER)
+    assert "no such file" in json.loads(line[len(RESULT_MARKER) :])["error"]
+    assert trial_worker.main([]) == 2
+    assert trial_worker.mission_timeout_s(300) == 270 and trial_worker.mission_timeout_s(20) == 16

@@ -190,7 +190,7 @@ def markdown_report(
         "",
         "## (2) Chair accessible after human assistance",
         "",
-        "| Experiment | Assist. num. | Accessible num. | Rate |",
+        "| Helper (inaccessible placements) | Assist. num. | Accessible num. | Rate |",
         "|---|---:|---:|---:|",
     ]
     out += [f"| {r.label} | {r.n} | {r.count} | {_rate(r)} |" for r in table.assistance]
