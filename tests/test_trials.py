@@ -623,3 +623,21 @@ def test_the_real_worker_reports_an_unusable_chair_as_an_error(tmp_path, capsys)
     assert "no such file" in json.loads(line[len(RESULT_MARKER) :])["error"]
     assert trial_worker.main([]) == 2
     assert trial_worker.mission_timeout_s(300) == 270 and trial_worker.mission_timeout_s(20) == 16
+
+
+def test_an_interrupted_run_worker_kills_its_trial_process(tmp_path, fake_worker, monkeypatch):
+    import threading
+
+    from executive.trials.worker_process import run_worker
+
+    monkeypatch.setenv("FAKE_SLEEP_S", "30")
+    spec = expand_protocol(entries(["a.obj"], tmp_path), "paper", 0)[0]
+    timer = threading.Timer(1.5, os.kill, (os.getpid(), signal.SIGINT))
+    start = time.monotonic()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        run_worker(fake_worker, spec.to_payload(tmp_path / "run", 60), 60)
+    timer.cancel()
+    assert time.monotonic() - start < 10  # stopped, not waited for
+    pids = worker_pids(tmp_path)
+    assert len(pids) == 1 and not process_alive(pids[0])

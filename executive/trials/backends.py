@@ -150,6 +150,8 @@ class RayBackend:
                     on_result(spec, outcome)
         except BaseException:
             for ref in in_flight:
+                # Not force=True: the task gets a KeyboardInterrupt and kills its trial
+                # subprocess, which a killed Ray worker would leave running.
                 with contextlib.suppress(Exception):  # already finished or gone
-                    ray.cancel(ref, force=True)
+                    ray.cancel(ref)
             raise

@@ -137,6 +137,10 @@ def run_worker(
             if group.stopping:
                 return WorkerOutcome(None, "stopped by the harness", elapsed, cancelled=True)
             return WorkerOutcome(None, f"timed out after {timeout_s:.0f} s: worker killed", elapsed)
+        except BaseException:  # KeyboardInterrupt (a Ray task cancelled): take the worker along
+            kill_process_group(process)
+            group.finished(process)
+            raise
         group.finished(process)
     elapsed = time.monotonic() - start
     if group.stopping:
