@@ -13,7 +13,7 @@ from hardware.interfaces import Clock, Helper, Humanoid, ScanningArm, SeatingJud
 from hardware.sim.camera import CARMINE_INTRINSICS, T_HAND_CAMERA
 from hardware.sim.world import SimConfig, SimWorld
 from skills.arena import DEFAULT_ARENA, HUMANOID_TAG
-from skills.geometry import transform_points, wrap_angle, yaw_of
+from skills.geometry import SE2Pose, transform_points, wrap_angle, yaw_of
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 
@@ -212,6 +212,25 @@ def test_walking_moves_the_nao_and_odometry_drifts_little():
         world.nao.stop()
         turned = wrap_angle(world.nao.true_pose().theta - end.theta)
         assert 0.6 < turned < 1.1
+
+
+def test_place_nao_moves_the_robot_and_the_held_bear():
+    with SimWorld(SimConfig(seed=5, camera_noise=False)) as world:
+        T_feet_bear = np.linalg.inv(world.nao.T_world_feet()) @ world.bear.T_world_bear()
+        target = SE2Pose(1.2, 0.1, 2.5)
+        world.place_nao(target)
+        world.clock.sleep(0.5)
+        for pose in (world.nao.true_pose(), world.nao.pose()):
+            assert pose.distance_to(target) < 1e-6
+            assert abs(wrap_angle(pose.theta - target.theta)) < 1e-6
+        for sole in ("l_sole", "r_sole"):
+            assert abs(world.nao.T_world_link(sole)[2, 3]) < 0.003
+        # The bear stayed in the hands, where it was relative to the feet.
+        assert world.bear.held
+        T_moved = np.linalg.inv(world.nao.T_world_feet()) @ world.bear.T_world_bear()
+        np.testing.assert_allclose(T_moved[:3, 3], T_feet_bear[:3, 3], atol=0.005)
+        with pytest.raises(ValueError):
+            world.place_nao(SE2Pose(math.nan, 0.0, 0.0))
 
 
 def test_joint_trajectory_keeps_feet_on_the_floor():

@@ -226,6 +226,33 @@ def test_carrying_posture_matches_the_simulator():
     assert nao_sim.HOLDING_POSTURE_RAD.items() >= CARRYING_POSTURE_RAD.items()
 
 
+def test_carrying_posture_holds_the_bear_high_stably_within_limits():
+    joints, _ = parse_urdf()
+    for name, value in CARRYING_POSTURE_RAD.items():
+        assert joints[name].lower <= value <= joints[name].upper, name
+    frames = link_transforms(CARRYING_POSTURE_RAD)
+    hands = _hands_frame(frames)
+    seat_point = hands[:3, 3] - [0.0, 0.0, BEAR_SEAT_BELOW_HANDS_M]
+    # High enough to carry the bear over seats of about 0.30 m, the ears below the tag.
+    assert seat_point[2] >= 0.31
+    assert seat_point[2] + BEAR_HEIGHT_M < 0.58
+    assert abs(seat_point[1]) < 1e-6
+    # Standing straight with the bear: the centre of mass over the feet, with a margin.
+    _, links = parse_urdf()
+    total, mass = 0.2 * (seat_point[0]), 0.2
+    for name, link in links.items():
+        if link.mass_kg > 0 and name in frames:
+            total += link.mass_kg * (frames[name][:3, :3] @ link.com + frames[name][:3, 3])[0]
+            mass += link.mass_kg
+    x_back, x_front = planar_nao().support_x
+    assert x_back + 0.02 <= total / mass <= x_front - 0.02
+    # The planar start posture has the palms where the carrying posture has them.
+    start = _hands_frame(_frames(STANDING_POSTURE))
+    assert np.linalg.norm(start[[0, 2], 3] - hands[[0, 2], 3]) < 0.003
+    pitch = Rotation.from_matrix(start[:3, :3] @ hands[:3, :3].T).magnitude()
+    assert pitch < math.radians(2.0)
+
+
 def test_retract_releases_upright_and_stable(chair, plan):
     q_all = _planar(plan.retract_positions_rad)
     np.testing.assert_allclose(q_all[0], _planar(plan.positions_rad)[-1])
