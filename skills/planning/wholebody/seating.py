@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections.abc import Iterator
 from typing import NamedTuple
 
 import numpy as np
@@ -211,17 +212,33 @@ def _radius_of(label: str) -> float:
 
 
 def solve_goal_posture(problems: SeatingProblems, scene: SeatingScene) -> tuple[np.ndarray, float]:
-    """q_goal (eq. 12-16) and its solve time in seconds.
+    """q_goal (eq. 12-16) and its solve time in seconds: the first feasible candidate.
 
     Raises:
         InfeasibleSeating: naming the violated constraint.
     """
-    global _warm_goal
     started = time.perf_counter()
+    q_goal = next(goal_posture_candidates(problems, scene))
+    return q_goal, time.perf_counter() - started
+
+
+def goal_posture_candidates(problems: SeatingProblems, scene: SeatingScene) -> Iterator[np.ndarray]:
+    """Feasible goal postures (eq. 12-16), one per initial guess that reaches one.
+
+    The guesses are the last accepted goal (a warm start) and fixed postures; different
+    guesses may end in different local optima, so a caller whose trajectory fails from
+    one goal can try the next.
+
+    Raises:
+        InfeasibleSeating: when no guess gives a feasible goal (naming the violated
+            constraint); raised on the first ``next`` that finds none.
+    """
+    global _warm_goal
     chair = scene.profile.as_vector()
     lower, upper = problems.posture_bounds(g_xz=scene.g_xz, tilt_rad=BEAR_TILT_GOAL_RAD)
     guesses = ([_warm_goal] if _warm_goal is not None else []) + list(_GOAL_GUESSES)
     best: tuple[float, str, str] | None = None
+    found: list[np.ndarray] = []
     for guess in guesses:
         with problems.lock:
             result = problems.goal_solver(
@@ -237,10 +254,16 @@ def solve_goal_posture(problems: SeatingProblems, scene: SeatingScene) -> tuple[
             problems, q, scene.profile, g_xz=scene.g_xz, tilt_rad=BEAR_TILT_GOAL_RAD
         )
         if violation[0] <= CHECK_TOLERANCE:
+            if any(np.max(np.abs(q - other)) < 1e-3 for other in found):
+                continue  # the same optimum again
+            found.append(q)
             _warm_goal = q
-            return q, time.perf_counter() - started
+            yield q
+            continue
         if best is None or violation[0] < best[0]:
             best = violation
+    if found:
+        return
     # Infeasible: is g out of reach? Minimise the placement error under the others.
     free_lower, free_upper = problems.posture_bounds(g_xz=None, tilt_rad=BEAR_TILT_GOAL_RAD)
     with problems.lock:
@@ -400,34 +423,26 @@ def plan_seating(
         raise InfeasibleSeating(
             "chair collision", f"the NAO's feet are {-toe_clearance:.2f} m under the chair"
         )
-    q_goal, goal_s = solve_goal_posture(problems, scene)
-    started = time.perf_counter()
-    times, knots = solve_trajectory(
-        problems, scene.profile, STANDING_POSTURE, q_goal, bear_held=True
-    )
-    trajectory_s = time.perf_counter() - started
-    started = time.perf_counter()
-    q_folded = withdrawn_hands_posture(problems, q_goal)
-    fold_times, fold = solve_trajectory(
-        problems,
-        scene.profile,
-        q_goal,
-        q_folded,
-        bear_held=False,
-        freeze_legs=True,
-        phase="retract (hands back)",
-    )
-    stand_times, stand = solve_trajectory(
-        problems,
-        scene.profile,
-        q_folded,
-        REST_POSTURE,
-        bear_held=False,
-        phase="retract (standing up)",
-    )
-    retract_s = time.perf_counter() - started
-    retract_knots = np.vstack([fold, stand[1:]])
-    retract_times = np.r_[fold_times, fold_times[-1] + stand_times[1:]]
+    # A goal from which the trajectory or the retract is infeasible may have a sibling
+    # (another local optimum) from which both are feasible: try each in turn.
+    goal_s = trajectory_s = retract_s = 0.0
+    failure: InfeasibleSeating | None = None
+    candidates = goal_posture_candidates(problems, scene)
+    while True:
+        started = time.perf_counter()
+        try:
+            q_goal = next(candidates)
+        except StopIteration:
+            assert failure is not None
+            raise failure from None
+        goal_s += time.perf_counter() - started
+        try:
+            motion = _motion_from_goal(problems, scene.profile, q_goal)
+        except InfeasibleSeating as error:
+            failure = error
+            continue
+        break
+    times, knots, retract_times, retract_knots, trajectory_s, retract_s = motion
     return SeatingPlan(
         joint_names=DRIVEN_JOINTS,
         times_s=LEAD_IN_S + times,
@@ -436,6 +451,42 @@ def plan_seating(
         retract_positions_rad=to_joint_positions(retract_knots),
         seconds={"goal": goal_s, "trajectory": trajectory_s, "retract": retract_s},
     )
+
+
+def _motion_from_goal(
+    problems: SeatingProblems, profile: ChairProfile, q_goal: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float]:
+    """(times, knots, retract times, retract knots, trajectory s, retract s) to q_goal.
+
+    Raises:
+        InfeasibleSeating: the trajectory or the retract is infeasible.
+    """
+    started = time.perf_counter()
+    times, knots = solve_trajectory(problems, profile, STANDING_POSTURE, q_goal, bear_held=True)
+    trajectory_s = time.perf_counter() - started
+    started = time.perf_counter()
+    q_folded = withdrawn_hands_posture(problems, q_goal)
+    fold_times, fold = solve_trajectory(
+        problems,
+        profile,
+        q_goal,
+        q_folded,
+        bear_held=False,
+        freeze_legs=True,
+        phase="retract (hands back)",
+    )
+    stand_times, stand = solve_trajectory(
+        problems,
+        profile,
+        q_folded,
+        REST_POSTURE,
+        bear_held=False,
+        phase="retract (standing up)",
+    )
+    retract_s = time.perf_counter() - started
+    retract_knots = np.vstack([fold, stand[1:]])
+    retract_times = np.r_[fold_times, fold_times[-1] + stand_times[1:]]
+    return times, knots, retract_times, retract_knots, trajectory_s, retract_s
 
 
 def preplan_seating(
