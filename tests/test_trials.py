@@ -29,7 +29,7 @@ from executive.trials.protocol import (
     expand_protocol,
     trial_seed,
 )
-from executive.trials.report import compute_table, format_table, markdown_report
+from executive.trials.report import compute_table, failure_kind, format_table, markdown_report
 from executive.trials.store import TrialStore, record_from_error, record_from_summary
 
 REPO = Path(__file__).resolve().parents[1]
@@ -434,6 +434,9 @@ def test_table_1_numbers_from_known_records():
         "harness: timed out after 300 s": 1,
     }
     assert table.failure_stages == [("ReleaseAndStand", 3), ("ImagineSitting", 1), ("harness", 1)]
+    assert failure_kind("ReleaseAndStand: torso tilted 48 deg > 30 (tilt -4.5 deg)") == (
+        "ReleaseAndStand: torso tilted # deg > # (tilt # deg)"
+    )
     assert table.errors == 1 and table.trial_median_s == 40.0
     text = format_table(table)
     assert "Total" in text and "93.1%" in text and "97.1%" in text

@@ -11,6 +11,7 @@ failure.
 
 from __future__ import annotations
 
+import re
 import statistics
 from collections import Counter
 from pathlib import Path
@@ -51,6 +52,8 @@ class TrialsTable(NamedTuple):
         trial_median_s: median wall time of a whole trial (its subprocess), if any.
         failure_stages: (failed stage, count), most frequent first ("harness" for crashes
             and timeouts).
+        failure_kinds: (cause with its numbers replaced by "#", count), most frequent
+            first: the same kind of failure with different measurements counts together.
         failure_causes: (cause, count), most frequent first.
         errors: trials that crashed or hung.
         assisted_accessible_trials: accessible placements that were nevertheless assisted.
@@ -61,6 +64,7 @@ class TrialsTable(NamedTuple):
     stage_median_s: dict[str, tuple[float, int]]
     trial_median_s: float | None
     failure_stages: list[tuple[str, int]]
+    failure_kinds: list[tuple[str, int]]
     failure_causes: list[tuple[str, int]]
     errors: int
     assisted_accessible_trials: int
@@ -104,18 +108,25 @@ def compute_table(records: list[dict[str, Any]]) -> TrialsTable:
     failed = [r for r in records if r["outcome"] != "success"]
     causes = Counter(failure_cause(r) for r in failed)
     stages = Counter(failure_cause(r).split(":", 1)[0] for r in failed)
+    kinds = Counter(failure_kind(failure_cause(r)) for r in failed)
     return TrialsTable(
         seating=seating,
         assistance=assistance,
         stage_median_s=stage_median_s,
         trial_median_s=statistics.median(walls) if walls else None,
         failure_stages=sorted(stages.items(), key=lambda item: (-item[1], item[0])),
+        failure_kinds=sorted(kinds.items(), key=lambda item: (-item[1], item[0])),
         failure_causes=sorted(causes.items(), key=lambda item: (-item[1], item[0])),
         errors=sum(bool(r.get("error")) for r in records),
         assisted_accessible_trials=sum(
             r["experiment"] == "accessible" and (r.get("instructions") or 0) > 0 for r in records
         ),
     )
+
+
+def failure_kind(cause: str) -> str:
+    """The cause with every number replaced by ``#`` ("torso tilted # deg > #")."""
+    return re.sub(r"-?\d+(\.\d+)?", "#", cause)
 
 
 def failure_cause(record: dict[str, Any]) -> str:
@@ -162,8 +173,10 @@ def format_table(table: TrialsTable) -> str:
         lines.append("  none")
     else:
         lines.append("  by stage: " + ", ".join(f"{s} {n}" for s, n in table.failure_stages))
-    for cause, count in table.failure_causes:
-        lines.append(f"  {count:>3} x {cause}")
+    for kind, count in table.failure_kinds:
+        lines.append(f"  {count:>3} x {kind}")
+    if table.failure_causes:
+        lines.append("  (every cause with its numbers: report.md)")
     return "\n".join(lines)
 
 
@@ -221,6 +234,10 @@ def markdown_report(
         out += ["| Failed stage | Trials |", "|---|---:|"]
         out += [f"| {s} | {n} |" for s, n in table.failure_stages]
         out.append("")
+    if table.failure_kinds:
+        out += ["By kind (numbers replaced by #):", ""]
+        out += [f"- {count} x {_md(kind)}" for kind, count in table.failure_kinds]
+        out += ["", "Every cause:", ""]
     out += [f"- {count} x {_md(cause)}" for cause, count in table.failure_causes]
     if skipped:
         out += ["", "## Meshes not in the campaign", ""]
