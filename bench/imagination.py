@@ -37,7 +37,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--only", default="", help="only meshes whose file name contains this")
+    parser.add_argument(
+        "--only",
+        default="",
+        help="only meshes whose file name contains one of these (comma-separated)",
+    )
     parser.add_argument("--save", type=Path, help="pickle the raw drops here")
     parser.add_argument("--rescore", type=Path, help="re-score saved raw drops, no simulation")
     parser.add_argument("--json", type=Path, help="write the summary as JSON here")
@@ -47,7 +51,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"skipped: {CHAIRS_DIR} is absent (calibration meshes not available)")
         return 0
     manifest = json.loads((CHAIRS_DIR / "manifest.json").read_text())
-    entries = [e for e in manifest["meshes"] if args.only in e["file"]]
+    patterns = args.only.split(",")
+    entries = [e for e in manifest["meshes"] if any(p in e["file"] for p in patterns)]
 
     from skills.imagination import imagine_sitting_details, warm_up
     from skills.imagination.imagine import choose_sitting_pose
