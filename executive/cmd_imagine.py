@@ -1,0 +1,87 @@
+"""``bearchair imagine MESH``: the sitting imagination on one mesh file.
+
+Prints the sitting position (metres) and yaw (degrees from +x about +z, the direction
+the sitter faces) in the mesh's frame, the number of correct sittings and the time; or
+``--json`` one JSON object with the keys found, position, yaw_deg, n_correct, n_drops,
+seconds and, when not found, reason. A mesh that is not a chair gives ``found: false``
+and exit status 0; an unreadable or empty file gives one line on stderr and status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Adds the ``imagine`` subcommand."""
+    parser = subparsers.add_parser(
+        "imagine", help="find how to sit on a chair mesh by physical simulation"
+    )
+    parser.add_argument("mesh", type=Path, help="chair mesh (OBJ/PLY/STL/OFF/GLB), z up, metres")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the drops (default 0)")
+    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--image", type=Path, metavar="PNG", help="also draw the result here")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Runs the imagination on ``args.mesh``; returns the exit status."""
+    from skills.imagination import imagine_sitting
+    from skills.meshes import MeshLoadError, load_mesh
+
+    try:
+        mesh = load_mesh(args.mesh)
+    except MeshLoadError as error:
+        print(f"bearchair imagine: {error}", file=sys.stderr)
+        return 2
+    if args.workers < 1:
+        print("bearchair imagine: --workers must be at least 1", file=sys.stderr)
+        return 2
+    result = imagine_sitting(mesh, seed=args.seed, workers=args.workers)
+    seconds = result.seconds.get("total", 0.0)
+    if args.image is not None:
+        from skills.imagination.render import render_sitting
+
+        title = (
+            f"{args.mesh.name}: yaw {math.degrees(result.sitting_pose.yaw):.1f} deg, "
+            f"{result.n_correct} correct of {result.n_drops}"
+            if result.found and result.sitting_pose is not None
+            else f"{args.mesh.name}: no sitting pose ({result.reason})"
+        )
+        render_sitting(mesh, result.sitting_pose, args.image, title)
+    if args.json:
+        payload: dict = {
+            "found": result.found,
+            "position": [round(float(v), 4) for v in result.sitting_pose.position]
+            if result.sitting_pose is not None
+            else None,
+            "yaw_deg": round(math.degrees(result.sitting_pose.yaw), 2)
+            if result.sitting_pose is not None
+            else None,
+            "n_correct": result.n_correct,
+            "n_drops": result.n_drops,
+            "seconds": round(seconds, 3),
+        }
+        if not result.found:
+            payload["reason"] = result.reason
+        print(json.dumps(payload))
+        return 0
+    if result.found and result.sitting_pose is not None:
+        x, y, z = (float(v) for v in result.sitting_pose.position)
+        print(f"sitting position: x={x:.3f} y={y:.3f} z={z:.3f} m (mesh frame)")
+        print(f"sitting yaw:      {math.degrees(result.sitting_pose.yaw):.1f} deg from +x about +z")
+    else:
+        print(f"no sitting pose: {result.reason}")
+    print(f"correct sittings: {result.n_correct} of {result.n_drops} drops")
+    print(
+        f"time:             {seconds:.2f} s (prepare {result.seconds.get('prepare', 0.0):.2f} s, "
+        f"simulate {result.seconds.get('simulate', 0.0):.2f} s)"
+    )
+    if args.image is not None:
+        print(f"image:            {args.image}")
+    return 0

@@ -1,0 +1,160 @@
+"""Tests of the sitting imagination (skills.imagination) and ``bearchair imagine``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+import numpy as np
+import pytest
+import trimesh
+
+from skills.geometry import make_transform, rot_z, wrap_angle
+from skills.imagination import imagine_sitting
+from skills.imagination.agent import JOINTS, LINKS, TOTAL_MASS_KG, agent_urdf_path
+from skills.imagination.chair import prepare_chair, yaw_obb
+from skills.imagination.sam import joint_score, link_score
+from skills.meshes import box_chair_mesh
+
+
+def _placed(mesh: trimesh.Trimesh, yaw_rad: float, xy: tuple[float, float]) -> trimesh.Trimesh:
+    moved = mesh.copy()
+    moved.apply_transform(make_transform(rot_z(yaw_rad), np.array([xy[0], xy[1], 0.0])))
+    return moved
+
+
+@pytest.fixture(scope="module")
+def box_chair() -> trimesh.Trimesh:
+    return box_chair_mesh()
+
+
+def test_agent_is_child_sized() -> None:
+    import pybullet as p
+
+    assert 12.0 <= TOTAL_MASS_KG <= 14.0
+    client = p.connect(p.DIRECT)
+    try:
+        body = p.loadURDF(str(agent_urdf_path()), physicsClientId=client)
+        assert p.getNumJoints(body, physicsClientId=client) == len(JOINTS)
+        # Stand the agent up (legs straight down) and measure its height.
+        names = {
+            p.getJointInfo(body, i, physicsClientId=client)[1].decode(): i
+            for i in range(len(JOINTS))
+        }
+        for side in ("left", "right"):
+            p.resetJointState(body, names[f"{side}_hip_pitch"], math.pi / 2, physicsClientId=client)
+            p.resetJointState(
+                body, names[f"{side}_knee_pitch"], -math.pi / 2, physicsClientId=client
+            )
+        p.resetJointState(body, names["chest_pitch"], 0.0, physicsClientId=client)
+        lows, highs = [], []
+        for link in range(-1, len(JOINTS)):
+            lo, hi = p.getAABB(body, link, physicsClientId=client)
+            lows.append(lo[2])
+            highs.append(hi[2])
+        assert 0.82 <= max(highs) - min(lows) <= 0.95
+    finally:
+        p.disconnect(client)
+
+
+def test_key_configuration_scores_zero() -> None:
+    key = np.array([joint.key_rad for joint in JOINTS])
+    assert joint_score(key) == pytest.approx(0.0)
+    upright_z = np.tile([0.0, 0.0, 1.0], (len(LINKS), 1))
+    # An agent with every link upright differs from the reclined key only by the torso.
+    assert 0.0 < link_score(upright_z, 0.3) < 0.2
+    assert link_score(-upright_z, 0.3) > 2.0
+
+
+def test_yaw_obb_recovers_the_footprint_rotation() -> None:
+    box = trimesh.creation.box(extents=(0.4, 0.25, 0.5))
+    turned = _placed(box, math.radians(20.0), (0.3, -0.2))
+    gamma, centre, extents = yaw_obb(turned)
+    assert abs(wrap_angle(4 * (gamma + math.radians(20.0)))) < 1e-6  # aligned, modulo 90 deg
+    assert np.allclose(centre, (0.3, -0.2), atol=1e-6)
+    assert sorted(extents) == pytest.approx([0.25, 0.4], abs=1e-6)
+
+
+def test_preparation_is_cached(box_chair: trimesh.Trimesh) -> None:
+    first = prepare_chair(box_chair)
+    assert prepare_chair(box_chair.copy()) is first
+    assert first.mass_kg > 0 and len(first.pieces) >= 1
+
+
+@pytest.mark.parametrize("yaw_deg", [0.0, 100.0, 200.0, 300.0])
+def test_box_chair_sitting_faces_away_from_the_backrest(
+    box_chair: trimesh.Trimesh, yaw_deg: float
+) -> None:
+    yaw = math.radians(yaw_deg)
+    chair = _placed(box_chair, yaw, (0.2, -0.1))
+    result = imagine_sitting(chair, seed=3, workers=2)
+    assert result.found, result.reason
+    # The box chair's backrest is at -x: its sitter faces +x, turned by the yaw.
+    error = abs(math.degrees(wrap_angle(result.sitting_pose.yaw - yaw)))
+    assert error < 15.0
+    seat_centre = np.array([0.2, -0.1])
+    assert np.linalg.norm(result.sitting_pose.position[:2] - seat_centre) < 0.15
+    assert 0.24 < result.sitting_pose.position[2] < 0.45
+    assert result.n_drops in (24, 56) and len(result.drops) == result.n_drops
+    assert result.n_correct >= 1
+    assert {"prepare", "simulate", "total"} <= set(result.seconds)
+
+
+def test_a_one_metre_cube_is_not_a_chair() -> None:
+    cube = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+    cube.apply_translation((0.0, 0.0, 0.5))
+    result = imagine_sitting(cube, seed=0, workers=2)
+    assert not result.found
+    assert result.sitting_pose is None
+    assert result.n_drops == 56
+    assert "no correct sitting" in result.reason
+
+
+def test_same_seed_same_result_and_worker_count_does_not_matter(
+    box_chair: trimesh.Trimesh,
+) -> None:
+    chair = _placed(box_chair, math.radians(37.0), (0.0, 0.0))
+    one = imagine_sitting(chair, seed=11, workers=1)
+    two = imagine_sitting(chair, seed=11, workers=2)
+    again = imagine_sitting(chair, seed=11, workers=2)
+    for other in (two, again):
+        assert other.found == one.found
+        assert other.n_correct == one.n_correct
+        assert np.array_equal(other.sitting_pose.position, one.sitting_pose.position)
+        assert other.sitting_pose.yaw == one.sitting_pose.yaw
+        for a, b in zip(one.drops, other.drops, strict=True):
+            assert np.array_equal(a.position, b.position)
+            assert (a.joint_score, a.link_score, a.correct) == (
+                b.joint_score,
+                b.link_score,
+                b.correct,
+            )
+    different = imagine_sitting(chair, seed=12, workers=2)
+    assert any(
+        not np.array_equal(a.position, b.position)
+        for a, b in zip(one.drops, different.drops, strict=False)
+    )
+
+
+def test_cli_json_and_errors(tmp_path, capsys) -> None:
+    from executive import cmd_imagine
+
+    parser = argparse.ArgumentParser()
+    cmd_imagine.register(parser.add_subparsers())
+    cube = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+    cube.apply_translation((0.0, 0.0, 0.5))
+    cube_path = tmp_path / "cube.obj"
+    cube.export(cube_path)
+    args = parser.parse_args(["imagine", str(cube_path), "--json"])
+    assert args.func(args) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert payload["found"] is False and payload["n_drops"] == 56 and payload["reason"]
+    assert {"position", "yaw_deg", "n_correct", "seconds"} <= set(payload)
+
+    empty = tmp_path / "empty.obj"
+    empty.write_text("")
+    args = parser.parse_args(["imagine", str(empty)])
+    assert args.func(args) != 0
+    captured = capsys.readouterr()
+    assert captured.out == "" and len(captured.err.strip().splitlines()) == 1
