@@ -158,3 +158,13 @@ def test_cli_json_and_errors(tmp_path, capsys) -> None:
     assert args.func(args) != 0
     captured = capsys.readouterr()
     assert captured.out == "" and len(captured.err.strip().splitlines()) == 1
+
+
+def test_cancel_stops_before_simulating(box_chair: trimesh.Trimesh) -> None:
+    import threading
+
+    cancel = threading.Event()
+    cancel.set()
+    for workers in (1, 2):
+        result = imagine_sitting(box_chair, seed=0, cancel=cancel, workers=workers)
+        assert not result.found and result.reason == "cancelled"
