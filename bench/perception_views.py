@@ -32,7 +32,8 @@ OVERVIEW = ((0.35, 0.0, 0.85), (1.3, 0.0, 0.35))
 
 LIMITS = [(-2.8973, 2.8973), (-1.7628, 1.7628), (-2.8973, 2.8973), (-3.0718, -0.0698),
           (-2.8973, 2.8973), (-0.0175, 3.7525), (-2.8973, 2.8973)]  # fmt: skip
-REST = [0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.785]
+REST = [-0.0421, -0.5278, -0.0006, -0.8539, 0.0280, 0.8495, 0.7669]  # HOME: eye (0.15, 0, 0.98)
+SPREAD_RAD = 1.3
 
 
 def solve(
@@ -117,7 +118,9 @@ def sample_views(kin: PandaKinematics, rng: np.random.Generator, target: np.ndar
     upper = np.array([hi for _, hi in LIMITS])
     found = []
     for _ in range(samples):
-        joints = rng.uniform(lower, upper)
+        # Stay in the ready pose's (elbow up) family so that straight joint-space motions
+        # between views, and from the ready pose, keep clear of the chair.
+        joints = np.clip(np.asarray(REST) + rng.uniform(-SPREAD_RAD, SPREAD_RAD, 7), lower, upper)
         T = kin.camera_pose(joints)
         offset = target - T[:3, 3]
         distance = np.linalg.norm(offset)
@@ -125,9 +128,26 @@ def sample_views(kin: PandaKinematics, rng: np.random.Generator, target: np.ndar
             continue
         if T[2, 3] < 0.3:
             continue
-        if check(kin, joints, T[:3, 3], T[:3, 3] + T[:3, 2])["ok"] and unoccluded(kin, T[:3, 3]):
+        if (
+            check(kin, joints, T[:3, 3], T[:3, 3] + T[:3, 2])["ok"]
+            and unoccluded(kin, T[:3, 3])
+            and path_clearance(kin, np.asarray(REST), joints) > 0.03
+        ):
             found.append((joints, T[:3, 3].copy()))
     return found
+
+
+def path_clearance(
+    kin: PandaKinematics, start: np.ndarray, end: np.ndarray, steps: int = 40
+) -> float:
+    """Smallest clearance (floor, chair volume; -1 on self-collision) along the straight
+    joint-space motion from ``start`` to ``end``."""
+    worst = 10.0
+    for fraction in np.linspace(0.0, 1.0, steps):
+        joints = (1.0 - fraction) * start + fraction * end
+        report = check(kin, joints, np.zeros(3), np.ones(3))
+        worst = min(worst, report["floor_m"], report["volume_m"], -1.0 if report["self"] else 10.0)
+    return worst
 
 
 def unoccluded(kin: PandaKinematics, eye: np.ndarray, at_least: float = 0.97) -> bool:
@@ -175,8 +195,22 @@ def main() -> None:
     print(f"# {len(candidates)} valid sampled views out of {SAMPLES}")
     # The sampled joint vectors are used as they are (each already looks within 8 degrees
     # of the target); only the overview, a single wanted pose, is solved by IK.
-    for name, (joints, eye) in zip((f"scan{i}" for i in range(9)), spread(candidates, target, 9)):
-        print_view(name, joints, check(kin, joints, eye, target), eye, target)
+    chosen = spread(candidates, target, 9)
+    # Visit them in nearest-neighbour order (joint space) from the ready pose.
+    order, position = [], np.asarray(REST)
+    remaining = list(range(len(chosen)))
+    while remaining:
+        nearest = min(remaining, key=lambda i: float(np.abs(chosen[i][0] - position).sum()))
+        order.append(nearest)
+        remaining.remove(nearest)
+        position = chosen[nearest][0]
+    previous = np.asarray(REST)
+    for rank, index in enumerate(order):
+        joints, eye = chosen[index]
+        clearance = path_clearance(kin, previous, joints)
+        print(f"    # path from the previous configuration: clearance {clearance:.2f} m")
+        print_view(f"scan{rank}", joints, check(kin, joints, eye, target), eye, target)
+        previous = joints
     eye, aim = np.asarray(OVERVIEW[0]), np.asarray(OVERVIEW[1])
     best = solve(kin, eye, aim, rng)
     if best is None:

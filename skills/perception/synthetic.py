@@ -28,14 +28,14 @@ _GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
 
 T_HAND_CAMERA = np.array(
     [
-        [0.0, -1.0, 0.0, 0.05],
-        [1.0, 0.0, 0.0, 0.0],
-        [0.0, 0.0, 1.0, 0.04],
+        [0.0, 1.0, 0.0, 0.065],
+        [-1.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.02],
         [0.0, 0.0, 0.0, 1.0],
     ]
 )
-"""Assumed hand-eye extrinsic: the optical axis along the hand's approach axis (+z),
-the camera 5 cm off the hand's centre toward +x and 4 cm forward."""
+"""Hand-eye extrinsic (camera in ``panda_hand``), the same as ``hardware.sim.camera``'s:
+the optical axis along the hand's approach axis, 6.5 cm off it along the hand's +x."""
 
 
 def carmine_intrinsics() -> CameraIntrinsics:

@@ -1,0 +1,168 @@
+"""The humanoid's planar pose from the ArUco tag on top of its head.
+
+The tag lies flat (its z axis up), its x axis along the humanoid's forward direction,
+its centre on the humanoid's vertical axis. ``cv2.aruco`` finds its four corners;
+``solvePnP`` (IPPE_SQUARE, the solver for a planar square) gives T_camera_tag, and
+T_world_tag = T_world_camera T_camera_tag. The humanoid's SE(2) pose is the tag
+centre's (x, y); its heading is that of the tag's x axis, measured from the corners cut
+with the horizontal plane at the tag's height (:func:`planar_yaw`), which is steadier
+than PnP's rotation when the tag is seen at a grazing angle. Where the depth
+image covers the tag, the tag centre's position along the viewing ray is taken from the
+measured depth (median over the tag's pixels) rather than from the apparent size of a
+tag only a few tens of pixels wide.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+from hardware.interfaces import RGBDFrame, ScanningArm
+from skills.arena import HUMANOID_TAG, TagSpec
+from skills.geometry import SE2Pose
+from skills.perception.views import HOME_CONFIGURATION, OVERVIEW_CONFIGURATION
+
+MAX_TILT_DEG = 35.0
+"""A fitted tag tilted more than this from horizontal is a bad fit, not the head tag."""
+
+AT_CONFIGURATION_RAD = 0.01
+"""The arm counts as already at the overview when every joint is within this."""
+
+
+@lru_cache(maxsize=4)
+def _detector(dictionary: str) -> cv2.aruco.ArucoDetector:
+    parameters = cv2.aruco.DetectorParameters()
+    parameters.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
+    parameters.cornerRefinementWinSize = 3
+    return cv2.aruco.ArucoDetector(
+        cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary)), parameters
+    )
+
+
+def detect_tag_corners(rgb: np.ndarray, tag: TagSpec) -> np.ndarray | None:
+    """The tag's four corners (4, 2) in pixels (OpenCV order), or None when not seen."""
+    gray = cv2.cvtColor(np.ascontiguousarray(rgb), cv2.COLOR_RGB2GRAY)
+    corners, ids, _ = _detector(tag.dictionary).detectMarkers(gray)
+    if ids is None:
+        return None
+    for marker_corners, marker_id in zip(corners, ids.reshape(-1), strict=True):
+        if int(marker_id) == tag.marker_id:
+            return marker_corners.reshape(4, 2).astype(np.float64)
+    return None
+
+
+def tag_pose_in_camera(
+    corners_px: np.ndarray, frame: RGBDFrame, side_m: float
+) -> np.ndarray | None:
+    """T_camera_tag from the corners by IPPE_SQUARE, or None when solvePnP fails."""
+    half = side_m / 2.0
+    object_points = np.array(
+        [[-half, half, 0.0], [half, half, 0.0], [half, -half, 0.0], [-half, -half, 0.0]]
+    )
+    ok, rvec, tvec = cv2.solvePnP(
+        object_points,
+        corners_px,
+        frame.intrinsics.matrix(),
+        None,
+        flags=cv2.SOLVEPNP_IPPE_SQUARE,
+    )
+    if not ok:
+        return None
+    transform = np.eye(4)
+    transform[:3, :3] = cv2.Rodrigues(rvec)[0]
+    transform[:3, 3] = tvec.reshape(3)
+    return transform
+
+
+def _depth_range_correction(
+    corners_px: np.ndarray, frame: RGBDFrame, centre_camera: np.ndarray
+) -> np.ndarray:
+    """The tag centre moved along its viewing ray to the depth measured on the tag."""
+    depth = np.asarray(frame.depth_m, dtype=np.float64)
+    mask = np.zeros(depth.shape, dtype=np.uint8)
+    centre_px = corners_px.mean(axis=0)
+    # Shrink the quadrilateral so that pixels at the tag's border (mixed depths) are out.
+    inner = centre_px + 0.7 * (corners_px - centre_px)
+    cv2.fillConvexPoly(mask, np.round(inner).astype(np.int32), 1)
+    values = depth[(mask > 0) & np.isfinite(depth) & (depth > 0)]
+    if len(values) < 8:
+        return centre_camera
+    # The tag is a plane: its mean depth over a symmetric patch is the centre's depth.
+    measured_z = float(np.median(values))
+    if abs(measured_z - centre_camera[2]) > 0.15 * centre_camera[2]:
+        return centre_camera  # the depth belongs to something else
+    return centre_camera * (measured_z / centre_camera[2])
+
+
+def planar_yaw(corners_px: np.ndarray, frame: RGBDFrame, height_m: float) -> float:
+    """The tag's heading from its corners' viewing rays cut with the plane z = height_m.
+
+    With the tag known to lie flat, only its heading is unknown, and the four edges'
+    directions on the plane give it without PnP's tilt ambiguity at grazing views:
+    the x axis runs from corner 0 to 1 and from 3 to 2, the y axis from 3 to 0 and from
+    2 to 1 (OpenCV's corner order); the heading is the circular mean of the four.
+    """
+    K_inv = np.linalg.inv(frame.intrinsics.matrix())
+    pose = np.asarray(frame.T_world_camera, dtype=np.float64)
+    rays = (pose[:3, :3] @ (K_inv @ np.column_stack((corners_px, np.ones(4))).T)).T
+    scale = (height_m - pose[2, 3]) / rays[:, 2]
+    on_plane = pose[:3, 3] + scale[:, None] * rays
+    x_edges = [on_plane[1] - on_plane[0], on_plane[2] - on_plane[3]]
+    y_edges = [on_plane[0] - on_plane[3], on_plane[1] - on_plane[2]]
+    angles = [math.atan2(e[1], e[0]) for e in x_edges]
+    angles += [math.atan2(e[1], e[0]) - math.pi / 2 for e in y_edges]
+    return math.atan2(sum(math.sin(a) for a in angles), sum(math.cos(a) for a in angles))
+
+
+def estimate_tag_pose(
+    frame: RGBDFrame, tag: TagSpec = HUMANOID_TAG, *, planar_heading: bool = True
+) -> SE2Pose | None:
+    """The humanoid's SE(2) pose (world frame) from one frame, or None when no tag is seen.
+
+    Args:
+        frame: one capture.
+        tag: the tag's dictionary, id and size.
+        planar_heading: heading from :func:`planar_yaw` (default) or from PnP's x axis.
+
+    Returns None, never a guess, when the tag is not detected, PnP fails or the fit is
+    tilted more than :data:`MAX_TILT_DEG` from horizontal.
+    """
+    corners = detect_tag_corners(frame.rgb, tag)
+    if corners is None:
+        return None
+    T_camera_tag = tag_pose_in_camera(corners, frame, tag.side_m)
+    if T_camera_tag is None:
+        return None
+    T_camera_tag[:3, 3] = _depth_range_correction(corners, frame, T_camera_tag[:3, 3])
+    T_world_tag = np.asarray(frame.T_world_camera) @ T_camera_tag
+    if T_world_tag[2, 2] < math.cos(math.radians(MAX_TILT_DEG)):
+        return None
+    if planar_heading:
+        heading = planar_yaw(corners, frame, float(T_world_tag[2, 3]))
+    else:
+        heading = math.atan2(T_world_tag[1, 0], T_world_tag[0, 0])
+    return SE2Pose(float(T_world_tag[0, 3]), float(T_world_tag[1, 3]), heading)
+
+
+def locate_humanoid(
+    arm: ScanningArm,
+    *,
+    tag: TagSpec = HUMANOID_TAG,
+    configuration: tuple[float, ...] = OVERVIEW_CONFIGURATION,
+) -> SE2Pose | None:
+    """Moves the arm to the overview through HOME (unless already there), captures and
+    finds the tag.
+
+    Returns:
+        The humanoid's SE(2) pose in the world frame from this capture, or None when the
+        tag is not in it.
+    """
+    current = np.asarray(arm.joint_positions(), dtype=np.float64)
+    wanted = np.asarray(configuration, dtype=np.float64)
+    if current.shape != wanted.shape or np.max(np.abs(current - wanted)) > AT_CONFIGURATION_RAD:
+        arm.move_to(HOME_CONFIGURATION)
+        arm.move_to(configuration)
+    return estimate_tag_pose(arm.capture(), tag)
