@@ -237,7 +237,9 @@ def reconstruct_chair(frames: Sequence[RGBDFrame], config: ReconstructionConfig)
     if len(above) < config.min_chair_points:
         raise PerceptionError("nothing chair-sized stands on the floor in the chair area")
     keep, chair_cells, origin = largest_cluster(above, config, cell_m)
-    chair_points = above[keep]
+    # open3d's hash map returns points in no fixed order: sort them so that the same
+    # frames always give the same arrays.
+    chair_points = _sorted_rows(above[keep])
     seconds["cluster"] = time.perf_counter() - tick
     if len(chair_points) < config.min_chair_points:
         raise PerceptionError(
@@ -288,4 +290,24 @@ def _chair_mesh(
     if len(parts) > 1:
         biggest = max(len(part.faces) for part in parts)
         chair = trimesh.util.concatenate([p for p in parts if len(p.faces) >= 0.02 * biggest])
-    return chair
+    return _canonical(chair)
+
+
+def _sorted_rows(points: np.ndarray) -> np.ndarray:
+    return points[np.lexsort(points.T[::-1])]
+
+
+def _canonical(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    """The mesh with its vertices and faces in a fixed (sorted) order, for determinism."""
+    # Marching cubes sums in no fixed order either: round away the last bits (1 µm).
+    vertices = np.round(np.asarray(mesh.vertices), 6)
+    order = np.lexsort(vertices.T[::-1])
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    faces = rank[np.asarray(mesh.faces)]
+    # Rotate each face so that its smallest index comes first (keeps the winding).
+    faces = np.take_along_axis(
+        faces, (np.argmin(faces, axis=1)[:, None] + np.arange(3)[None]) % 3, axis=1
+    )
+    faces = faces[np.lexsort(faces.T[::-1])]
+    return trimesh.Trimesh(vertices[order], faces, process=False)

@@ -57,24 +57,35 @@ def detect_tag_corners(rgb: np.ndarray, tag: TagSpec) -> np.ndarray | None:
 def tag_pose_in_camera(
     corners_px: np.ndarray, frame: RGBDFrame, side_m: float
 ) -> np.ndarray | None:
-    """T_camera_tag from the corners by IPPE_SQUARE, or None when solvePnP fails."""
+    """T_camera_tag from the corners by IPPE_SQUARE, or None when solvePnP fails.
+
+    A small square seen at a grazing angle has two nearly equally good poses (the planar
+    ambiguity); IPPE returns both, and the one whose face points most nearly up in the
+    world is kept, since the tag lies flat on the head.
+    """
     half = side_m / 2.0
     object_points = np.array(
         [[-half, half, 0.0], [half, half, 0.0], [half, -half, 0.0], [-half, -half, 0.0]]
     )
-    ok, rvec, tvec = cv2.solvePnP(
+    count, rvecs, tvecs, _ = cv2.solvePnPGeneric(
         object_points,
         corners_px,
         frame.intrinsics.matrix(),
         None,
         flags=cv2.SOLVEPNP_IPPE_SQUARE,
     )
-    if not ok:
+    if not count:
         return None
-    transform = np.eye(4)
-    transform[:3, :3] = cv2.Rodrigues(rvec)[0]
-    transform[:3, 3] = tvec.reshape(3)
-    return transform
+    world_up_in_camera = np.asarray(frame.T_world_camera)[:3, :3].T @ np.array([0.0, 0.0, 1.0])
+    best, best_alignment = None, -2.0
+    for rvec, tvec in zip(rvecs, tvecs, strict=True):
+        transform = np.eye(4)
+        transform[:3, :3] = cv2.Rodrigues(rvec)[0]
+        transform[:3, 3] = np.asarray(tvec).reshape(3)
+        alignment = float(transform[:3, 2] @ world_up_in_camera)
+        if alignment > best_alignment:
+            best, best_alignment = transform, alignment
+    return best
 
 
 def _depth_range_correction(

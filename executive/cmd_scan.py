@@ -1,0 +1,102 @@
+"""``bearchair scan --chair MESH``: scan a chair in the simulated world as ScanChair does.
+
+Places the chair in the simulated world, moves the Panda through the 9 capture
+configurations, reconstructs the chair and writes ``chair.ply`` (mesh) and
+``chair_points.ply`` (point cloud) to ``--out``. Prints the timings, or with ``--json``
+one object with the keys mesh, points, seconds (per step) and views. An unreadable mesh
+or a failed scan gives one line on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Adds the ``scan`` subcommand."""
+    parser = subparsers.add_parser("scan", help="scan and reconstruct a chair in simulation")
+    parser.add_argument(
+        "--chair", type=Path, required=True, metavar="MESH", help="chair mesh, z up, metres"
+    )
+    parser.add_argument("--seed", type=int, default=0, help="seeds placement and noise")
+    parser.add_argument(
+        "--out", type=Path, default=Path("scan-out"), help="output folder (default scan-out)"
+    )
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Scans the chair; returns the exit status."""
+    import time
+
+    import numpy as np
+    import trimesh
+
+    from hardware.sim.world import SimConfig, SimWorld
+    from skills.meshes import MeshLoadError, load_mesh
+    from skills.perception import PerceptionError, scan_chair
+
+    try:
+        load_mesh(args.chair)
+    except MeshLoadError as error:
+        print(f"bearchair scan: {error}", file=sys.stderr)
+        return 2
+    started = time.perf_counter()
+    try:
+        # pybullet's C code prints to stdout when it connects: keep stdout for our output.
+        with _stdout_to_stderr():
+            world = SimWorld(SimConfig(chair_path=args.chair, seed=args.seed))
+        with world:
+            world_s = time.perf_counter() - started
+            scan = scan_chair(world.robot.arm, seed=args.seed)
+    except PerceptionError as error:
+        print(f"bearchair scan: {error}", file=sys.stderr)
+        return 2
+    args.out.mkdir(parents=True, exist_ok=True)
+    mesh_path = args.out / "chair.ply"
+    points_path = args.out / "chair_points.ply"
+    scan.chair_mesh.export(mesh_path)
+    trimesh.PointCloud(np.asarray(scan.chair_points)).export(points_path)
+    seconds = {"world": world_s, **scan.seconds}
+    if args.json:
+        print(
+            json.dumps(
+                {
+                    "mesh": str(mesh_path),
+                    "points": str(points_path),
+                    "seconds": {k: round(v, 3) for k, v in seconds.items()},
+                    "views": scan.views,
+                }
+            )
+        )
+        return 0
+    print(
+        f"chair: {len(scan.chair_mesh.faces)} faces -> {mesh_path}; "
+        f"{len(scan.chair_points)} points -> {points_path}"
+    )
+    for step, value in seconds.items():
+        print(f"  {step:<8} {value:7.3f} s (wall)")
+    print(f"views: {scan.views}")
+    return 0
+
+
+class _stdout_to_stderr:
+    """Sends file descriptor 1 to descriptor 2 for the duration of a ``with`` block."""
+
+    def __enter__(self) -> None:
+        import os
+
+        sys.stdout.flush()
+        self._saved = os.dup(1)
+        os.dup2(2, 1)
+
+    def __exit__(self, *exc: object) -> None:
+        import os
+
+        sys.stdout.flush()
+        os.dup2(self._saved, 1)
+        os.close(self._saved)
