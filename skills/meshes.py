@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
+from scipy import ndimage
 
 SUPPORTED_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 
@@ -121,6 +122,62 @@ def _run_vhacd(mesh: trimesh.Trimesh, output: Path, max_vertices_per_piece: int)
             os.replace(partial, output)
     finally:
         pybullet.disconnect(client)
+
+
+def solid_below_surface(
+    mesh: trimesh.Trimesh, pitch_m: float = 0.01, max_cells_per_axis: int = 256
+) -> trimesh.Trimesh:
+    """A closed, blocky solid: every cell under the mesh's surface, down to its lowest point.
+
+    A scanned chair is an open surface (the camera never sees under the seat) and a
+    thin one: its convex pieces are shells a voxel thick, which a falling sitter
+    tunnels through and which weigh almost nothing. Filling each vertical column of a
+    voxelisation from its highest surface cell down to the floor gives scans and
+    modelled meshes the same kind of solid: the top surfaces (seat, backrest front,
+    armrests), which are all a sitter touches, stay where they were (to within a cell),
+    and the space under the seat, which a sitter never uses, becomes solid.
+
+    Args:
+        mesh: any surface, z up, metres.
+        pitch_m: the voxel edge; coarsened so that no axis has more than
+            ``max_cells_per_axis`` cells (a sofa, or a mesh in millimetres).
+        max_cells_per_axis: bounds the grid's memory.
+
+    Returns:
+        The union of the filled cells' boundary faces (watertight up to cells that
+        touch along an edge only), in the mesh's frame.
+    """
+    pitch_m = max(pitch_m, float(np.max(mesh.extents)) / max_cells_per_axis)
+    voxels = mesh.voxelized(pitch_m)
+    surface = np.asarray(voxels.matrix, dtype=bool)
+    # Column-wise "anything at or above": reverse along z, running OR, reverse back.
+    filled = np.flip(np.logical_or.accumulate(np.flip(surface, axis=2), axis=2), axis=2)
+    # Close one-cell cracks (holes in a scan) without growing the outline.
+    filled |= ndimage.binary_closing(filled, structure=np.ones((3, 3, 3), dtype=bool))
+    cell_origin = np.asarray(voxels.transform)[:3, 3] - 0.5 * pitch_m
+    return _cell_boundary_mesh(filled, pitch_m, cell_origin)
+
+
+def _cell_boundary_mesh(
+    occupied: np.ndarray, pitch_m: float, origin: np.ndarray
+) -> trimesh.Trimesh:
+    """The faces between occupied and free cells, outward-facing, two triangles each."""
+    padded = np.pad(occupied, 1)
+    quads = []
+    for axis in range(3):
+        u, v = (axis + 1) % 3, (axis + 2) % 3
+        for side in (1, -1):
+            exposed = padded & ~np.roll(padded, -side, axis=axis)
+            corner = np.argwhere(exposed).astype(float) - 1.0
+            corner[:, axis] += 1.0 if side > 0 else 0.0
+            du, dv = np.eye(3)[u], np.eye(3)[v]
+            # (u, v, axis) is right-handed: u→v winds counter-clockwise seen from +axis.
+            quad = np.stack([corner, corner + du, corner + du + dv, corner + dv], axis=1)
+            quads.append(quad if side > 0 else quad[:, ::-1])
+    corners = np.concatenate(quads).reshape(-1, 3) * pitch_m + origin
+    index = np.arange(len(corners)).reshape(-1, 4)
+    faces = np.concatenate([index[:, [0, 1, 2]], index[:, [0, 2, 3]]])
+    return trimesh.Trimesh(corners, faces, process=True)
 
 
 class _stdout_to:

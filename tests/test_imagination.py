@@ -15,7 +15,7 @@ from skills.imagination import imagine_sitting
 from skills.imagination.agent import JOINTS, LINKS, TOTAL_MASS_KG, agent_urdf_path
 from skills.imagination.chair import prepare_chair, yaw_obb
 from skills.imagination.sam import joint_score, link_score
-from skills.meshes import box_chair_mesh
+from skills.meshes import box_chair_mesh, solid_below_surface
 
 
 def _placed(mesh: trimesh.Trimesh, yaw_rad: float, xy: tuple[float, float]) -> trimesh.Trimesh:
@@ -99,6 +99,33 @@ def test_box_chair_sitting_faces_away_from_the_backrest(
     assert result.n_drops in (24, 56) and len(result.drops) == result.n_drops
     assert result.n_correct >= 1
     assert {"prepare", "simulate", "total"} <= set(result.seconds)
+
+
+def _seen_from_above(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    """The mesh without its downward-facing faces: open, as a camera above sees it."""
+    kept = mesh.face_normals[:, 2] > -0.5
+    return trimesh.Trimesh(mesh.vertices, mesh.faces[kept], process=False)
+
+
+def test_solid_below_surface_fills_an_open_scan_like_surface(box_chair: trimesh.Trimesh) -> None:
+    open_chair = _seen_from_above(box_chair)
+    assert not open_chair.is_watertight
+    solid_closed = solid_below_surface(box_chair, 0.01)
+    solid_open = solid_below_surface(open_chair, 0.01)
+    # Seat footprint x seat height, plus the backrest's column above the seat (m^3).
+    expected = 0.28 * 0.32 * 0.24 + 0.03 * 0.32 * (0.535 - 0.24)
+    for solid in (solid_closed, solid_open):
+        assert solid.volume == pytest.approx(expected, rel=0.25)
+        assert solid.bounds[1, 2] == pytest.approx(0.535, abs=0.011)
+        assert solid.bounds[0, 2] == pytest.approx(0.0, abs=0.011)
+    assert solid_open.volume == pytest.approx(solid_closed.volume, rel=0.05)
+
+
+def test_open_surface_chair_is_sat_on_like_the_closed_one(box_chair: trimesh.Trimesh) -> None:
+    result = imagine_sitting(_seen_from_above(box_chair), seed=0)
+    assert result.found, result.reason
+    assert abs(math.degrees(wrap_angle(result.sitting_pose.yaw))) < 30.0
+    assert 0.24 < result.sitting_pose.position[2] < 0.40
 
 
 def test_a_one_metre_cube_is_not_a_chair() -> None:

@@ -23,12 +23,14 @@ import numpy as np
 import trimesh
 
 from skills.geometry import make_transform, rot_z, transform_points
-from skills.meshes import cache_dir, convex_pieces, mesh_digest
+from skills.meshes import cache_dir, convex_pieces, mesh_digest, solid_below_surface
 
-PREPARATION_VERSION = "v2"
+PREPARATION_VERSION = "v3"
 CHAIR_DENSITY_KG_M3 = 500.0
 """Wood-like; the mass is clamped to CHAIR_MASS_RANGE_KG since hulls overestimate volume."""
 CHAIR_MASS_RANGE_KG = (1.5, 12.0)
+SOLID_PITCH_M = 0.01
+"""Voxel edge of the solid the convex pieces are taken from (metres)."""
 
 
 class PreparedChair(NamedTuple):
@@ -146,8 +148,11 @@ def _prepare(mesh: trimesh.Trimesh, digest: str) -> PreparedChair:
     T_obb_mesh = make_transform(rotation, translation)
     z_min, z_top = float(vertices[:, 2].min()), float(vertices[:, 2].max())
 
+    # Scans are open, thin surfaces; modelled meshes may be too. Both are simulated as
+    # the solid under their top surfaces (see solid_below_surface).
+    solid = solid_below_surface(mesh, SOLID_PITCH_M)
     hulls = [
-        transform_points(T_obb_mesh, np.asarray(piece.vertices)) for piece in convex_pieces(mesh)
+        transform_points(T_obb_mesh, np.asarray(piece.vertices)) for piece in convex_pieces(solid)
     ]
     hull_meshes = [trimesh.convex.convex_hull(h) for h in hulls if len(h) >= 4]
     hull_meshes = [h for h in hull_meshes if h.volume > 1e-9]

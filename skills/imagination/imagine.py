@@ -59,11 +59,15 @@ L_SIT_RATIO = 0.15
 JITTER_POSITION_M = 0.005
 JITTER_YAW_RAD = math.radians(2.0)
 WINDOW_HALF_WIDTH = 1
-"""Beyond the paper: the rotations at ±45 degrees of α_i vote with it (see
-``choose_sitting_pose``). On the calibration chairs the paper's rule (0) put 49 of 54
-fronted meshes within 30 degrees, the vote 53: on round or wide seats the diagonal
-rotations also give correct sittings, and the paper's tie-break by mean J + L then
-picks a diagonal; averaging the three neighbouring rotations centres the direction."""
+"""Beyond the paper: the rotations at ±45 degrees of α_i vote with it when the best
+rotation is chosen (see ``choose_sitting_pose``); the pose is still averaged over the
+chosen rotation's own sittings. On round or wide seats the diagonal rotations also give
+correct sittings and the paper's tie-break by mean J + L then picks a diagonal; the vote
+keeps the rotation whose neighbours agree. Measured on the calibration chairs scanned in
+the simulated world (solid collision bodies): the paper's rule put 89 % of the true
+meshes within 30 degrees of the front, the vote with a three-rotation mean 93 % but only
+74 % of scans within 15 degrees of their true mesh, the vote with the centre's mean 91 %
+and 85 %."""
 MIN_CORRECT = 1
 """Correct sittings the best rotation needs for a sitting pose to be reported."""
 
@@ -182,9 +186,9 @@ def choose_sitting_pose(
 ) -> ImaginationResult:
     """The paper's choice of the best rotation and the weighted mean pose.
 
-    With ``window_half_width`` w > 0, rotations are compared by the correct sittings in
-    the window α_{i-w} .. α_{i+w}, and every correct sitting of the best window enters
-    the weighted means (``n_correct`` counts them).
+    With ``window_half_width`` w > 0, rotations are compared first by the correct
+    sittings in the window α_{i-w} .. α_{i+w}, then by their own; the weighted means
+    run over the chosen rotation's own correct sittings (``n_correct`` counts them).
 
     Args:
         prepared: the chair (for g_obb).
@@ -213,9 +217,10 @@ def choose_sitting_pose(
         return float(np.mean([_jl(d) for d in chosen])) if chosen else math.inf
 
     # The paper: most correct sittings, ties to the lowest mean J + L. With a window,
-    # the neighbouring rotations (±45 degrees) vote too; the centre still breaks ties.
+    # the neighbouring rotations (±45 degrees) vote too, among the rotations that have a
+    # correct sitting of their own; the centre still breaks ties.
     best = min(
-        by_rotation,
+        (i for i in by_rotation if by_rotation[i]),
         key=lambda i: (
             -len(window(i)),
             -len(by_rotation[i]),
@@ -224,7 +229,7 @@ def choose_sitting_pose(
             i,
         ),
     )
-    chosen = window(best)
+    chosen = by_rotation[best]
     weights = np.array([1.0 / max(_jl(d), 1e-6) for d in chosen])
     position_chair = (weights[:, None] * np.array([d.position for d in chosen])).sum(
         0
