@@ -46,3 +46,8 @@ over: the palms hold the middle of the bear's torso."""
 
 PALM_IN_WRIST_M: tuple[float, float, float] = (0.045, 0.0, -0.008)
 """The palm's centre (metres) in the ``l_wrist`` / ``r_wrist`` link frames."""
+
+BEAR_SEAT_CLEARANCE_M = 0.02
+"""The bear's seat point is let go this high over the seat's top. The imagined sitting
+pose's height is the sitter's pelvis, 6 to 10 cm over the seat: a bear released there
+drops and tips over the seat's front edge."""

@@ -39,7 +39,11 @@ from skills.planning.wholebody.optimisation import (
     PLACEMENT_TOLERANCE_M,
     seating_problems,
 )
-from skills.planning.wholebody.seating import PLANNING_VELOCITY_RADPS, seating_scene
+from skills.planning.wholebody.seating import (
+    BEAR_SEAT_CLEARANCE_M,
+    PLANNING_VELOCITY_RADPS,
+    seating_scene,
+)
 
 SEAT_HEIGHT_M = 0.24
 # The box chair faces +x; g sits 2 cm above the seat, 2 cm in front of the seat's middle.
@@ -279,11 +283,19 @@ def test_bear_one_metre_away_is_out_of_reach(chair):
     assert "1.00 m forward" in str(info.value)
 
 
-def test_bear_one_metre_high_is_out_of_reach(chair):
-    high = SittingPose(SITTING_POSE.position + np.array([0.0, 0.0, 1.0]), 0.0)
+def test_seat_one_metre_high_is_out_of_reach() -> None:
+    tall_chair = box_chair_mesh(seat_height_m=1.0, overall_height_m=1.3)
+    high = SittingPose(np.array([0.02, 0.0, 1.06]), 0.0)
     with pytest.raises(InfeasibleSeating, match="bear placement") as info:
-        plan_seating(chair, high, NAO_POSE)
-    assert "1.26 m high" in str(info.value)
+        plan_seating(tall_chair, high, NAO_POSE)
+    # The bear goes BEAR_SEAT_CLEARANCE_M over the seat's top, not at the sitter's pelvis.
+    assert "1.02 m high" in str(info.value)
+
+
+def test_bear_is_set_down_just_over_the_seat_not_at_the_pelvis(chair) -> None:
+    pelvis_high = SittingPose(SITTING_POSE.position + np.array([0.0, 0.0, 0.08]), 0.0)
+    scene = seating_scene(chair, pelvis_high, NAO_POSE)
+    assert scene.g_xz[1] == pytest.approx(SEAT_HEIGHT_M + BEAR_SEAT_CLEARANCE_M, abs=0.005)
 
 
 def test_nao_facing_away_and_standing_inside_the_chair_fail_cleanly(chair):

@@ -31,6 +31,7 @@ from ompl import util as ou
 
 from skills.arena import Arena
 from skills.geometry import SE2Pose, SittingPose, wrap_angle
+from skills.nao_carrying import BEAR_SEAT_CLEARANCE_M
 from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
 from skills.planning.reach import check_reach, max_forward_reach
 from skills.results import AccessibilityResult
@@ -46,6 +47,10 @@ REACH_SLACK_M = 0.005
 """p slides to this much inside the arms' reach, so the reach check is not a rounding call."""
 SEAT_HEIGHT_TOLERANCE_M = 0.03
 """How much the seat's height may change under p as it slides and still count as the seat."""
+SEAT_EDGE_MARGIN_M = 0.07
+"""p slides no closer than this to the seat's front edge: the bear's legs stick out
+forward (its centre of mass is 2 cm ahead of p), and a bear set down at the edge tips
+off it. Trials on chair-chairgen-01 put bears at the rounded front edge and lost them."""
 MAX_SLIDE_RETRIES = 4
 SLIDE_RETRY_STEP_M = 0.03
 """After a pre-plan finds the bear out of reach, p slides this much closer and it retries."""
@@ -154,7 +159,7 @@ def place_se2_goal(
             )
     se2_goal = goal_on_ray(sitting_pose, distance)
 
-    reach_m = max_forward_reach(float(sitting_pose.position[2]))
+    reach_m = max_forward_reach(bear_release_height(chair_mesh, sitting_pose))
     if distance <= reach_m or reach_m == 0.0:
         return GoalPlacement(se2_goal, sitting_pose, distance)
     moved, slide = slide_on_seat(chair_mesh, sitting_pose, distance - (reach_m - REACH_SLACK_M))
@@ -162,40 +167,55 @@ def place_se2_goal(
 
 
 def slide_on_seat(
-    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, slide_m: float
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    slide_m: float,
+    edge_margin_m: float = SEAT_EDGE_MARGIN_M,
 ) -> tuple[SittingPose, float]:
     """Moves p along the sitting direction by up to ``slide_m``, only as far as the seat
-    continues under it (its height within ``SEAT_HEIGHT_TOLERANCE_M`` of the seat under p).
+    continues under it (its height within ``SEAT_HEIGHT_TOLERANCE_M`` of the seat under p)
+    for another ``edge_margin_m`` ahead.
 
     Returns:
         The moved sitting pose (its height follows the seat) and the distance moved, metres.
     """
     direction = sitting_pose.direction()
     slides = np.minimum(np.arange(0.0, slide_m + SEAT_STEP_M, SEAT_STEP_M), slide_m)
+    ahead = np.arange(0.0, slide_m + edge_margin_m + SEAT_STEP_M, SEAT_STEP_M)
     p = np.asarray(sitting_pose.position, dtype=float)
     heights = seat_support_heights(
-        chair_mesh, p[:2] + slides[:, None] * direction, float(p[2]) + 0.02
+        chair_mesh, p[:2] + ahead[:, None] * direction, float(p[2]) + 0.02
     )
     if np.isnan(heights[0]):
         logger.warning("no seat found under the sitting position; p is not moved")
         return sitting_pose, 0.0
     on_seat = np.abs(heights - heights[0]) <= SEAT_HEIGHT_TOLERANCE_M
-    last = len(slides) - 1 if on_seat.all() else int(np.argmin(on_seat)) - 1
+    seat_ends_m = ahead[int(np.argmin(on_seat))] - SEAT_STEP_M if not on_seat.all() else math.inf
+    # Never slide backwards: when p is already within the margin it stays where it is.
+    allowed = slides <= max(seat_ends_m - edge_margin_m, 0.0) + 1e-9
+    last = int(np.flatnonzero(allowed)[-1])
     slide = float(slides[last])
     moved = p.copy()
     moved[:2] += slide * direction
-    moved[2] += heights[last] - heights[0]
+    moved[2] += float(np.interp(slide, ahead, heights)) - heights[0]
     return SittingPose(moved, sitting_pose.yaw), slide
+
+
+def bear_release_height(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> float:
+    """Where the bear's seat point is let go: ``BEAR_SEAT_CLEARANCE_M`` over the seat under
+    p (metres); p's own height (the imagined pelvis) when no seat is found under it."""
+    p = np.asarray(sitting_pose.position, dtype=float)
+    seat_z = seat_support_heights(chair_mesh, p[None, :2], float(p[2]) + 0.02)[0]
+    return float(p[2]) if np.isnan(seat_z) else float(seat_z) + BEAR_SEAT_CLEARANCE_M
 
 
 def reach_validator(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
 ) -> SeatingCheck:
     """Fallback validity check: the NAO's arms reach p from s_goal (:mod:`reach`)."""
-    del chair_mesh
     offset = np.asarray(sitting_pose.position[:2], dtype=float) - (se2_goal.x, se2_goal.y)
     forward = float(offset @ (math.cos(se2_goal.theta), math.sin(se2_goal.theta)))
-    check = check_reach(forward, float(sitting_pose.position[2]))
+    check = check_reach(forward, bear_release_height(chair_mesh, sitting_pose))
     return SeatingCheck(check.reason, forward > check.max_forward_m)
 
 

@@ -34,6 +34,7 @@ from scipy.optimize import least_squares
 
 from hardware.interfaces import Humanoid
 from skills.geometry import SE2Pose, SittingPose, transform_points, wrap_angle
+from skills.nao_carrying import BEAR_SEAT_CLEARANCE_M
 from skills.planning.wholebody.chair_profile import (
     ChairProfile,
     ChairProfileError,
@@ -73,6 +74,7 @@ RETRACT_UP_M = 0.03
 LATERAL_TOLERANCE_M = 0.05
 """How far g may lie beside the NAO's sagittal plane (the planar motion cannot reach it)."""
 FACING_TOLERANCE_RAD = math.radians(20.0)
+
 """How far the NAO's heading may differ from the opposite of the sitting direction."""
 TOE_POINT_XZ = np.array([0.10, 0.02])
 """The front of the feet in the NAO frame (metres), checked against the chair."""
@@ -109,7 +111,8 @@ class SeatingScene(NamedTuple):
     """The seating problem's numbers in the NAO frame (metres, radians).
 
     Attributes:
-        g_xz: the bear's target base (forward distance d, height h).
+        g_xz: the bear's target base: forward distance d of the sitting pose, height h
+            ``BEAR_SEAT_CLEARANCE_M`` over the seat's top under it.
         lateral_m: g's offset beside the sagittal plane (ignored by the planar motion).
         facing_error_rad: the NAO's heading minus the opposite of the sitting direction.
         profile: the chair's two-block cross-section.
@@ -149,7 +152,8 @@ def seating_scene(
         profile = fit_chair_profile(chair_mesh, T_nao_world, g_nao)
     except ChairProfileError as error:
         raise InfeasibleSeating("chair", str(error)) from error
-    return SeatingScene(g_nao[[0, 2]], float(g_nao[1]), facing_error, profile)
+    g_xz = np.array([g_nao[0], profile.seat_top_z + BEAR_SEAT_CLEARANCE_M])
+    return SeatingScene(g_xz, float(g_nao[1]), facing_error, profile)
 
 
 def _worst_violation(
