@@ -67,10 +67,10 @@ RETRACT_LEAD_IN_S = 0.3
 
 PLANNING_VELOCITY_RADPS = 0.3
 """Joint speed limit of the quasi-static motion (well under the URDF's 6-8 rad/s)."""
-RETRACT_BACK_M = 0.05
-"""After release the hands first withdraw this far back (toward the NAO) ..."""
-RETRACT_UP_M = 0.03
-"""... and this far up from where they let go, beside the bear."""
+RETRACT_OFFSETS_M: tuple[tuple[float, float], ...] = ((0.05, 0.03), (0.03, 0.05), (0.0, 0.06))
+"""After release the hands first withdraw (back toward the NAO, up) from where they let
+go, beside the bear: the first of these whose posture keeps clear of the chair. Pulling
+straight back can swing an elbow into a seat's front edge."""
 LATERAL_TOLERANCE_M = 0.05
 """How far g may lie beside the NAO's sagittal plane (the planar motion cannot reach it)."""
 FACING_TOLERANCE_RAD = math.radians(20.0)
@@ -381,7 +381,12 @@ def solve_trajectory(
     return np.arange(len(knots)) * dt, knots
 
 
-def withdrawn_hands_posture(problems: SeatingProblems, q_goal: np.ndarray) -> np.ndarray:
+def withdrawn_hands_posture(
+    problems: SeatingProblems,
+    q_goal: np.ndarray,
+    back_m: float = RETRACT_OFFSETS_M[0][0],
+    up_m: float = RETRACT_OFFSETS_M[0][1],
+) -> np.ndarray:
     """q_goal with the arms moved so the hands withdraw back and up from the bear.
 
     The legs keep their goal angles; shoulder and elbow are found by least squares on
@@ -392,7 +397,7 @@ def withdrawn_hands_posture(problems: SeatingProblems, q_goal: np.ndarray) -> np
     def hand(q: np.ndarray) -> np.ndarray:
         return nao.numeric_frames(q)["l_gripper"][[0, 2], 3]
 
-    target = hand(q_goal) + np.array([-RETRACT_BACK_M, RETRACT_UP_M])
+    target = hand(q_goal) + np.array([-back_m, up_m])
 
     def residual(arms: np.ndarray) -> np.ndarray:
         return hand(np.r_[q_goal[:3], arms]) - target
@@ -469,7 +474,7 @@ def _motion_from_goal(
     times, knots = solve_trajectory(problems, profile, STANDING_POSTURE, q_goal, bear_held=True)
     trajectory_s = time.perf_counter() - started
     started = time.perf_counter()
-    q_folded = withdrawn_hands_posture(problems, q_goal)
+    q_folded = _clear_withdrawn_posture(problems, profile, q_goal)
     fold_times, fold = solve_trajectory(
         problems,
         profile,
@@ -491,6 +496,21 @@ def _motion_from_goal(
     retract_knots = np.vstack([fold, stand[1:]])
     retract_times = np.r_[fold_times, fold_times[-1] + stand_times[1:]]
     return times, knots, retract_times, retract_knots, trajectory_s, retract_s
+
+
+def _clear_withdrawn_posture(
+    problems: SeatingProblems, profile: ChairProfile, q_goal: np.ndarray
+) -> np.ndarray:
+    """The first withdrawn-hands posture of ``RETRACT_OFFSETS_M`` clear of the chair (the
+    last one when none is: the retract then reports the violation)."""
+    for back_m, up_m in RETRACT_OFFSETS_M:
+        q_folded = withdrawn_hands_posture(problems, q_goal, back_m, up_m)
+        violation = exact_posture_violation(
+            problems, q_folded, profile, g_xz=None, tilt_rad=math.pi, bear_held=False
+        )
+        if violation[0] <= CHECK_TOLERANCE:
+            break
+    return q_folded
 
 
 def preplan_seating(
