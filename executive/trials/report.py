@@ -19,15 +19,7 @@ from typing import Any, NamedTuple
 
 from executive.trials.pictures import trial_picture_name
 from executive.trials.protocol import EXPERIMENT_LABELS, EXPERIMENTS, SkippedChair
-
-STAGE_ORDER = (
-    "ScanChair",
-    "ImagineSitting",
-    "MakeChairAccessible",
-    "WalkToChair",
-    "SeatBear",
-    "ReleaseAndStand",
-)
+from trees.mission import STAGES
 
 
 class RateRow(NamedTuple):
@@ -97,8 +89,8 @@ def compute_table(records: list[dict[str, Any]]) -> TrialsTable:
     for record in records:
         for stage, seconds in (record.get("stage_seconds") or {}).items():
             durations.setdefault(stage, []).append(float(seconds))
-    ordered = [s for s in STAGE_ORDER if s in durations] + sorted(
-        s for s in durations if s not in STAGE_ORDER
+    ordered = [s for s in STAGES if s in durations] + sorted(
+        s for s in durations if s not in STAGES
     )
     stage_median_s = {
         stage: (statistics.median(durations[stage]), len(durations[stage])) for stage in ordered
