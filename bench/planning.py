@@ -2,7 +2,8 @@
 
 Prints, for the box chair and (when ../shared/chairs exists) the calibration chairs:
 
-* accessible placements (sitting direction within ±30 degrees of the NAO): how often a
+* accessible placements (sitting direction within ±30 degrees of the NAO, leaving room
+  to stand in front inside the arena: ``skills.arena.accessible_sitting_yaws``): how often a
   path is found and the planning times (median over the runs, max);
 * inaccessible placements (sitting direction toward the arm, or toward a side edge):
   how many the arena really makes inaccessible, and with a simulated helper who turns the
@@ -33,7 +34,7 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
-from skills.arena import DEFAULT_ARENA, Arena
+from skills.arena import DEFAULT_ARENA, Arena, accessible_sitting_yaws
 from skills.assistance import compose_instruction
 from skills.geometry import SittingPose, yaw_transform
 from skills.meshes import box_chair_mesh, load_mesh
@@ -101,18 +102,13 @@ def random_centre(rng: np.random.Generator, arena: Arena) -> np.ndarray:
     return np.array([rng.uniform(area.x_min, area.x_max), rng.uniform(area.y_min, area.y_max)])
 
 
-def toward_nao(centre_xy: np.ndarray, arena: Arena) -> float:
-    start = arena.humanoid_start
-    return math.atan2(start.y - centre_xy[1], start.x - centre_xy[0])
-
-
 def bench_accessible(chairs: list[Chair], arena: Arena, runs: int, seed: int) -> None:
     rng = np.random.default_rng(seed)
     found, plan_s, total_s, reasons = 0, [], [], []
     for run in range(runs):
         chair = chairs[run % len(chairs)]
         centre = random_centre(rng, arena)
-        yaw = toward_nao(centre, arena) + math.radians(rng.uniform(-30.0, 30.0))
+        yaw = float(rng.choice(accessible_sitting_yaws(arena, tuple(centre))))
         mesh, sitting = place(chair, centre, yaw)
         began = time.perf_counter()
         result = _check(mesh, sitting, arena, seed + run)

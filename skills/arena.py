@@ -13,7 +13,10 @@ is in metres or radians, world frame, z up.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
+
+import numpy as np
 
 from skills.geometry import SE2Pose
 
@@ -66,6 +69,36 @@ DEFAULT_ARENA = Arena(
     obstacles=(Box2D(-0.15, 0.15, -0.15, 0.15, height=0.9),),
     humanoid_start=SE2Pose(1.9, 0.0, 3.141592653589793),
 )
+
+
+ACCESSIBLE_TOLERANCE_RAD = math.radians(30.0)
+"""An accessible placement's sitting direction is within this of the way to the humanoid."""
+STANDING_ROOM_M = 0.5
+"""... and its ray keeps this far from the chair's centre inside the arena (metres)."""
+STANDING_MARGIN_M = 0.12
+"""... by this much (about the humanoid's half width, metres)."""
+
+
+def accessible_sitting_yaws(
+    arena: Arena, centre_xy: tuple[float, float], samples: int = 61
+) -> np.ndarray:
+    """Sitting directions (radians) that make a chair at ``centre_xy`` accessible.
+
+    Within ``ACCESSIBLE_TOLERANCE_RAD`` of the direction toward the humanoid's start, and
+    leaving room to stand in front of the chair inside the arena; a placement generator
+    draws from these so that "accessible" means the humanoid can stand there. Never empty:
+    the direction straight toward the start stays when nothing else qualifies.
+    """
+    start = arena.humanoid_start
+    x, y = centre_xy
+    toward = math.atan2(start.y - y, start.x - x)
+    yaws = toward + np.linspace(-ACCESSIBLE_TOLERANCE_RAD, ACCESSIBLE_TOLERANCE_RAD, samples)
+    front_x = x + STANDING_ROOM_M * np.cos(yaws)
+    front_y = y + STANDING_ROOM_M * np.sin(yaws)
+    room = np.array(
+        [arena.contains(fx, fy, STANDING_MARGIN_M) for fx, fy in zip(front_x, front_y, strict=True)]
+    )
+    return yaws[room] if room.any() else np.array([toward])
 
 
 class TagSpec(NamedTuple):

@@ -220,3 +220,24 @@ def test_out_of_reach_preplan_slides_p_closer_and_retries(monkeypatch: pytest.Mo
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0, seat_depth_m=0.2)
     result = check_accessibility(chair_mesh, sitting_pose, START, DEFAULT_ARENA, seed=0)
     assert not result.accessible and "out of reach" in result.reason
+
+
+def test_accessible_sitting_yaws_leave_room_to_stand_inside_the_arena() -> None:
+    from skills.arena import (
+        ACCESSIBLE_TOLERANCE_RAD,
+        STANDING_MARGIN_M,
+        STANDING_ROOM_M,
+        accessible_sitting_yaws,
+    )
+
+    start = DEFAULT_ARENA.humanoid_start
+    for centre in ((0.6, 0.0), (0.85, 0.25), (0.35, -0.25)):
+        yaws = accessible_sitting_yaws(DEFAULT_ARENA, centre)
+        assert len(yaws) > 0
+        toward = math.atan2(start.y - centre[1], start.x - centre[0])
+        assert np.all(np.abs(yaws - toward) <= ACCESSIBLE_TOLERANCE_RAD + 1e-9)
+        front = np.array(centre) + STANDING_ROOM_M * np.c_[np.cos(yaws), np.sin(yaws)]
+        assert all(DEFAULT_ARENA.contains(x, y, STANDING_MARGIN_M) for x, y in front)
+    # Beside the arena's side edge, turning toward that edge is excluded.
+    yaws = accessible_sitting_yaws(DEFAULT_ARENA, (0.85, 0.25))
+    assert yaws.max() < math.radians(10.0)

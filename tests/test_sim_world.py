@@ -275,7 +275,10 @@ def test_judge_rejects_a_bear_on_the_floor_and_accepts_one_on_the_seat():
         # mission imagined: a wrong imagination cannot pass its own exam.
         verdict = world.judge.judge(wrap_angle(world.sitting_yaw_true() + math.pi), settle_s=0.1)
         assert verdict.seated and verdict.facing_error_deg < 10
-        backwards = make_transform(rot_z(world.sitting_yaw_true() + math.pi), seat[:3])
+        # Backwards, its legs (0.13 m long) pointing at the backrest: set it forward on
+        # the seat so that they clear it.
+        seat_front = T_world_chair @ np.array([0.04, 0.0, 0.245, 1.0])
+        backwards = make_transform(rot_z(world.sitting_yaw_true() + math.pi), seat_front[:3])
         world.bear.set_T_world_bear(backwards)
         verdict = world.judge.judge(world.sitting_yaw_true(), settle_s=1.0)
         assert not verdict.seated and "facing" in verdict.reason

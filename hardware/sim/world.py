@@ -34,7 +34,7 @@ from hardware.sim.nao import SimNao
 from hardware.sim.nao_model import nao_urdf
 from hardware.sim.panda import SimPanda
 from hardware.sim.tag import tag_assets
-from skills.arena import DEFAULT_ARENA, HUMANOID_TAG, Arena
+from skills.arena import DEFAULT_ARENA, HUMANOID_TAG, Arena, accessible_sitting_yaws
 from skills.geometry import SE2Pose, make_transform, rot_z, wrap_angle, yaw_of
 from skills.meshes import box_chair_mesh, load_mesh
 from skills.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, PALM_IN_WRIST_M
@@ -264,8 +264,7 @@ class SimWorld:
         tolerance = math.radians(PLACEMENT_TOLERANCE_DEG)
         offset = rng.uniform(-tolerance, tolerance)
         if config.placement == "accessible":
-            start = config.arena.humanoid_start
-            sitting_yaw = math.atan2(start.y - y, start.x - x) + offset
+            sitting_yaw = float(rng.choice(accessible_sitting_yaws(config.arena, (x, y))))
         else:
             # Toward the arm, or toward the side edge nearer the chair: the far side would
             # leave room in front of the chair inside the arena.
