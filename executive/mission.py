@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import math
 import sys
 import time
 from collections.abc import Callable
@@ -12,6 +13,7 @@ from typing import Any, TextIO
 from executive.config import RunConfig, front_yaw_from_manifest
 from executive.record import RunRecorder
 from executive.runner import MissionRunner, summarise
+from skills.geometry import wrap_angle
 from skills.meshes import load_mesh
 from skills.toolbox import DefaultSkills, MissionSkills
 from trees.mission import create_tree
@@ -83,7 +85,15 @@ def run_in_simulation(
     world = SimWorld(sim_config)
     try:
         return _run_tree(
-            root, recorder, world.robot, config, run_info, skills, on_tick, world.render_png
+            root,
+            recorder,
+            world.robot,
+            config,
+            run_info,
+            skills,
+            on_tick,
+            world.render_png,
+            lambda summary: _ground_truth(world, summary),
         )
     finally:
         world.close()
@@ -121,6 +131,7 @@ def _run_tree(
     skills: MissionSkills | None,
     on_tick: Callable[[MissionRunner], None] | None,
     render_png: Callable[[Path], None] | None,
+    ground_truth: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """Ticks the tree on ``robot`` and writes the summary; the record survives any error."""
     try:
@@ -141,10 +152,30 @@ def _run_tree(
                 summary["picture"] = "final_scene.png"
             except Exception as error:  # a missing picture must not lose the record
                 logger.warning("could not render the final scene: %s", error)
+        if ground_truth is not None:
+            try:
+                summary["ground_truth"] = ground_truth(summary)
+            except Exception as error:  # nor must a missing comparison
+                logger.warning("could not compare with the ground truth: %s", error)
         recorder.write_summary(summary)
         return summary
     finally:
         recorder.close()
+
+
+def _ground_truth(world: Any, summary: dict[str, Any]) -> dict[str, Any]:
+    """What only the simulated world knows, at the end of the run: the chair's true
+    sitting direction and how far the mission's sitting pose was from it (degrees)."""
+    true_yaw = world.sitting_yaw_true()
+    truth: dict[str, Any] = {
+        "sitting_yaw_deg": None if true_yaw is None else round(math.degrees(true_yaw), 2),
+        "sitting_yaw_error_deg": None,
+    }
+    pose = summary.get("sitting_pose")
+    if true_yaw is not None and pose:
+        error = wrap_angle(math.radians(pose["yaw_deg"]) - true_yaw)
+        truth["sitting_yaw_error_deg"] = round(abs(math.degrees(error)), 2)
+    return truth
 
 
 def format_summary(summary: dict[str, Any]) -> str:

@@ -376,3 +376,23 @@ def test_every_calibration_mesh_loads_into_the_world():
             if (entry["front_yaw_deg"] is None) != (world.sitting_yaw_true() is None):
                 problems.append(f"{name}: sitting direction known iff the manifest gives it")
     assert not problems, "; ".join(problems)
+
+
+def test_simulated_run_records_the_ground_truth(tmp_path):
+    import json
+
+    from executive.config import RunConfig
+    from executive.mission import run_in_simulation
+    from skills.fakes import ScriptedSkills
+
+    summary = run_in_simulation(
+        RunConfig(seed=0, out_dir=tmp_path, mute=True, timeout_s=120.0), skills=ScriptedSkills()
+    )
+    truth = json.loads((tmp_path / "summary.json").read_text())["ground_truth"]
+    assert truth == summary["ground_truth"]
+    with SimWorld(SimConfig(seed=0, camera_noise=False)) as world:
+        true_yaw = world.sitting_yaw_true()
+    assert truth["sitting_yaw_deg"] == pytest.approx(math.degrees(true_yaw), abs=0.01)
+    imagined = math.radians(summary["sitting_pose"]["yaw_deg"])
+    expected = abs(math.degrees(wrap_angle(imagined - true_yaw)))
+    assert truth["sitting_yaw_error_deg"] == pytest.approx(expected, abs=0.02)
