@@ -132,7 +132,7 @@ def solid_below_surface(
     A scanned chair is an open surface (the camera never sees under the seat) and a
     thin one: its convex pieces are shells a voxel thick, which a falling sitter
     tunnels through and which weigh almost nothing. Filling each vertical column of a
-    voxelisation from its highest surface cell down to the floor gives scans and
+    grid from its highest surface cell down to the floor gives scans and
     modelled meshes the same kind of solid: the top surfaces (seat, backrest front,
     armrests), which are all a sitter touches, stay where they were (to within a cell),
     and the space under the seat, which a sitter never uses, becomes solid.
@@ -148,14 +148,36 @@ def solid_below_surface(
         touch along an edge only), in the mesh's frame.
     """
     pitch_m = max(pitch_m, float(np.max(mesh.extents)) / max_cells_per_axis)
-    voxels = mesh.voxelized(pitch_m)
-    surface = np.asarray(voxels.matrix, dtype=bool)
-    # Column-wise "anything at or above": reverse along z, running OR, reverse back.
-    filled = np.flip(np.logical_or.accumulate(np.flip(surface, axis=2), axis=2), axis=2)
+    origin = np.asarray(mesh.bounds[0], dtype=float)
+    shape = np.floor(np.asarray(mesh.extents) / pitch_m).astype(int) + 1
+    cells = np.floor((surface_samples(mesh, 0.5 * pitch_m) - origin) / pitch_m).astype(int)
+    cells = np.clip(cells, 0, shape - 1)
+    # The highest surface cell of each column (-1: no surface there).
+    top = np.full(shape[:2], -1, dtype=int)
+    np.maximum.at(top, (cells[:, 0], cells[:, 1]), cells[:, 2])
+    filled = np.arange(shape[2])[None, None, :] <= top[:, :, None]
     # Close one-cell cracks (holes in a scan) without growing the outline.
     filled |= ndimage.binary_closing(filled, structure=np.ones((3, 3, 3), dtype=bool))
-    cell_origin = np.asarray(voxels.transform)[:3, 3] - 0.5 * pitch_m
-    return _cell_boundary_mesh(filled, pitch_m, cell_origin)
+    return _cell_boundary_mesh(filled, pitch_m, origin)
+
+
+def surface_samples(mesh: trimesh.Trimesh, spacing_m: float) -> np.ndarray:
+    """Points on every triangle, no farther than ``spacing_m`` apart along its edges.
+
+    Deterministic (a barycentric lattice per triangle, finer for larger triangles), so
+    the same mesh always gives the same solid; the vertices are included.
+    """
+    triangles = np.asarray(mesh.triangles, dtype=float)
+    edges = np.linalg.norm(triangles - np.roll(triangles, 1, axis=1), axis=2).max(axis=1)
+    divisions = np.maximum(np.ceil(edges / spacing_m).astype(int), 1)
+    points = [np.asarray(mesh.vertices, dtype=float)]
+    for n in np.unique(divisions):
+        i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+        keep = i + j <= n
+        weights = np.stack([i[keep], j[keep], n - i[keep] - j[keep]], axis=1) / n
+        group = triangles[divisions == n]
+        points.append(np.einsum("pk,tkd->tpd", weights, group).reshape(-1, 3))
+    return np.concatenate(points)
 
 
 def _cell_boundary_mesh(

@@ -68,6 +68,9 @@ the simulated world (solid collision bodies): the paper's rule put 89 % of the t
 meshes within 30 degrees of the front, the vote with a three-rotation mean 93 % but only
 74 % of scans within 15 degrees of their true mesh, the vote with the centre's mean 91 %
 and 85 %."""
+MORE_POSITIONS_MAX_CORRECT = 1
+"""The paper: the four extra drop positions run when at most this many of the first 24
+drops were correct sittings."""
 MIN_CORRECT = 1
 """Correct sittings the best rotation needs for a sitting pose to be reported."""
 
@@ -158,7 +161,7 @@ def imagine_sitting_details(
         if cancelled:
             break
         n_correct = sum(score_drop(drop, thresholds).correct for drop in raw)
-        if n_correct > 1:
+        if n_correct > MORE_POSITIONS_MAX_CORRECT:
             break
     simulated_at = time.perf_counter()
 
