@@ -73,10 +73,13 @@ DEFAULT_ARENA = Arena(
 
 ACCESSIBLE_TOLERANCE_RAD = math.radians(30.0)
 """An accessible placement's sitting direction is within this of the way to the humanoid."""
-STANDING_ROOM_M = 0.5
-"""... and its ray keeps this far from the chair's centre inside the arena (metres)."""
-STANDING_MARGIN_M = 0.12
-"""... by this much (about the humanoid's half width, metres)."""
+STANDING_ROOM_M = (0.35, 0.6)
+"""... and its ray, from this near to this far from the chair's centre (metres: where the
+humanoid stands once clear of chairs of every depth), stays inside the arena ..."""
+STANDING_MARGIN_M = 0.15
+"""... by this much (the NAO ellipsoid's lateral semi-axis, 0.14 m, and a centimetre).
+Checking 0.5 m alone with 0.12 m let a box chair at the arm-side edge turned 34 degrees
+count as accessible with its s_goal in the wall."""
 
 
 def accessible_sitting_yaws(
@@ -93,10 +96,15 @@ def accessible_sitting_yaws(
     x, y = centre_xy
     toward = math.atan2(start.y - y, start.x - x)
     yaws = toward + np.linspace(-ACCESSIBLE_TOLERANCE_RAD, ACCESSIBLE_TOLERANCE_RAD, samples)
-    front_x = x + STANDING_ROOM_M * np.cos(yaws)
-    front_y = y + STANDING_ROOM_M * np.sin(yaws)
+    distances = np.linspace(*STANDING_ROOM_M, 6)
     room = np.array(
-        [arena.contains(fx, fy, STANDING_MARGIN_M) for fx, fy in zip(front_x, front_y, strict=True)]
+        [
+            all(
+                arena.contains(x + d * math.cos(yaw), y + d * math.sin(yaw), STANDING_MARGIN_M)
+                for d in distances
+            )
+            for yaw in yaws
+        ]
     )
     return yaws[room] if room.any() else np.array([toward])
 

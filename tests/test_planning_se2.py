@@ -112,6 +112,23 @@ def test_goal_is_pushed_out_along_the_ray_to_the_first_free_spot() -> None:
     assert placement.standoff_m <= max_forward_reach(0.29)
 
 
+def test_goal_in_the_wall_behind_a_chair_at_the_arena_edge_is_pushed_clear() -> None:
+    # At the arm-side edge, turned 34 degrees: the first spot clear of the chair puts the
+    # NAO's front in the wall; the goal moves on along the ray and p slides to reach (the
+    # deep seat leaves room to slide; the default box chair's would end out of reach).
+    chair_mesh, sitting_pose = _placed_chair(0.36, 0.16, -34.0, seat_depth_m=0.36)
+    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
+    first_clear = place_se2_goal(chair_mesh, sitting_pose, checker).se2_goal
+    chair_clear_along = 0.25
+    while checker.collides_with_chair(goal_on_ray(sitting_pose, chair_clear_along)):
+        chair_clear_along += PUSH_STEP_M
+    assert checker.collides_with_walls(goal_on_ray(sitting_pose, chair_clear_along))
+    assert checker.blocked_by(first_clear) == ""
+    result = _check(chair_mesh, sitting_pose)
+    assert result.accessible, result.reason
+    assert result.sitting_pose.position[0] > sitting_pose.position[0]  # slid toward the NAO
+
+
 def test_far_sitting_position_slides_toward_the_nao_on_the_seat() -> None:
     chair_mesh, _ = _placed_chair(0.6, 0.0, 0.0, seat_depth_m=0.5)
     p_back = SittingPose(np.array([0.45, 0.0, 0.29]), 0.0)  # 0.15 m behind the seat centre
@@ -236,8 +253,9 @@ def test_accessible_sitting_yaws_leave_room_to_stand_inside_the_arena() -> None:
         assert len(yaws) > 0
         toward = math.atan2(start.y - centre[1], start.x - centre[0])
         assert np.all(np.abs(yaws - toward) <= ACCESSIBLE_TOLERANCE_RAD + 1e-9)
-        front = np.array(centre) + STANDING_ROOM_M * np.c_[np.cos(yaws), np.sin(yaws)]
-        assert all(DEFAULT_ARENA.contains(x, y, STANDING_MARGIN_M) for x, y in front)
+        for distance in np.linspace(*STANDING_ROOM_M, 4):
+            front = np.array(centre) + distance * np.c_[np.cos(yaws), np.sin(yaws)]
+            assert all(DEFAULT_ARENA.contains(x, y, STANDING_MARGIN_M) for x, y in front)
     # Beside the arena's side edge, turning toward that edge is excluded.
     yaws = accessible_sitting_yaws(DEFAULT_ARENA, (0.85, 0.25))
     assert yaws.max() < math.radians(10.0)

@@ -2,7 +2,8 @@
 
 The paper, section "System Pipeline": the SE(2) goal s_goal faces opposite the sitting
 direction γ and lies on the horizontal ray from p along γ, first at ``l_init`` from p,
-pushed along the ray until the NAO's ellipsoid is clear of the chair; if the NAO is then
+pushed along the ray until the NAO's ellipsoid is clear of the chair (and further, where
+that spot is in a wall or obstacle, until it clears those too); if the NAO is then
 beyond its arms' reach of p, p slides along the ray toward the NAO while staying on the
 seat. The seat motion is pre-planned at s_goal to check it is valid; then OMPL's
 RRTConnect plans an SE(2) path from the humanoid to s_goal within the arena, checked with
@@ -157,6 +158,7 @@ def place_se2_goal(
             return GoalPlacement(
                 None, sitting_pose, distance, "no spot on the sitting ray clear of the chair"
             )
+    distance = _clear_of_walls_and_obstacles(checker, sitting_pose, distance, l_init_m + MAX_PUSH_M)
     se2_goal = goal_on_ray(sitting_pose, distance)
 
     reach_m = max_forward_reach(bear_release_height(chair_mesh, sitting_pose))
@@ -164,6 +166,28 @@ def place_se2_goal(
         return GoalPlacement(se2_goal, sitting_pose, distance)
     moved, slide = slide_on_seat(chair_mesh, sitting_pose, distance - (reach_m - REACH_SLACK_M))
     return GoalPlacement(se2_goal, moved, distance - slide, slide_m=slide)
+
+
+def _clear_of_walls_and_obstacles(
+    checker: NaoCollisionChecker, sitting_pose: SittingPose, distance_m: float, max_m: float
+) -> float:
+    """The first distance from ``distance_m`` on (metres) where the NAO, inside the arena,
+    also clears the walls and obstacles; ``distance_m`` itself when there is none.
+
+    A chair near the arena's edge leaves its first chair-free spot with the NAO's front in
+    the wall behind the chair; a step further back along the ray (p then slides toward the
+    NAO) is a valid goal. When no spot clears everything, the first chair-free one stays so
+    that the goal check names what blocks it.
+    """
+    distance = distance_m
+    while distance <= max_m:
+        goal = goal_on_ray(sitting_pose, distance)
+        if not checker.arena.contains(goal.x, goal.y):
+            break
+        if not checker.collides_with_walls(goal) and not checker.collides_with_obstacles(goal):
+            return distance
+        distance += PUSH_STEP_M
+    return distance_m
 
 
 def slide_on_seat(
