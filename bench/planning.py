@@ -9,7 +9,9 @@ Prints, for the box chair and (when ../shared/chairs exists) the calibration cha
   how many the arena really makes inaccessible, and with a simulated helper who turns the
   chair by the instructed angle (plus N(0, 5 deg) of human error) about its centre, how
   often it is accessible after the first rotation; and with a helper who disobeys the first
-  instruction (no turn, or the wrong way), how often within three rotations.
+  instruction (no turn, or the wrong way), how often within three rotations. A chair that
+  stays inaccessible is tried at the same spot facing the NAO straight: when that fails
+  too (its seating pre-plan is infeasible there), no rotation could help, and it is listed.
 
 The sitting pose stands in for the imagination's: the manifest's ``front_yaw_deg`` gives
 γ, and p is 5 cm above the first surface straight below the chair's centre. The chair's
@@ -196,6 +198,7 @@ def bench_inaccessible(chairs: list[Chair], arena: Arena, trials: int, seed: int
     already = {"arm": 0, "edge": 0}
     needing_help, obeyed_first, disobeyed_within = 0, 0, 0
     leaks: list[str] = []
+    unseatable: list[str] = []
     initial_reasons: Counter[str] = Counter()
     failure_reasons: Counter[str] = Counter()
     for trial in range(trials):
@@ -221,12 +224,24 @@ def bench_inaccessible(chairs: list[Chair], arena: Arena, trials: int, seed: int
         initial_reasons[_short(initial.reason)] += 1
         obeyed_first += obeyed == 1
         if obeyed != 1:
-            failure_reasons[_short(reason)] += 1
+            failure_reasons[f"{chair.name}: {_short(reason)}"] += 1
         mode = "still" if trial % 4 < 2 else "wrong-way"
-        disobeyed, _ = assistance_trial(
+        disobeyed, last_reason = assistance_trial(
             mesh, sitting, arena, trial_rng, seed=seed + trial, disobey_first=mode
         )
         disobeyed_within += disobeyed is not None
+        if disobeyed is None:
+            failure_reasons[f"{chair.name} ({mode} first): {_short(last_reason)}"] += 1
+        if obeyed != 1 or disobeyed is None:
+            # Would any orientation do? Facing the NAO straight from the same spot.
+            toward = math.atan2(
+                arena.humanoid_start.y - centre[1], arena.humanoid_start.x - centre[0]
+            )
+            facing = _check(*place(chair, centre, toward), arena, seed)
+            if not facing.accessible:
+                unseatable.append(
+                    f"{chair.name} at ({centre[0]:.2f}, {centre[1]:.2f}): {_short(facing.reason)}"
+                )
     arm_trials = (trials + 1) // 2
     print(
         f"  accessible without help although facing the arm: {already['arm']}/{arm_trials}, "
@@ -243,9 +258,13 @@ def bench_inaccessible(chairs: list[Chair], arena: Arena, trials: int, seed: int
             f"  helper disobeys once, accessible within {MAX_ROTATIONS} rotations: "
             f"{disobeyed_within}/{needing_help} ({100.0 * disobeyed_within / needing_help:.0f}%)"
         )
+        for line in unseatable:
+            print(f"    not accessible facing the NAO either (no rotation can help): {line}")
         print(f"  why they were inaccessible at first: {dict(initial_reasons)}")
         if failure_reasons:
-            print(f"  why not accessible after the first rotation: {dict(failure_reasons)}")
+            print(
+                f"  why not accessible (after the first rotation; within 3): {dict(failure_reasons)}"
+            )
 
 
 def main(argv: list[str] | None = None) -> int:
