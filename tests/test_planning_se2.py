@@ -15,6 +15,7 @@ from skills.planning import collision
 from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
 from skills.planning.reach import check_reach, max_forward_reach
 from skills.planning.se2 import (
+    L_INIT_M,
     PUSH_STEP_M,
     SEAT_EDGE_MARGIN_M,
     AccessibilityError,
@@ -119,7 +120,7 @@ def test_goal_in_the_wall_behind_a_chair_at_the_arena_edge_is_pushed_clear() -> 
     chair_mesh, sitting_pose = _placed_chair(0.36, 0.16, -34.0, seat_depth_m=0.36)
     checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
     first_clear = place_se2_goal(chair_mesh, sitting_pose, checker).se2_goal
-    chair_clear_along = 0.25
+    chair_clear_along = L_INIT_M
     while checker.collides_with_chair(goal_on_ray(sitting_pose, chair_clear_along)):
         chair_clear_along += PUSH_STEP_M
     assert checker.collides_with_walls(goal_on_ray(sitting_pose, chair_clear_along))
