@@ -147,6 +147,74 @@ def solid_below_surface(
         The union of the filled cells' boundary faces (watertight up to cells that
         touch along an edge only), in the mesh's frame.
     """
+    filled, pitch_m, origin = _filled_columns(mesh, pitch_m, max_cells_per_axis)
+    return _cell_boundary_mesh(filled, pitch_m, origin)
+
+
+def solid_below_surface_boxes(
+    mesh: trimesh.Trimesh,
+    pitch_m: float = 0.01,
+    max_cells_per_axis: int = 256,
+    tolerance_cells: int = 1,
+) -> list[np.ndarray]:
+    """The solid of :func:`solid_below_surface` as floor-standing boxes.
+
+    V-HACD's few convex pieces of that solid bridge gaps a sitter needs: the hull of
+    an armrest, the seat and the legs under them fills the space between the armrests
+    up to their tops. The solid is a height field (each column filled from its top down
+    to the floor), so it splits exactly into boxes: neighbouring columns whose tops
+    differ by at most ``tolerance_cells`` merge greedily into rectangles, each box as
+    high as its highest column (at most ``tolerance_cells * pitch`` above any of them).
+
+    Args:
+        mesh: any surface, z up, metres.
+        pitch_m: the column size (coarsened as in :func:`solid_below_surface`).
+        max_cells_per_axis: bounds the grid's memory.
+        tolerance_cells: how unequal the tops of merged columns may be.
+
+    Returns:
+        One (2, 3) array of (lower, upper) corners per box, in the mesh's frame (metres).
+    """
+    filled, pitch_m, origin = _filled_columns(mesh, pitch_m, max_cells_per_axis)
+    any_filled = filled.any(axis=2)
+    # Highest filled cell of each column, counted from the floor (-1: empty column).
+    top = np.where(any_filled, filled.shape[2] - 1 - np.argmax(filled[:, :, ::-1], axis=2), -1)
+    boxes: list[np.ndarray] = []
+    # Plain lists: the greedy scan reads single cells, where numpy indexing is slow.
+    tops = top.tolist()
+    covered = (top < 0).tolist()
+    nx, ny = top.shape
+    for i in range(nx):
+        for j in range(ny):
+            if covered[i][j]:
+                continue
+            low, high = tops[i][j] - tolerance_cells, tops[i][j] + tolerance_cells
+
+            def mergeable(row: int, start: int, end: int, low: int = low, high: int = high) -> bool:
+                return all(
+                    not covered[row][k] and low <= tops[row][k] <= high for k in range(start, end)
+                )
+
+            j_end = j + 1
+            while j_end < ny and mergeable(i, j_end, j_end + 1):
+                j_end += 1
+            i_end = i + 1
+            while i_end < nx and mergeable(i_end, j, j_end):
+                i_end += 1
+            height = 0
+            for row in range(i, i_end):
+                covered[row][j:j_end] = [True] * (j_end - j)
+                height = max(height, max(tops[row][j:j_end]) + 1)
+            lower = origin + pitch_m * np.array([i, j, 0.0])
+            upper = origin + pitch_m * np.array([i_end, j_end, height])
+            boxes.append(np.array([lower, upper]))
+    return boxes
+
+
+def _filled_columns(
+    mesh: trimesh.Trimesh, pitch_m: float, max_cells_per_axis: int
+) -> tuple[np.ndarray, float, np.ndarray]:
+    """The occupancy grid of :func:`solid_below_surface`, its pitch and origin (metres)."""
     pitch_m = max(pitch_m, float(np.max(mesh.extents)) / max_cells_per_axis)
     origin = np.asarray(mesh.bounds[0], dtype=float)
     shape = np.floor(np.asarray(mesh.extents) / pitch_m).astype(int) + 1
@@ -158,7 +226,7 @@ def solid_below_surface(
     filled = np.arange(shape[2])[None, None, :] <= top[:, :, None]
     # Close one-cell cracks (holes in a scan) without growing the outline.
     filled |= ndimage.binary_closing(filled, structure=np.ones((3, 3, 3), dtype=bool))
-    return _cell_boundary_mesh(filled, pitch_m, origin)
+    return filled, pitch_m, origin
 
 
 def surface_samples(mesh: trimesh.Trimesh, spacing_m: float) -> np.ndarray:
@@ -230,8 +298,12 @@ def box_chair_mesh(
     overall_height_m: float = 0.535,
     backrest_thickness_m: float = 0.03,
     leg_side_m: float = 0.03,
+    armrest_height_m: float | None = None,
 ) -> trimesh.Trimesh:
     """A child-sized chair made of boxes: four legs, a seat and a backrest.
+
+    With ``armrest_height_m`` (above the floor), two solid side panels from the seat up
+    to that height close the seat at +-y, like an armchair's armrests.
 
     The sitting direction is +x (the backrest stands at -x); the chair is centred in
     x and y with its lowest point at z = 0, like the calibration meshes.
@@ -265,6 +337,19 @@ def box_chair_mesh(
                         sx * (half_depth - leg_side_m / 2.0),
                         sy * (half_width - leg_side_m / 2.0),
                         leg_height / 2.0,
+                    ),
+                )
+            )
+    if armrest_height_m is not None:
+        panel_height = armrest_height_m - seat_top
+        for sy in (-1.0, 1.0):
+            parts.append(
+                _box(
+                    (seat_depth_m, leg_side_m, panel_height),
+                    (
+                        0.0,
+                        sy * (half_width - leg_side_m / 2.0),
+                        seat_top + panel_height / 2.0,
                     ),
                 )
             )

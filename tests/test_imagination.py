@@ -15,7 +15,7 @@ from skills.imagination import imagine_sitting
 from skills.imagination.agent import JOINTS, LINKS, TOTAL_MASS_KG, agent_urdf_path
 from skills.imagination.chair import prepare_chair, yaw_obb
 from skills.imagination.sam import joint_score, link_score
-from skills.meshes import box_chair_mesh, solid_below_surface
+from skills.meshes import box_chair_mesh, solid_below_surface, solid_below_surface_boxes
 
 
 def _placed(mesh: trimesh.Trimesh, yaw_rad: float, xy: tuple[float, float]) -> trimesh.Trimesh:
@@ -119,6 +119,37 @@ def test_solid_below_surface_fills_an_open_scan_like_surface(box_chair: trimesh.
         assert solid.bounds[1, 2] == pytest.approx(0.535, abs=0.011)
         assert solid.bounds[0, 2] == pytest.approx(0.0, abs=0.011)
     assert solid_open.volume == pytest.approx(solid_closed.volume, rel=0.05)
+
+
+ARMCHAIR = {"seat_width_m": 0.30, "armrest_height_m": 0.38}
+"""A box chair with armrest panels: 0.24 m between them, 0.14 m above the seat."""
+
+
+def test_solid_boxes_keep_the_gap_between_armrests_open() -> None:
+    armchair = box_chair_mesh(**ARMCHAIR)
+    pitch = 0.006
+    boxes = np.array(solid_below_surface_boxes(armchair, pitch, tolerance_cells=2))
+
+    def top_at(x: float, y: float) -> float:
+        over = (boxes[:, 0, 0] <= x) & (x <= boxes[:, 1, 0])
+        over &= (boxes[:, 0, 1] <= y) & (y <= boxes[:, 1, 1])
+        return float(boxes[over, 1, 2].max())
+
+    # A convex hull over an armrest and the seat would reach the armrest's top here.
+    assert top_at(0.0, 0.0) == pytest.approx(0.24, abs=3 * pitch)
+    assert top_at(0.0, 0.11) == pytest.approx(0.24, abs=3 * pitch)
+    assert top_at(0.0, 0.14) == pytest.approx(0.38, abs=3 * pitch)
+    assert np.all(boxes[:, 0, 2] == pytest.approx(0.0))
+    volume = float(np.prod(boxes[:, 1] - boxes[:, 0], axis=1).sum())
+    assert volume == pytest.approx(solid_below_surface(armchair, pitch).volume, rel=0.05)
+
+
+def test_armchair_is_sat_on_between_its_armrests() -> None:
+    result = imagine_sitting(box_chair_mesh(**ARMCHAIR), seed=0)
+    assert result.found, result.reason
+    assert abs(math.degrees(wrap_angle(result.sitting_pose.yaw))) < 15.0
+    # On the seat, not perched on the armrests (0.38 m) with the pelvis 0.42 m up.
+    assert result.sitting_pose.position[2] < 0.36
 
 
 def test_open_surface_chair_is_sat_on_like_the_closed_one(box_chair: trimesh.Trimesh) -> None:
