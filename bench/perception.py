@@ -86,6 +86,7 @@ def main() -> int:
         imagine_sitting = None
 
     rows, icp_rows, tag_rows, imagination_rows = [], [], [], []
+    imagination_names: list[str] = []
     recon_s, capture_s, icp_s = [], [], []
     entries = chair_entries(args.limit)
     for number, entry in enumerate(entries):
@@ -125,6 +126,11 @@ def main() -> int:
                     imagination_rows.append(difference)
                 else:
                     imagination_rows.append(float("inf") if on_true.found != on_scan.found else 0.0)
+                imagination_names.append(entry["file"])
+                print(
+                    f"{entry['file']:<24} imagination scan vs true {imagination_rows[-1]:5.1f} deg"
+                    f" (found on scan {on_scan.found}, on true mesh {on_true.found})"
+                )
             if number < args.icp_chairs:
                 reference = scan.chair_points
                 T_old = world.T_world_chair_true()
@@ -231,6 +237,13 @@ def main() -> int:
         print(
             f"imagination on reconstructed vs true within 15 deg: {within:.0%} of {len(imagination_rows)} chairs (target 90 %)"
         )
+        differing = [
+            f"{name} ({difference:.0f} deg)"
+            for name, difference in zip(imagination_names, imagination_rows, strict=True)
+            if difference > 15
+        ]
+        if differing:
+            print("  differing: " + ", ".join(differing))
     return 0
 
 

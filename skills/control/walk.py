@@ -55,7 +55,7 @@ class WalkGains(NamedTuple):
     final_tolerance_m: float = 0.03
     final_tolerance_rad: float = math.radians(5.0)
     # Stopping happens inside a tighter box so that the settle drift stays within the final one.
-    stop_tolerance_m: float = 0.015
+    stop_tolerance_m: float = 0.01
     stop_tolerance_rad: float = math.radians(2.5)
     settle_s: float = 0.3
 

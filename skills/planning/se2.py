@@ -31,6 +31,7 @@ from ompl import geometric as og
 from ompl import util as ou
 
 from skills.arena import Arena
+from skills.control.walk import DEFAULT_GAINS
 from skills.geometry import SE2Pose, SittingPose, wrap_angle
 from skills.nao_carrying import BEAR_SEAT_CLEARANCE_M
 from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
@@ -55,6 +56,10 @@ off it. Trials on chair-chairgen-01 put bears at the rounded front edge and lost
 MAX_SLIDE_RETRIES = 4
 SLIDE_RETRY_STEP_M = 0.03
 """After a pre-plan finds the bear out of reach, p slides this much closer and it retries."""
+WALK_STOP_MARGIN_M = DEFAULT_GAINS.stop_tolerance_m
+"""The walk stops anywhere within this of s_goal, so seating is checked from s_goal and
+from this much farther from the chair (the worst case for reach): trials whose s_goal
+was feasible with 1 cm to spare failed when the NAO stopped 1.3 cm short."""
 PLANNING_TIME_S = 1.0
 CHECK_RESOLUTION_M = 0.01
 """Spacing of validity checks along motions, metres (OMPL's resolution is relative)."""
@@ -161,10 +166,13 @@ def place_se2_goal(
     distance = _clear_of_walls_and_obstacles(checker, sitting_pose, distance, l_init_m + MAX_PUSH_M)
     se2_goal = goal_on_ray(sitting_pose, distance)
 
+    # Within reach from wherever the walk may stop, up to WALK_STOP_MARGIN_M short.
     reach_m = max_forward_reach(bear_release_height(chair_mesh, sitting_pose))
-    if distance <= reach_m or reach_m == 0.0:
+    if distance <= reach_m - WALK_STOP_MARGIN_M or reach_m == 0.0:
         return GoalPlacement(se2_goal, sitting_pose, distance)
-    moved, slide = slide_on_seat(chair_mesh, sitting_pose, distance - (reach_m - REACH_SLACK_M))
+    moved, slide = slide_on_seat(
+        chair_mesh, sitting_pose, distance - (reach_m - WALK_STOP_MARGIN_M - REACH_SLACK_M)
+    )
     return GoalPlacement(se2_goal, moved, distance - slide, slide_m=slide)
 
 
@@ -267,6 +275,32 @@ def default_seating_validator() -> SeatingValidator:
         return SeatingCheck()
 
     return wholebody_validator
+
+
+def _within_walk_tolerance(validator: SeatingValidator) -> SeatingValidator:
+    """``validator`` at s_goal and at s_goal ``WALK_STOP_MARGIN_M`` farther back."""
+
+    def check(
+        chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
+    ) -> SeatingCheck:
+        verdict = validator(chair_mesh, sitting_pose, se2_goal)
+        if verdict.reason:
+            return verdict
+        # The NAO faces the chair: backing off is a step along -heading.
+        stopped_short = SE2Pose(
+            se2_goal.x - WALK_STOP_MARGIN_M * math.cos(se2_goal.theta),
+            se2_goal.y - WALK_STOP_MARGIN_M * math.sin(se2_goal.theta),
+            se2_goal.theta,
+        )
+        verdict = validator(chair_mesh, sitting_pose, stopped_short)
+        if verdict.reason:
+            reason = (
+                f"{verdict.reason} (with the NAO {100 * WALK_STOP_MARGIN_M:.1f} cm short of s_goal)"
+            )
+            return SeatingCheck(reason, verdict.bear_placement)
+        return verdict
+
+    return check
 
 
 class PlannedPath(NamedTuple):
@@ -422,7 +456,7 @@ def check_accessibility(
     reason = goal_blocked_reason(checker, se2_goal)
     if reason:
         return AccessibilityResult(False, se2_goal, sitting_pose, (), reason)
-    validator = seating_validator or default_seating_validator()
+    validator = _within_walk_tolerance(seating_validator or default_seating_validator())
     check = validator(chair_mesh, sitting_pose, se2_goal)
     # The pre-plan knows the arm's workspace better than the reach model that set the
     # first slide: while the bear is out of its reach, slide p closer, along the seat.
