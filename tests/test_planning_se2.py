@@ -18,6 +18,7 @@ from skills.planning.se2 import (
     L_INIT_M,
     PUSH_STEP_M,
     SEAT_EDGE_MARGIN_M,
+    STANCE_RETRY_STEP_M,
     WALK_STOP_MARGIN_M,
     AccessibilityError,
     SeatingCheck,
@@ -269,6 +270,37 @@ def test_seating_is_checked_where_the_walk_may_stop_short() -> None:
     assert result.se2_goal == nominal.se2_goal
     assert forward_m(result.sitting_pose, result.se2_goal) + WALK_STOP_MARGIN_M <= reach_m
     assert max(probes) == pytest.approx(reach_m - 0.005 + WALK_STOP_MARGIN_M)
+
+
+def test_nao_too_close_for_the_carried_bear_steps_back_along_the_ray() -> None:
+    chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0)
+
+    def anywhere(chair_mesh, pose, se2_goal) -> SeatingCheck:
+        return SeatingCheck()
+
+    nominal = check_accessibility(
+        chair_mesh, sitting_pose, START, DEFAULT_ARENA, seed=0, seating_validator=anywhere
+    )
+    needed_x = nominal.se2_goal.x + 0.03
+
+    def bear_in_the_chair_when_close(chair_mesh, pose, se2_goal) -> SeatingCheck:
+        if se2_goal.x < needed_x - 1e-9:
+            return SeatingCheck("stance: the bear is in the chair", too_close=True)
+        return SeatingCheck()
+
+    result = check_accessibility(
+        chair_mesh,
+        sitting_pose,
+        START,
+        DEFAULT_ARENA,
+        seed=0,
+        seating_validator=bear_in_the_chair_when_close,
+    )
+    assert result.accessible, result.reason
+    assert needed_x <= result.se2_goal.x < needed_x + STANCE_RETRY_STEP_M
+    assert result.se2_goal.y == pytest.approx(nominal.se2_goal.y)
+    assert result.se2_goal.theta == pytest.approx(nominal.se2_goal.theta)
+    assert result.path[-1] == result.se2_goal
 
 
 def test_accessible_sitting_yaws_leave_room_to_stand_inside_the_arena() -> None:

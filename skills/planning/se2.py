@@ -53,7 +53,9 @@ SEAT_EDGE_MARGIN_M = 0.07
 """p slides no closer than this to the seat's front edge: the bear's legs stick out
 forward (its centre of mass is 2 cm ahead of p), and a bear set down at the edge tips
 off it. Trials on chair-chairgen-01 put bears at the rounded front edge and lost them."""
-MAX_SLIDE_RETRIES = 4
+MAX_SLIDE_RETRIES = 6
+STANCE_RETRY_STEP_M = 0.02
+"""After a pre-plan finds the NAO too close to the chair, s_goal steps back this much."""
 SLIDE_RETRY_STEP_M = 0.03
 """After a pre-plan finds the bear out of reach, p slides this much closer and it retries."""
 WALK_STOP_MARGIN_M = DEFAULT_GAINS.stop_tolerance_m
@@ -73,10 +75,13 @@ class SeatingCheck(NamedTuple):
         reason: why seating from s_goal is infeasible ("" when feasible).
         bear_placement: the failure is about where the bear goes (reach), so sliding p
             closer to the NAO may fix it.
+        too_close: the NAO stands too close to the chair (its feet, or the bear it
+            carries, in the chair), so standing farther back may fix it.
     """
 
     reason: str = ""
     bear_placement: bool = False
+    too_close: bool = False
 
 
 SeatingValidator = Callable[[trimesh.Trimesh, SittingPose, SE2Pose], SeatingCheck]
@@ -263,6 +268,7 @@ def default_seating_validator() -> SeatingValidator:
     if preplan is None:
         return reach_validator
     infeasible = getattr(module, "InfeasibleSeating", ValueError)
+    stance = getattr(module, "STANCE", None)
 
     def wholebody_validator(
         chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
@@ -270,8 +276,12 @@ def default_seating_validator() -> SeatingValidator:
         try:
             preplan(chair_mesh, sitting_pose, se2_goal)
         except infeasible as error:
-            placement = getattr(error, "constraint", "") == "bear placement"
-            return SeatingCheck(f"seating pre-plan infeasible: {error}", placement)
+            constraint = getattr(error, "constraint", "")
+            return SeatingCheck(
+                f"seating pre-plan infeasible: {error}",
+                bear_placement=constraint == "bear placement",
+                too_close=constraint == stance,
+            )
         return SeatingCheck()
 
     return wholebody_validator
@@ -297,7 +307,7 @@ def _within_walk_tolerance(validator: SeatingValidator) -> SeatingValidator:
             reason = (
                 f"{verdict.reason} (with the NAO {100 * WALK_STOP_MARGIN_M:.1f} cm short of s_goal)"
             )
-            return SeatingCheck(reason, verdict.bear_placement)
+            return verdict._replace(reason=reason)
         return verdict
 
     return check
@@ -458,16 +468,29 @@ def check_accessibility(
         return AccessibilityResult(False, se2_goal, sitting_pose, (), reason)
     validator = _within_walk_tolerance(seating_validator or default_seating_validator())
     check = validator(chair_mesh, sitting_pose, se2_goal)
-    # The pre-plan knows the arm's workspace better than the reach model that set the
-    # first slide: while the bear is out of its reach, slide p closer, along the seat.
+    # The pre-plan knows the NAO better than the ellipsoid and the reach model that placed
+    # s_goal: while the bear is out of reach, slide p closer along the seat; while the NAO
+    # stands too close (the carried bear in the chair), step s_goal back along the ray.
     slide = placement.slide_m
     for _ in range(MAX_SLIDE_RETRIES):
-        if not (check.reason and check.bear_placement):
+        if check.reason and check.too_close:
+            backed = goal_on_ray(
+                original_pose,
+                math.hypot(
+                    se2_goal.x - original_pose.position[0], se2_goal.y - original_pose.position[1]
+                )
+                + STANCE_RETRY_STEP_M,
+            )
+            if goal_blocked_reason(checker, backed):
+                break
+            se2_goal = backed
+        elif check.reason and check.bear_placement:
+            moved, moved_m = slide_on_seat(chair_mesh, original_pose, slide + SLIDE_RETRY_STEP_M)
+            if moved_m <= slide + 1e-6:
+                break  # the seat ends here
+            slide, sitting_pose = moved_m, moved
+        else:
             break
-        moved, moved_m = slide_on_seat(chair_mesh, original_pose, slide + SLIDE_RETRY_STEP_M)
-        if moved_m <= slide + 1e-6:
-            break  # the seat ends here
-        slide, sitting_pose = moved_m, moved
         check = validator(chair_mesh, sitting_pose, se2_goal)
     if check.reason:
         return AccessibilityResult(False, se2_goal, sitting_pose, (), check.reason)

@@ -14,6 +14,7 @@ constraint.
 
 from skills.planning.wholebody.seating import (
     REST_POSTURE,
+    STANCE,
     STANDING_POSTURE,
     InfeasibleSeating,
     SeatingCancelled,
@@ -25,6 +26,7 @@ from skills.planning.wholebody.seating import (
 
 __all__ = [
     "REST_POSTURE",
+    "STANCE",
     "STANDING_POSTURE",
     "InfeasibleSeating",
     "SeatingCancelled",

@@ -91,6 +91,11 @@ _GOAL_GUESSES = (
 )
 
 
+STANCE = "stance"
+"""The constraint group of an s_goal too close to the chair (feet, or the carried bear,
+in it): standing farther back may help."""
+
+
 class InfeasibleSeating(ValueError):
     """No seating motion satisfies the constraints; the message names the violated one.
 
@@ -430,7 +435,24 @@ def plan_seating(
     toe_clearance = scene.profile.clearance(TOE_POINT_XZ[None, :])[0]
     if toe_clearance < 0.0:
         raise InfeasibleSeating(
-            "chair collision", f"the NAO's feet are {-toe_clearance:.2f} m under the chair"
+            STANCE, f"the NAO's feet are {-toe_clearance:.2f} m under the chair"
+        )
+    # Standing there with the bear held in front must be clear of the chair too: a high
+    # seat (a director's chair) reaches the carried bear before the NAO's ellipsoid.
+    standing = exact_posture_violation(
+        problems,
+        STANDING_POSTURE,
+        scene.profile,
+        g_xz=None,
+        tilt_rad=BEAR_TILT_MOTION_RAD,
+        bear_held=True,
+    )
+    too_close = None
+    if standing[0] > CHECK_TOLERANCE and standing[1] == "chair collision":
+        too_close = InfeasibleSeating(
+            STANCE,
+            f"{standing[2]} {standing[0]:.3f} m inside the chair in the standing posture "
+            "(the NAO stands too close)",
         )
     # A goal from which the trajectory or the retract is infeasible may have a sibling
     # (another local optimum) from which both are feasible: try each in turn.
@@ -445,6 +467,9 @@ def plan_seating(
             assert failure is not None
             raise failure from None
         goal_s += time.perf_counter() - started
+        if too_close is not None:
+            # Only now: an unreachable g is the first thing to report (no stance helps).
+            raise too_close
         try:
             motion = _motion_from_goal(problems, scene.profile, q_goal)
         except InfeasibleSeating as error:
