@@ -5,7 +5,9 @@ direction γ and lies on the horizontal ray from p along γ, first at ``l_init``
 pushed along the ray until the NAO's ellipsoid is clear of the chair (and further, where
 that spot is in a wall or obstacle, until it clears those too); if the NAO is then
 beyond its arms' reach of p, p slides along the ray toward the NAO while staying on the
-seat. The seat motion is pre-planned at s_goal to check it is valid; then OMPL's
+seat. The seat motion is pre-planned at s_goal, and from where the walk may stop short
+of it, to check it is valid (p slides closer while the bear is out of reach; s_goal steps
+back while the carried bear would be in the chair); then OMPL's
 RRTConnect plans an SE(2) path from the humanoid to s_goal within the arena, checked with
 FCL (:mod:`skills.planning.collision`). With u = (cos γ, sin γ) and distance l along
 the ray:
@@ -287,6 +289,15 @@ def default_seating_validator() -> SeatingValidator:
     return wholebody_validator
 
 
+def _stepped_back(se2_goal: SE2Pose, distance_m: float) -> SE2Pose:
+    """s_goal moved ``distance_m`` back along the sitting ray (the NAO faces the chair)."""
+    return SE2Pose(
+        se2_goal.x - distance_m * math.cos(se2_goal.theta),
+        se2_goal.y - distance_m * math.sin(se2_goal.theta),
+        se2_goal.theta,
+    )
+
+
 def _within_walk_tolerance(validator: SeatingValidator) -> SeatingValidator:
     """``validator`` at s_goal and at s_goal ``WALK_STOP_MARGIN_M`` farther back."""
 
@@ -296,13 +307,7 @@ def _within_walk_tolerance(validator: SeatingValidator) -> SeatingValidator:
         verdict = validator(chair_mesh, sitting_pose, se2_goal)
         if verdict.reason:
             return verdict
-        # The NAO faces the chair: backing off is a step along -heading.
-        stopped_short = SE2Pose(
-            se2_goal.x - WALK_STOP_MARGIN_M * math.cos(se2_goal.theta),
-            se2_goal.y - WALK_STOP_MARGIN_M * math.sin(se2_goal.theta),
-            se2_goal.theta,
-        )
-        verdict = validator(chair_mesh, sitting_pose, stopped_short)
+        verdict = validator(chair_mesh, sitting_pose, _stepped_back(se2_goal, WALK_STOP_MARGIN_M))
         if verdict.reason:
             reason = (
                 f"{verdict.reason} (with the NAO {100 * WALK_STOP_MARGIN_M:.1f} cm short of s_goal)"
@@ -474,13 +479,7 @@ def check_accessibility(
     slide = placement.slide_m
     for _ in range(MAX_SLIDE_RETRIES):
         if check.reason and check.too_close:
-            backed = goal_on_ray(
-                original_pose,
-                math.hypot(
-                    se2_goal.x - original_pose.position[0], se2_goal.y - original_pose.position[1]
-                )
-                + STANCE_RETRY_STEP_M,
-            )
+            backed = _stepped_back(se2_goal, STANCE_RETRY_STEP_M)
             if goal_blocked_reason(checker, backed):
                 break
             se2_goal = backed
