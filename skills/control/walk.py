@@ -54,8 +54,10 @@ class WalkGains(NamedTuple):
     waypoint_tolerance_rad: float = math.radians(25.0)
     final_tolerance_m: float = 0.03
     final_tolerance_rad: float = math.radians(5.0)
-    # Stopping happens inside a tighter box so that the settle drift stays within the final one.
-    stop_tolerance_m: float = 0.01
+    # Stopping happens inside a tighter box so that the settle drift stays within the final
+    # one; 5 mm because the seating pre-plan at s_goal may have only ~1 cm of reach to
+    # spare (trials stopped 1.3 cm short inside a 1.5 cm box and failed at SeatBear).
+    stop_tolerance_m: float = 0.005
     stop_tolerance_rad: float = math.radians(2.5)
     settle_s: float = 0.3
 

@@ -5,9 +5,9 @@ direction γ and lies on the horizontal ray from p along γ, first at ``l_init``
 pushed along the ray until the NAO's ellipsoid is clear of the chair (and further, where
 that spot is in a wall or obstacle, until it clears those too); if the NAO is then
 beyond its arms' reach of p, p slides along the ray toward the NAO while staying on the
-seat. The seat motion is pre-planned at s_goal, and from where the walk may stop short
-of it, to check it is valid (p slides closer while the bear is out of reach; s_goal steps
-back while the carried bear would be in the chair); then OMPL's
+seat. The seat motion is pre-planned at s_goal to check it is valid (p slides closer
+while the bear is out of reach; s_goal steps back while the carried bear would be in the
+chair); then OMPL's
 RRTConnect plans an SE(2) path from the humanoid to s_goal within the arena, checked with
 FCL (:mod:`skills.planning.collision`). With u = (cos γ, sin γ) and distance l along
 the ray:
@@ -33,7 +33,6 @@ from ompl import geometric as og
 from ompl import util as ou
 
 from skills.arena import Arena
-from skills.control.walk import DEFAULT_GAINS
 from skills.geometry import SE2Pose, SittingPose, wrap_angle
 from skills.nao_carrying import BEAR_SEAT_CLEARANCE_M
 from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
@@ -60,10 +59,6 @@ STANCE_RETRY_STEP_M = 0.02
 """After a pre-plan finds the NAO too close to the chair, s_goal steps back this much."""
 SLIDE_RETRY_STEP_M = 0.03
 """After a pre-plan finds the bear out of reach, p slides this much closer and it retries."""
-WALK_STOP_MARGIN_M = DEFAULT_GAINS.stop_tolerance_m
-"""The walk stops anywhere within this of s_goal, so seating is checked from s_goal and
-from this much farther from the chair (the worst case for reach): trials whose s_goal
-was feasible with 1 cm to spare failed when the NAO stopped 1.3 cm short."""
 PLANNING_TIME_S = 1.0
 CHECK_RESOLUTION_M = 0.01
 """Spacing of validity checks along motions, metres (OMPL's resolution is relative)."""
@@ -173,13 +168,10 @@ def place_se2_goal(
     distance = _clear_of_walls_and_obstacles(checker, sitting_pose, distance, l_init_m + MAX_PUSH_M)
     se2_goal = goal_on_ray(sitting_pose, distance)
 
-    # Within reach from wherever the walk may stop, up to WALK_STOP_MARGIN_M short.
     reach_m = max_forward_reach(bear_release_height(chair_mesh, sitting_pose))
-    if distance <= reach_m - WALK_STOP_MARGIN_M or reach_m == 0.0:
+    if distance <= reach_m or reach_m == 0.0:
         return GoalPlacement(se2_goal, sitting_pose, distance)
-    moved, slide = slide_on_seat(
-        chair_mesh, sitting_pose, distance - (reach_m - WALK_STOP_MARGIN_M - REACH_SLACK_M)
-    )
+    moved, slide = slide_on_seat(chair_mesh, sitting_pose, distance - (reach_m - REACH_SLACK_M))
     return GoalPlacement(se2_goal, moved, distance - slide, slide_m=slide)
 
 
@@ -296,26 +288,6 @@ def _stepped_back(se2_goal: SE2Pose, distance_m: float) -> SE2Pose:
         se2_goal.y - distance_m * math.sin(se2_goal.theta),
         se2_goal.theta,
     )
-
-
-def _within_walk_tolerance(validator: SeatingValidator) -> SeatingValidator:
-    """``validator`` at s_goal and at s_goal ``WALK_STOP_MARGIN_M`` farther back."""
-
-    def check(
-        chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
-    ) -> SeatingCheck:
-        verdict = validator(chair_mesh, sitting_pose, se2_goal)
-        if verdict.reason:
-            return verdict
-        verdict = validator(chair_mesh, sitting_pose, _stepped_back(se2_goal, WALK_STOP_MARGIN_M))
-        if verdict.reason:
-            reason = (
-                f"{verdict.reason} (with the NAO {100 * WALK_STOP_MARGIN_M:.1f} cm short of s_goal)"
-            )
-            return verdict._replace(reason=reason)
-        return verdict
-
-    return check
 
 
 class PlannedPath(NamedTuple):
@@ -471,7 +443,7 @@ def check_accessibility(
     reason = goal_blocked_reason(checker, se2_goal)
     if reason:
         return AccessibilityResult(False, se2_goal, sitting_pose, (), reason)
-    validator = _within_walk_tolerance(seating_validator or default_seating_validator())
+    validator = seating_validator or default_seating_validator()
     check = validator(chair_mesh, sitting_pose, se2_goal)
     # The pre-plan knows the NAO better than the ellipsoid and the reach model that placed
     # s_goal: while the bear is out of reach, slide p closer along the seat; while the NAO
