@@ -26,6 +26,7 @@ from skills.planning.se2 import (
     place_se2_goal,
     reach_validator,
     seat_support_heights,
+    slide_on_seat,
 )
 
 PELVIS_ABOVE_SEAT_M = 0.05
@@ -240,6 +241,28 @@ def test_out_of_reach_preplan_slides_p_closer_and_retries(monkeypatch: pytest.Mo
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0, seat_depth_m=0.2)
     result = check_accessibility(chair_mesh, sitting_pose, START, DEFAULT_ARENA, seed=0)
     assert not result.accessible and "out of reach" in result.reason
+
+
+def test_seat_of_slats_is_found_under_a_gap_and_ends_at_its_front_edge() -> None:
+    # Slats 3 cm wide with 3 cm gaps, running across the sitting direction (+x), seat
+    # top at 0.24 m from x = -0.15 to 0.12.
+    slats = [
+        trimesh.creation.box(
+            extents=(0.03, 0.3, 0.02),
+            transform=trimesh.transformations.translation_matrix((x, 0.0, 0.23)),
+        )
+        for x in np.arange(-0.135, 0.136, 0.06)
+    ]
+    seat = trimesh.util.concatenate(slats)
+    in_a_gap = np.array([[-0.105, 0.0]])
+    assert seat_support_heights(seat, in_a_gap, 0.3)[0] == pytest.approx(0.24)
+    assert np.isnan(seat_support_heights(seat, np.array([[0.25, 0.0]]), 0.3)[0])
+    p = SittingPose(np.array([-0.105, 0.0, 0.29]), 0.0)
+    moved, slide_m = slide_on_seat(seat, p, 1.0)
+    # Slides to SEAT_EDGE_MARGIN_M behind the front edge (within a step), not past it.
+    assert 0.12 - SEAT_EDGE_MARGIN_M - 0.02 <= moved.position[0] <= 0.12 - SEAT_EDGE_MARGIN_M
+    assert moved.position[2] == pytest.approx(0.29)
+    assert slide_m == pytest.approx(moved.position[0] - p.position[0])
 
 
 def test_nao_too_close_for_the_carried_bear_steps_back_along_the_ray() -> None:

@@ -114,24 +114,64 @@ def goal_on_ray(sitting_pose: SittingPose, distance_m: float) -> SE2Pose:
     return SE2Pose(float(x), float(y), wrap_angle(sitting_pose.yaw + math.pi))
 
 
+SUPPORT_RADIUS_M = 0.04
+"""The surface under a point is taken over a disc of this radius (metres), not from one
+vertical ray: slatted seats (chairgen-10) have gaps 3 cm wide, and scans have holes."""
+
+
 def seat_support_heights(chair_mesh: trimesh.Trimesh, xy: np.ndarray, z_from: float) -> np.ndarray:
-    """Height of the first chair surface straight below each point, NaN where there is none.
+    """Height of the chair surface below each point, NaN where there is none.
+
+    Vertical rays start at ``z_from`` on a 1 cm grid over a disc of ``SUPPORT_RADIUS_M``
+    around each point; each ray finds the first surface below it, and the height is the
+    median of the hits. A gap between slats or a hole in a scan does not hide the seat;
+    the seat seems to reach ``SUPPORT_RADIUS_M`` past its edge.
 
     Args:
         chair_mesh: the chair, world frame.
         xy: (N, 2) query points, metres.
         z_from: height the vertical rays start from, metres.
     """
+    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+    offsets = _DISC_OFFSETS_M
+    hits = _first_surface_below(
+        chair_mesh, (xy[:, None, :] + offsets[None, :, :]).reshape(-1, 2), z_from
+    ).reshape(len(xy), len(offsets))
+    found = ~np.isnan(hits)
+    heights = np.full(len(xy), np.nan)
+    for i in np.flatnonzero(found.any(axis=1)):
+        heights[i] = float(np.median(hits[i, found[i]]))
+    return heights
+
+
+_DISC_OFFSETS_M = np.array(
+    [
+        (dx, dy)
+        for dx in np.arange(-SUPPORT_RADIUS_M, SUPPORT_RADIUS_M + 1e-9, 0.01)
+        for dy in np.arange(-SUPPORT_RADIUS_M, SUPPORT_RADIUS_M + 1e-9, 0.01)
+        if math.hypot(dx, dy) <= SUPPORT_RADIUS_M + 1e-9
+    ]
+)
+
+
+def _first_surface_below(chair_mesh: trimesh.Trimesh, xy: np.ndarray, z_from: float) -> np.ndarray:
+    """Height of the first triangle straight below each (x, y) from ``z_from`` (NaN: none)."""
     # A vertical ray hits a triangle where the point lies inside its xy projection; the hit
     # height is the barycentric blend of the corner heights.
     triangles = np.asarray(chair_mesh.triangles, dtype=float)
+    # Only triangles under the queried region can be hit.
+    low, high = xy.min(axis=0), xy.max(axis=0)
+    near = np.all(triangles[:, :, :2].max(axis=1) >= low, axis=1) & np.all(
+        triangles[:, :, :2].min(axis=1) <= high, axis=1
+    )
+    triangles = triangles[near & (triangles[:, :, 2].min(axis=1) <= z_from)]
     a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
     ab, ac = (b - a)[:, :2], (c - a)[:, :2]
     det = ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0]
     usable = np.abs(det) > 1e-12
     a, b, c, ab, ac, det = a[usable], b[usable], c[usable], ab[usable], ac[usable], det[usable]
     heights = np.full(len(xy), np.nan)
-    for i, point in enumerate(np.asarray(xy, dtype=float)):
+    for i, point in enumerate(xy):
         ap = point - a[:, :2]
         v = (ap[:, 0] * ac[:, 1] - ap[:, 1] * ac[:, 0]) / det
         w = (ab[:, 0] * ap[:, 1] - ab[:, 1] * ap[:, 0]) / det
@@ -221,7 +261,12 @@ def slide_on_seat(
         logger.warning("no seat found under the sitting position; p is not moved")
         return sitting_pose, 0.0
     on_seat = np.abs(heights - heights[0]) <= SEAT_HEIGHT_TOLERANCE_M
-    seat_ends_m = ahead[int(np.argmin(on_seat))] - SEAT_STEP_M if not on_seat.all() else math.inf
+    # The support disc sees the seat up to its radius past the edge.
+    seat_ends_m = (
+        ahead[int(np.argmin(on_seat))] - SEAT_STEP_M - SUPPORT_RADIUS_M
+        if not on_seat.all()
+        else math.inf
+    )
     # Never slide backwards: when p is already within the margin it stays where it is.
     allowed = slides <= max(seat_ends_m - edge_margin_m, 0.0) + 1e-9
     last = int(np.flatnonzero(allowed)[-1])
