@@ -110,7 +110,7 @@ SKILL_SOURCES: dict[str, str] = {
     "wait_until_chair_still": "skills.perception:wait_until_chair_still",
     "measure_chair_rotation": "skills.perception:measure_chair_rotation",
     "walk_path": "skills.control:walk_path",
-    "plan_seating": "skills.planning.wholebody:plan_seating",
+    "plan_seating": "skills.planning.wholebody:plan_seating_where_standing",
     "execute_seating": "skills.planning.wholebody:execute_seating",
     "release_and_stand": "skills.planning.wholebody:release_and_stand",
 }

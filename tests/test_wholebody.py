@@ -20,6 +20,7 @@ from skills.planning.wholebody import (
     SeatingCancelled,
     execute_seating,
     plan_seating,
+    plan_seating_where_standing,
     preplan_seating,
     release_and_stand,
 )
@@ -282,6 +283,18 @@ def test_bear_one_metre_away_is_out_of_reach(chair):
         preplan_seating(chair, SITTING_POSE, SE2Pose(1.02, 0.0, math.pi))
     assert info.value.constraint == "bear placement"
     assert "1.00 m forward" in str(info.value)
+
+
+def test_from_where_it_stopped_p_slides_into_reach_on_a_deep_seat() -> None:
+    deep_chair = box_chair_mesh(seat_height_m=SEAT_HEIGHT_M, seat_depth_m=0.40)
+    stopped_short = SE2Pose(0.37, 0.0, math.pi)
+    with pytest.raises(InfeasibleSeating, match="out of reach"):
+        plan_seating(deep_chair, SITTING_POSE, stopped_short)
+    plan = plan_seating_where_standing(deep_chair, SITTING_POSE, stopped_short)
+    assert len(plan.times_s) > 2
+    # Too far for the 3 cm slides, or for the seat: the first failure is reported.
+    with pytest.raises(InfeasibleSeating, match=r"0\.38 m forward"):
+        plan_seating_where_standing(deep_chair, SITTING_POSE, SE2Pose(0.40, 0.0, math.pi))
 
 
 def test_seat_one_metre_high_is_out_of_reach() -> None:

@@ -4,6 +4,7 @@ IPOPT), their execution through the humanoid interface, the release and the stan
 Public functions (the mission's skills):
 
 * :func:`plan_seating` (chair_mesh, sitting_pose, humanoid_pose) -> SeatingPlan
+* :func:`plan_seating_where_standing` (same): SeatBear's, p sliding closer if needed
 * :func:`preplan_seating` (chair_mesh, sitting_pose, se2_goal) -> SeatingPlan
 * :func:`execute_seating` (humanoid, plan, *, cancel=None) -> None
 * :func:`release_and_stand` (humanoid, plan, *, cancel=None) -> None
@@ -20,6 +21,7 @@ from skills.planning.wholebody.seating import (
     SeatingCancelled,
     execute_seating,
     plan_seating,
+    plan_seating_where_standing,
     preplan_seating,
     release_and_stand,
 )
@@ -32,6 +34,7 @@ __all__ = [
     "SeatingCancelled",
     "execute_seating",
     "plan_seating",
+    "plan_seating_where_standing",
     "preplan_seating",
     "release_and_stand",
 ]

@@ -35,6 +35,7 @@ from scipy.optimize import least_squares
 from hardware.interfaces import Humanoid
 from skills.geometry import SE2Pose, SittingPose, transform_points, wrap_angle
 from skills.nao_carrying import BEAR_SEAT_CLEARANCE_M
+from skills.planning.se2 import slide_on_seat
 from skills.planning.wholebody.chair_profile import (
     ChairProfile,
     ChairProfileError,
@@ -485,6 +486,41 @@ def plan_seating(
         retract_positions_rad=to_joint_positions(retract_knots),
         seconds={"goal": goal_s, "trajectory": trajectory_s, "retract": retract_s},
     )
+
+
+REACHED_POSE_SLIDES_M = (0.01, 0.02, 0.03)
+"""How far p may slide toward the NAO when the bear is out of reach from where it stopped."""
+
+
+def plan_seating_where_standing(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, humanoid_pose: SE2Pose
+) -> SeatingPlan:
+    """:func:`plan_seating` from where the NAO stopped, sliding p closer when needed.
+
+    The walk stops within 5 mm of s_goal, and some chairs leave the pre-plan at s_goal
+    less reach to spare than that (a director's chair's high seat). Then p slides toward
+    the NAO along the seat, up to 3 cm, as the accessibility check slides it
+    (:func:`skills.planning.se2.slide_on_seat`, which keeps it off the seat's edge).
+
+    Raises:
+        InfeasibleSeating: the first failure, when no slide helps.
+    """
+    try:
+        return plan_seating(chair_mesh, sitting_pose, humanoid_pose)
+    except InfeasibleSeating as error:
+        if error.constraint != "bear placement":
+            raise
+        first_failure = error
+    for slide_m in REACHED_POSE_SLIDES_M:
+        moved, moved_m = slide_on_seat(chair_mesh, sitting_pose, slide_m)
+        if moved_m < slide_m - 1e-6:
+            break  # the seat ends here
+        try:
+            return plan_seating(chair_mesh, moved, humanoid_pose)
+        except InfeasibleSeating as error:
+            if error.constraint != "bear placement":
+                raise
+    raise first_failure
 
 
 def _motion_from_goal(
