@@ -50,7 +50,7 @@ class PreparedChair(NamedTuple):
         extents_m: (3,) OBB size along the OBB frame's x, y, z.
         z_min_m: lowest point of the chair (OBB frame, equal to the mesh frame's).
         z_top_m: highest point of the chair.
-        pieces: convex pieces' vertices in the chair body frame (centred on the
+        pieces: the boxes' corners in the chair body frame (centred on the
             centre of mass), each an (N, 3) float array.
         collision_obj: an OBJ file of the pieces (one object each, body frame), which
             pybullet loads as a compound of convex hulls.
@@ -233,7 +233,7 @@ def _outer_terms(offsets: np.ndarray) -> np.ndarray:
 
 
 def _write_pieces_obj(path: Path, pieces: list[tuple[np.ndarray, np.ndarray]]) -> None:
-    """Writes convex pieces as separate OBJ objects (pybullet: one hull per object)."""
+    """Writes the pieces as separate OBJ objects (pybullet: one convex hull per object)."""
     lines: list[str] = []
     base = 1
     for index, (vertices, faces) in enumerate(pieces):

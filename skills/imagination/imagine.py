@@ -2,8 +2,8 @@
 
 The paper's procedure ("Sitting Imagination"):
 
-1. Prepare the chair: g_obb (yaw-only OBB alignment and horizontal centring), convex
-   pieces, mass properties (``skills.imagination.chair``).
+1. Prepare the chair: g_obb (yaw-only OBB alignment and horizontal centring), the solid
+   under its surface as boxes, mass properties (``skills.imagination.chair``).
 2. For each rotation α_i = iπ/4 (i = 0..7) drop the agent in its pre-sitting posture,
    facing +x, with the pelvis 15 cm above the OBB, at the OBB centre and at ±L_sit
    along x; if at most one correct sitting was found, drop again at ±2 L_sit and
@@ -128,7 +128,7 @@ def imagine_sitting_details(
     """``imagine_sitting`` with the raw drops and physics statistics (for benchmarks)."""
     settings = settings or SimulationSettings()
     started = time.perf_counter()
-    _pybullet()  # imported quietly here, before V-HACD imports it with its banner
+    _pybullet()  # imported quietly here, before anything else imports it with its banner
     try:
         prepared = prepare_chair(chair_mesh)
     except ChairPreparationError as error:
