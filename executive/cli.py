@@ -47,6 +47,11 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--mute", action="store_true", help="print instructions instead of speaking")
     run.add_argument("--timeout", type=float, default=900.0, help="stop after this many seconds")
     run.add_argument(
+        "--snapshots",
+        action="store_true",
+        help="in simulation, also save a picture whenever a stage ends (OUT/snapshots)",
+    )
+    run.add_argument(
         "--robots",
         type=Path,
         metavar="CELL_JSON",
@@ -99,6 +104,7 @@ def _run(args: argparse.Namespace) -> int:
         gui=args.gui,
         mute=args.mute,
         timeout_s=args.timeout,
+        snapshots=args.snapshots,
     )
     if args.timeout <= 0:
         raise CliError("bearchair run: --timeout must be positive")

@@ -30,6 +30,7 @@ class RunConfig:
         mute: print instructions instead of speaking them.
         timeout_s: wall time after which the mission is stopped as failed.
         arena: the workspace layout.
+        snapshots: in simulation, save a picture whenever a stage ends.
     """
 
     chair_path: Path | None = None
@@ -41,6 +42,7 @@ class RunConfig:
     mute: bool = False
     timeout_s: float = 900.0
     arena: Arena = field(default=DEFAULT_ARENA)
+    snapshots: bool = False
 
     def chair_name(self) -> str:
         return self.chair_path.name if self.chair_path else "box-chair (built in)"

@@ -40,6 +40,51 @@ class StageProgress:
             print(line, file=self._stream, flush=True)
 
 
+class StageSnapshots:
+    """Saves a picture of the scene whenever a stage ends (``bearchair run --snapshots``).
+
+    The pictures go to ``out_dir`` as ``NN-<stage>-<status>.png`` (a perspective and a
+    ``-top`` view): what the scene looked like when SeatBear finished, for example, which
+    the final picture no longer shows.
+    """
+
+    def __init__(self, render: Callable[..., None], out_dir: Path) -> None:
+        self._render = render
+        self._out_dir = out_dir
+        self._seen: dict[str, str] = {}
+        self.written: list[Path] = []
+
+    def __call__(self, runner: MissionRunner) -> None:
+        for stage in runner.stages:
+            if (
+                stage.status not in ("SUCCESS", "FAILURE")
+                or self._seen.get(stage.name) == stage.status
+            ):
+                continue
+            self._seen[stage.name] = stage.status
+            stem = f"{len(self._seen):02d}-{stage.name}-{stage.status.lower()}"
+            self._out_dir.mkdir(parents=True, exist_ok=True)
+            for suffix, view in (("", "perspective"), ("-top", "top")):
+                path = self._out_dir / f"{stem}{suffix}.png"
+                try:
+                    self._render(path, view=view)
+                except Exception as error:  # a missing picture must not stop the mission
+                    logger.warning("could not render %s: %s", path.name, error)
+                    continue
+                self.written.append(path)
+
+
+def _both(
+    first: Callable[[MissionRunner], None] | None, second: Callable[[MissionRunner], None]
+) -> Callable[[MissionRunner], None]:
+    def call(runner: MissionRunner) -> None:
+        if first is not None:
+            first(runner)
+        second(runner)
+
+    return call
+
+
 def run_in_simulation(
     config: RunConfig,
     skills: MissionSkills | None = None,
@@ -83,6 +128,8 @@ def run_in_simulation(
         voice=voice,
     )
     world = SimWorld(sim_config)
+    if config.snapshots:
+        on_tick = _both(on_tick, StageSnapshots(world.render_png, config.out_dir / "snapshots"))
     try:
         return _run_tree(
             root,

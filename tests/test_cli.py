@@ -112,3 +112,43 @@ def test_inspect_replays_a_recorded_run(tmp_path, capsys):
 
     assert main(["inspect", str(tmp_path), "--tick", "99999"]) == 2
     assert "outside the run" in capsys.readouterr().err
+
+
+def test_stage_snapshots_picture_each_stage_end_once(tmp_path) -> None:
+    from collections import namedtuple
+    from types import SimpleNamespace
+
+    from executive.mission import StageSnapshots
+
+    Stage = namedtuple("Stage", "name status")
+    calls: list[tuple[str, str]] = []
+
+    def render(path, view: str) -> None:
+        calls.append((path.name, view))
+        path.write_bytes(b"png")
+
+    snapshots = StageSnapshots(render, tmp_path / "snapshots")
+    runner = SimpleNamespace(
+        stages=[Stage("ScanChair", "RUNNING"), Stage("ImagineSitting", "INVALID")]
+    )
+    snapshots(runner)
+    assert calls == []
+    runner.stages = [Stage("ScanChair", "SUCCESS"), Stage("ImagineSitting", "RUNNING")]
+    snapshots(runner)
+    snapshots(runner)
+    assert calls == [
+        ("01-ScanChair-success.png", "perspective"),
+        ("01-ScanChair-success-top.png", "top"),
+    ]
+    runner.stages = [Stage("ScanChair", "SUCCESS"), Stage("ImagineSitting", "FAILURE")]
+    snapshots(runner)
+    assert calls[-1] == ("02-ImagineSitting-failure-top.png", "top")
+    assert [p.name for p in snapshots.written] == [name for name, _ in calls]
+    assert all(p.exists() for p in snapshots.written)
+
+    def broken(path, view: str) -> None:
+        raise RuntimeError("no renderer")
+
+    quiet = StageSnapshots(broken, tmp_path / "broken")
+    quiet(runner)  # logged, never raised: a missing picture must not stop the mission
+    assert quiet.written == []
