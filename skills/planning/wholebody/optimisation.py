@@ -51,10 +51,7 @@ BEAR_TILT_GOAL_RAD = math.radians(8.0)
 BEAR_TILT_MOTION_RAD = math.radians(30.0)
 SUPPORT_MARGIN_M = 0.01
 BODY_MARGIN_M = 0.01
-BEAR_CHAIR_MARGIN_M = 0.01
-"""The bear's outline keeps this clear of the chair profile (metres). The profile comes
-from the scan, whose edges are good to about 1 cm: at 3 mm the carried bear caught
-chairgen-06's seat front and shoved the chair 9 cm away."""
+BEAR_CHAIR_MARGIN_M = 0.003
 SMOOTH_MAX_SHARPNESS = 400.0
 
 GOAL_COM_WEIGHT = 10.0
