@@ -124,51 +124,33 @@ def _run_vhacd(mesh: trimesh.Trimesh, output: Path, max_vertices_per_piece: int)
         pybullet.disconnect(client)
 
 
-def solid_below_surface(
-    mesh: trimesh.Trimesh, pitch_m: float = 0.01, max_cells_per_axis: int = 256
-) -> trimesh.Trimesh:
-    """A closed, blocky solid: every cell under the mesh's surface, down to its lowest point.
-
-    A scanned chair is an open surface (the camera never sees under the seat) and a
-    thin one: its convex pieces are shells a voxel thick, which a falling sitter
-    tunnels through and which weigh almost nothing. Filling each vertical column of a
-    grid from its highest surface cell down to the floor gives scans and
-    modelled meshes the same kind of solid: the top surfaces (seat, backrest front,
-    armrests), which are all a sitter touches, stay where they were (to within a cell),
-    and the space under the seat, which a sitter never uses, becomes solid.
-
-    Args:
-        mesh: any surface, z up, metres.
-        pitch_m: the voxel edge; coarsened so that no axis has more than
-            ``max_cells_per_axis`` cells (a sofa, or a mesh in millimetres).
-        max_cells_per_axis: bounds the grid's memory.
-
-    Returns:
-        The union of the filled cells' boundary faces (watertight up to cells that
-        touch along an edge only), in the mesh's frame.
-    """
-    filled, pitch_m, origin = _filled_columns(mesh, pitch_m, max_cells_per_axis)
-    return _cell_boundary_mesh(filled, pitch_m, origin)
-
-
 def solid_below_surface_boxes(
     mesh: trimesh.Trimesh,
     pitch_m: float = 0.01,
     max_cells_per_axis: int = 256,
     tolerance_cells: int = 1,
 ) -> list[np.ndarray]:
-    """The solid of :func:`solid_below_surface` as floor-standing boxes.
+    """A blocky solid, as floor-standing boxes: every grid cell under the mesh's surface.
 
-    V-HACD's few convex pieces of that solid bridge gaps a sitter needs: the hull of
-    an armrest, the seat and the legs under them fills the space between the armrests
-    up to their tops. The solid is a height field (each column filled from its top down
-    to the floor), so it splits exactly into boxes: neighbouring columns whose tops
-    differ by at most ``tolerance_cells`` merge greedily into rectangles, each box as
-    high as its highest column (at most ``tolerance_cells * pitch`` above any of them).
+    A scanned chair is an open surface (the camera never sees under the seat) and a
+    thin one: its convex pieces are shells a voxel thick, which a falling sitter
+    tunnels through and which weigh almost nothing. Filling each vertical column of a
+    grid from its highest surface cell down to the floor gives scans and modelled
+    meshes the same kind of solid: the top surfaces (seat, backrest front, armrests),
+    which are all a sitter touches, stay where they were (to within a cell), and the
+    space under the seat, which a sitter never uses, becomes solid.
+
+    That solid is a height field, so it splits exactly into boxes: neighbouring columns
+    whose tops differ by at most ``tolerance_cells`` merge greedily into rectangles,
+    each box as high as its highest column (at most ``tolerance_cells * pitch`` above
+    any of them). V-HACD's few convex pieces of it bridged gaps a sitter needs: the hull
+    of an armrest, the seat and the legs under them filled the space between the
+    armrests up to their tops.
 
     Args:
         mesh: any surface, z up, metres.
-        pitch_m: the column size (coarsened as in :func:`solid_below_surface`).
+        pitch_m: the column size; coarsened so that no axis has more than
+            ``max_cells_per_axis`` cells (a sofa, or a mesh in millimetres).
         max_cells_per_axis: bounds the grid's memory.
         tolerance_cells: how unequal the tops of merged columns may be.
 
@@ -214,7 +196,7 @@ def solid_below_surface_boxes(
 def _filled_columns(
     mesh: trimesh.Trimesh, pitch_m: float, max_cells_per_axis: int
 ) -> tuple[np.ndarray, float, np.ndarray]:
-    """The occupancy grid of :func:`solid_below_surface`, its pitch and origin (metres)."""
+    """The occupancy grid of :func:`solid_below_surface_boxes`, its pitch and origin (metres)."""
     pitch_m = max(pitch_m, float(np.max(mesh.extents)) / max_cells_per_axis)
     origin = np.asarray(mesh.bounds[0], dtype=float)
     shape = np.floor(np.asarray(mesh.extents) / pitch_m).astype(int) + 1
@@ -246,28 +228,6 @@ def surface_samples(mesh: trimesh.Trimesh, spacing_m: float) -> np.ndarray:
         group = triangles[divisions == n]
         points.append(np.einsum("pk,tkd->tpd", weights, group).reshape(-1, 3))
     return np.concatenate(points)
-
-
-def _cell_boundary_mesh(
-    occupied: np.ndarray, pitch_m: float, origin: np.ndarray
-) -> trimesh.Trimesh:
-    """The faces between occupied and free cells, outward-facing, two triangles each."""
-    padded = np.pad(occupied, 1)
-    quads = []
-    for axis in range(3):
-        u, v = (axis + 1) % 3, (axis + 2) % 3
-        for side in (1, -1):
-            exposed = padded & ~np.roll(padded, -side, axis=axis)
-            corner = np.argwhere(exposed).astype(float) - 1.0
-            corner[:, axis] += 1.0 if side > 0 else 0.0
-            du, dv = np.eye(3)[u], np.eye(3)[v]
-            # (u, v, axis) is right-handed: u→v winds counter-clockwise seen from +axis.
-            quad = np.stack([corner, corner + du, corner + du + dv, corner + dv], axis=1)
-            quads.append(quad if side > 0 else quad[:, ::-1])
-    corners = np.concatenate(quads).reshape(-1, 3) * pitch_m + origin
-    index = np.arange(len(corners)).reshape(-1, 4)
-    faces = np.concatenate([index[:, [0, 1, 2]], index[:, [0, 2, 3]]])
-    return trimesh.Trimesh(corners, faces, process=True)
 
 
 class _stdout_to:

@@ -176,14 +176,7 @@ def _prepare(mesh: trimesh.Trimesh, digest: str) -> PreparedChair:
     com = (volumes[:, None] * centres).sum(0) / total_volume
     # Boxes' own moments (m/12 (b^2 + c^2), ...) plus the parallel-axis terms.
     squares = sizes**2
-    own = np.stack(
-        [
-            squares[:, 1] + squares[:, 2],
-            squares[:, 0] + squares[:, 2],
-            squares[:, 0] + squares[:, 1],
-        ],
-        axis=1,
-    )
+    own = squares.sum(axis=1, keepdims=True) - squares
     offsets = centres - com
     piece_masses = density * volumes
     inertia = np.einsum("n,nij->ij", piece_masses, _outer_terms(offsets)) + np.diag(

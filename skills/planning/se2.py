@@ -117,6 +117,14 @@ def goal_on_ray(sitting_pose: SittingPose, distance_m: float) -> SE2Pose:
 SUPPORT_RADIUS_M = 0.04
 """The surface under a point is taken over a disc of this radius (metres), not from one
 vertical ray: slatted seats (chairgen-10) have gaps 3 cm wide, and scans have holes."""
+_DISC_OFFSETS_M = np.array(
+    [
+        (dx, dy)
+        for dx in np.arange(-SUPPORT_RADIUS_M, SUPPORT_RADIUS_M + 1e-9, 0.01)
+        for dy in np.arange(-SUPPORT_RADIUS_M, SUPPORT_RADIUS_M + 1e-9, 0.01)
+        if math.hypot(dx, dy) <= SUPPORT_RADIUS_M + 1e-9
+    ]
+)
 
 
 def seat_support_heights(chair_mesh: trimesh.Trimesh, xy: np.ndarray, z_from: float) -> np.ndarray:
@@ -142,16 +150,6 @@ def seat_support_heights(chair_mesh: trimesh.Trimesh, xy: np.ndarray, z_from: fl
     for i in np.flatnonzero(found.any(axis=1)):
         heights[i] = float(np.median(hits[i, found[i]]))
     return heights
-
-
-_DISC_OFFSETS_M = np.array(
-    [
-        (dx, dy)
-        for dx in np.arange(-SUPPORT_RADIUS_M, SUPPORT_RADIUS_M + 1e-9, 0.01)
-        for dy in np.arange(-SUPPORT_RADIUS_M, SUPPORT_RADIUS_M + 1e-9, 0.01)
-        if math.hypot(dx, dy) <= SUPPORT_RADIUS_M + 1e-9
-    ]
-)
 
 
 def _first_surface_below(chair_mesh: trimesh.Trimesh, xy: np.ndarray, z_from: float) -> np.ndarray:
