@@ -67,13 +67,24 @@ def test_box_chair_is_reconstructed_in_the_world_frame(box_chair_scan):
 
 
 def test_reconstruction_is_deterministic(box_chair_frames, box_chair_scan):
-    again = reconstruct_chair(box_chair_frames, ReconstructionConfig())
-    assert np.array_equal(again.chair_points, box_chair_scan.chair_points)
-    # open3d fuses and meshes in parallel (float sums in thread order): equal to 0.1 mm.
-    assert again.chair_mesh.vertices.shape == box_chair_scan.chair_mesh.vertices.shape
-    nearest = cKDTree(box_chair_scan.chair_mesh.vertices).query(again.chair_mesh.vertices)[0]
-    assert nearest.max() < 1e-4
-    assert len(again.chair_mesh.faces) == len(box_chair_scan.chair_mesh.faces)
+    # Bit for bit: with open3d's threads, marching cubes moved vertices by 1-3 µm per run.
+    for _ in range(3):
+        again = reconstruct_chair(box_chair_frames, ReconstructionConfig())
+        assert np.array_equal(again.chair_points, box_chair_scan.chair_points)
+        assert np.array_equal(again.chair_mesh.vertices, box_chair_scan.chair_mesh.vertices)
+        assert np.array_equal(again.chair_mesh.faces, box_chair_scan.chair_mesh.faces)
+
+
+def test_registration_is_deterministic(box_chair_scan):
+    reference = box_chair_scan.chair_points
+    moved = transform_points(
+        yaw_transform(math.radians(70.0), np.array([0.02, 0.0, 0.0])), reference
+    )
+    first = register_chair(moved, reference)
+    for _ in range(2):
+        again = register_chair(moved, reference)
+        assert np.array_equal(again.T_world_new_old, first.T_world_new_old)
+        assert again.fitness == first.fitness and again.inlier_rmse_m == first.inlier_rmse_m
 
 
 @pytest.mark.parametrize("yaw_deg", [45.0, -90.0, 150.0, -175.0])

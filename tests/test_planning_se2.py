@@ -71,7 +71,9 @@ def test_chair_facing_the_back_wall_next_to_it_is_not_accessible() -> None:
     assert "s_goal" in result.reason and ("wall" in result.reason or "outside" in result.reason)
 
 
-def test_goal_blocked_everywhere_means_no_path() -> None:
+def test_goal_blocked_everywhere_means_no_path_after_the_check_budget(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     # A fence across the arena between the humanoid and the chair.
     fenced = DEFAULT_ARENA._replace(
         obstacles=(
@@ -80,10 +82,26 @@ def test_goal_blocked_everywhere_means_no_path() -> None:
         )
     )
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0)
-    result = _check(chair_mesh, sitting_pose, arena=fenced)
+    checks = []
+    is_free = NaoCollisionChecker.is_free
+    monkeypatch.setattr(
+        NaoCollisionChecker,
+        "is_free",
+        lambda self, *pose: checks.append(pose) or is_free(self, *pose),
+    )
+    result = check_accessibility(
+        chair_mesh,
+        sitting_pose,
+        START,
+        fenced,
+        seed=0,
+        seating_validator=reach_validator,
+        check_budget=4000,
+    )
     assert not result.accessible
     assert result.reason == "no collision-free path to s_goal"
-    assert 0.9 <= result.seconds < 2.0  # it used its 1 s budget
+    # The search stopped at its budget (plus the goal placement's own checks), not earlier.
+    assert 4000 <= len(checks) < 4000 + 2000
 
 
 def test_same_seed_same_path() -> None:

@@ -28,6 +28,7 @@ from scipy import ndimage
 from hardware.interfaces import RGBDFrame
 from skills.arena import DEFAULT_ARENA, Box2D
 from skills.perception.camera import clean_depth, depth_to_world, validate_frame
+from skills.perception.determinism import one_open3d_thread
 from skills.perception.errors import PerceptionError
 from skills.perception.views import CHAIR_MARGIN_M
 from skills.results import ChairScan
@@ -192,6 +193,7 @@ def largest_cluster(
     return point_labels == best_label, labels == best_label, origin
 
 
+@one_open3d_thread()
 def reconstruct_chair(frames: Sequence[RGBDFrame], config: ReconstructionConfig) -> ChairScan:
     """Reconstructs the chair from posed RGB-D frames of any camera backend.
 

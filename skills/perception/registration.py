@@ -20,6 +20,7 @@ import open3d as o3d
 
 from hardware.interfaces import RGBDFrame, ScanningArm
 from skills.geometry import rot_z, transform_points, yaw_of
+from skills.perception.determinism import one_open3d_thread
 from skills.perception.errors import PerceptionError, RegistrationError
 from skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
 from skills.perception.views import HOME_CONFIGURATION, SCAN_CONFIGURATIONS, TRACKING_VIEWS
@@ -86,6 +87,7 @@ def _planar(T: np.ndarray, pivot: np.ndarray) -> np.ndarray:
     return planar
 
 
+@one_open3d_thread()
 def register_chair(
     new_points: np.ndarray,
     reference_points: np.ndarray,
