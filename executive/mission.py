@@ -212,11 +212,15 @@ def _run_tree(
 
 def _ground_truth(world: Any, summary: dict[str, Any]) -> dict[str, Any]:
     """What only the simulated world knows, at the end of the run: the chair's true
-    sitting direction and how far the mission's sitting pose was from it (degrees)."""
+    sitting direction, how far the mission's sitting pose was from it (degrees), and how
+    deep the NAO went into the chair (centimetres; the simulated chair does not move)."""
     true_yaw = world.sitting_yaw_true()
+    touch = world.chair_touch.deepest
     truth: dict[str, Any] = {
         "sitting_yaw_deg": None if true_yaw is None else round(math.degrees(true_yaw), 2),
         "sitting_yaw_error_deg": None,
+        "nao_into_chair_cm": round(100.0 * touch.depth_m, 2),
+        "nao_into_chair_link": touch.nao_link,
     }
     pose = summary.get("sitting_pose")
     if true_yaw is not None and pose:
@@ -238,6 +242,12 @@ def format_summary(summary: dict[str, Any]) -> str:
         )
     for sentence in summary["instructions"]:
         lines.append(f'said: "{sentence}"')
+    truth = summary.get("ground_truth") or {}
+    if truth.get("nao_into_chair_cm"):
+        lines.append(
+            f"ground truth: the NAO's {truth['nao_into_chair_link']} went "
+            f"{truth['nao_into_chair_cm']:.1f} cm into the chair (the simulated chair does not move)"
+        )
     outcome = summary["outcome"].upper()
     if summary["outcome"] == "success":
         lines.append(f"outcome: {outcome} in {summary['wall_seconds']:.1f} s")

@@ -396,3 +396,35 @@ def test_simulated_run_records_the_ground_truth(tmp_path):
     imagined = math.radians(summary["sitting_pose"]["yaw_deg"])
     expected = abs(math.degrees(wrap_angle(imagined - true_yaw)))
     assert truth["sitting_yaw_error_deg"] == pytest.approx(expected, abs=0.02)
+
+
+@pytest.mark.skipif(not SHARED_CHAIRS.exists(), reason="../shared/chairs is absent")
+def test_the_chair_collides_as_its_own_surface_not_as_convex_pieces():
+    from skills.geometry import make_transform, rot_z
+
+    # A director's chair: the seat sits between higher side rails and armrests, and the
+    # convex pieces of seat and rails stood 2-4 cm above the seat.
+    chair_path = SHARED_CHAIRS / "chair-chairgen-09.obj"
+    config = SimConfig(chair_path=chair_path, front_yaw_deg=324.07, camera_noise=False)
+    with SimWorld(config) as world:
+        world.nao.set_hands(True)
+        T_world_chair = world.T_world_chair_true()
+        above_seat = T_world_chair @ np.array([0.0, 0.0, 0.36, 1.0])
+        world.bear.set_T_world_bear(make_transform(rot_z(world.sitting_yaw_true()), above_seat[:3]))
+        verdict = world.judge.judge(world.sitting_yaw_true(), settle_s=1.5)
+        assert verdict.seated, verdict.reason
+        # The bear frame's origin is its seat point: it rests on the mesh's seat (0.331 m).
+        assert world.bear.T_world_bear()[2, 3] == pytest.approx(0.331, abs=0.006)
+
+
+def test_the_nao_reaching_into_the_chair_is_recorded(world):
+    assert world.chair_touch.deepest.depth_m == 0.0
+    T_world_chair = world.T_world_chair_true()
+    sitting = world.sitting_yaw_true()
+    # Feet 12 cm in front of the seat's centre, facing the chair: the shins are in the seat.
+    feet_xy = T_world_chair[:2, 3] + 0.12 * np.array([math.cos(sitting), math.sin(sitting)])
+    world.place_nao(SE2Pose(float(feet_xy[0]), float(feet_xy[1]), wrap_angle(sitting + math.pi)))
+    world.clock.sleep(0.05)
+    touch = world.chair_touch.deepest
+    assert touch.depth_m > 0.01 and touch.nao_link
+    world.place_nao(DEFAULT_ARENA.humanoid_start)

@@ -28,6 +28,7 @@ from hardware.sim.bullet import LockedBullet, matrix_to_pose, pose_to_matrix
 from hardware.sim.camera import render_view
 from hardware.sim.chair import SimChair
 from hardware.sim.clock import SimClock
+from hardware.sim.contacts import ChairTouchMonitor
 from hardware.sim.helper import SimHelper, SimSpeaker
 from hardware.sim.judge import SimJudge
 from hardware.sim.nao import SimNao
@@ -140,6 +141,13 @@ class SimWorld:
                     nao_rng,
                     texture_id=texture,
                 )
+                self.chair_touch = ChairTouchMonitor(
+                    bullet,
+                    self.nao.body,
+                    self.chair.body,
+                    {index: name for name, index in self.nao.link_indices.items()},
+                )
+                self.clock.add_process(self.chair_touch)
                 self.bear = SimBear(bullet, self.clock, self._bear_in_hands())
                 self.bear.hold(self.hands_frame, self.nao.body)
                 self.nao.on_hands = self._on_hands
