@@ -16,25 +16,48 @@ from skills.results import SeatingPlan
 class SeatBear(SkillBehaviour):
     """Plans the seating motion from where the humanoid stands now, then plays it.
 
+    When the accessibility check says so (a seat higher than the carried bear), the
+    humanoid first raises the bear where the walk stopped and steps straight in to
+    s_goal.
+
     Blackboard:
-        reads ``/chair/mesh``, ``/sitting/pose``; writes ``/seat/plan``.
+        reads ``/chair/mesh``, ``/sitting/pose``, ``/accessibility/result``; writes
+        ``/seat/plan``.
     """
 
     activity = "seating the bear"
 
     def __init__(self, name: str = "SeatBear"):
         super().__init__(
-            name, reads=(keys.CHAIR_MESH, keys.SITTING_POSE), writes=(keys.SEATING_PLAN,)
+            name,
+            reads=(keys.CHAIR_MESH, keys.SITTING_POSE, keys.ACCESSIBILITY),
+            writes=(keys.SEATING_PLAN,),
         )
 
     def prepare(self) -> Callable[[], SeatingPlan]:
         skills, robot = self.need()
         chair_mesh = self.blackboard.get(keys.CHAIR_MESH)
         sitting_pose = self.blackboard.get(keys.SITTING_POSE)
+        accessibility = self.blackboard.get(keys.ACCESSIBILITY)
+        raised = accessibility.raise_at is not None
 
         def job() -> SeatingPlan:
+            if raised:
+                here = tracked_humanoid_pose(skills, robot)
+                skills.raise_bear(
+                    robot.humanoid, chair_mesh, sitting_pose, here, cancel=self.cancel_event
+                )
+                step_in = skills.walk_path(
+                    robot.humanoid,
+                    robot.clock,
+                    lambda: skills.locate_humanoid(robot.arm),
+                    (here, accessibility.se2_goal),
+                    cancel=self.cancel_event,
+                )
+                if not step_in.reached:
+                    raise RuntimeError(f"stepping in with the bear raised: {step_in.reason}")
             humanoid_pose = tracked_humanoid_pose(skills, robot)
-            plan = skills.plan_seating(chair_mesh, sitting_pose, humanoid_pose)
+            plan = skills.plan_seating(chair_mesh, sitting_pose, humanoid_pose, raised=raised)
             skills.execute_seating(robot.humanoid, plan, cancel=self.cancel_event)
             return plan
 

@@ -51,6 +51,7 @@ def default_results() -> dict[str, Any]:
             yaw_transform(-np.pi / 2), -np.pi / 2, 0.9, 0.004, np.zeros((10, 3))
         ),
         "walk_path": WalkResult(True, 0.01, 0.02, 12.0),
+        "raise_bear": None,
         "plan_seating": SeatingPlan(
             joint_names,
             np.linspace(0.0, 3.0, 4),

@@ -107,9 +107,13 @@ class AccessibilityResult(NamedTuple):
         accessible: a valid SE(2) goal and a collision-free path to it exist.
         se2_goal: where the humanoid should stand, facing opposite the sitting direction.
         sitting_pose: g, possibly moved along the ray toward the humanoid (arm reach).
-        path: waypoints from the humanoid's pose to ``se2_goal`` (empty when none).
+        path: waypoints from the humanoid's pose to ``se2_goal``, or to ``raise_at``
+            when set (empty when none).
         reason: why it is not accessible (empty when it is).
         seconds: planning wall time.
+        raise_at: where the humanoid raises the bear before stepping straight in to
+            ``se2_goal`` (a seat higher than the carried bear); None: it walks in as it
+            carries the bear.
     """
 
     accessible: bool
@@ -118,11 +122,13 @@ class AccessibilityResult(NamedTuple):
     path: tuple[SE2Pose, ...]
     reason: str = ""
     seconds: float = 0.0
+    raise_at: SE2Pose | None = None
 
     def summary(self) -> dict[str, Any]:
         return {
             "accessible": self.accessible,
             "se2_goal": _se2_json(self.se2_goal),
+            "raise_at": _se2_json(self.raise_at),
             "waypoints": len(self.path),
             "reason": self.reason,
             "seconds": round(self.seconds, 3),

@@ -87,8 +87,23 @@ class MissionSkills(Protocol):
         cancel: threading.Event | None = None,
     ) -> WalkResult: ...
 
+    def raise_bear(
+        self,
+        humanoid: Humanoid,
+        chair_mesh: trimesh.Trimesh,
+        sitting_pose: SittingPose,
+        humanoid_pose: SE2Pose,
+        *,
+        cancel: threading.Event | None = None,
+    ) -> None: ...
+
     def plan_seating(
-        self, chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, humanoid_pose: SE2Pose
+        self,
+        chair_mesh: trimesh.Trimesh,
+        sitting_pose: SittingPose,
+        humanoid_pose: SE2Pose,
+        *,
+        raised: bool = False,
     ) -> SeatingPlan: ...
 
     def execute_seating(
@@ -110,6 +125,7 @@ SKILL_SOURCES: dict[str, str] = {
     "wait_until_chair_still": "skills.perception:wait_until_chair_still",
     "measure_chair_rotation": "skills.perception:measure_chair_rotation",
     "walk_path": "skills.control:walk_path",
+    "raise_bear": "skills.planning.wholebody:raise_bear",
     "plan_seating": "skills.planning.wholebody:plan_seating_where_standing",
     "execute_seating": "skills.planning.wholebody:execute_seating",
     "release_and_stand": "skills.planning.wholebody:release_and_stand",

@@ -3,6 +3,7 @@ interruption, and an exception in the skill (per-tick assertions, py_trees style
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -21,6 +22,7 @@ from hardware.fakes import FakeJudge, fake_robot
 from hardware.interfaces import SeatingJudgement
 from skills.arena import DEFAULT_ARENA
 from skills.fakes import ScriptedSkills, default_results
+from skills.geometry import SE2Pose
 from skills.results import AccessibilityResult, ImaginationResult, WalkResult
 from skills.toolbox import SkillNotReady
 
@@ -211,3 +213,35 @@ def test_release_succeeds_when_seated():
     leaf = make(ReleaseAndStand, ScriptedSkills(), judge=FakeJudge())
     assert tick_until_done(leaf)[-1] == Status.SUCCESS
     assert "seated" in leaf.feedback_message
+
+
+def _raised_approach() -> AccessibilityResult:
+    raise_at = SE2Pose(1.02, 0.0, math.pi)
+    return DEFAULTS["check_accessibility"]._replace(raise_at=raise_at)
+
+
+def test_seat_bear_raises_the_bear_and_steps_in_when_the_check_says_so():
+    skills = ScriptedSkills()
+    leaf = make(SeatBear, skills)
+    py_trees.blackboard.Blackboard.set(keys.ACCESSIBILITY, _raised_approach())
+    assert tick_until_done(leaf)[-1] == Status.SUCCESS, leaf.feedback_message
+    assert len(skills.calls["raise_bear"]) == 1
+    (walked,) = skills.calls["walk_path"]
+    assert walked[0][3][-1] == DEFAULTS["check_accessibility"].se2_goal
+    assert skills.calls["plan_seating"][0][1]["raised"] is True
+
+
+def test_seat_bear_walks_in_without_raising_by_default():
+    skills = ScriptedSkills()
+    assert tick_until_done(make(SeatBear, skills))[-1] == Status.SUCCESS
+    assert not skills.calls["raise_bear"] and not skills.calls["walk_path"]
+    assert skills.calls["plan_seating"][0][1]["raised"] is False
+
+
+def test_seat_bear_fails_when_the_step_in_falls_short():
+    skills = ScriptedSkills({"walk_path": WalkResult(False, 0.1, 0.0, 20.0, "timed out")})
+    leaf = make(SeatBear, skills)
+    py_trees.blackboard.Blackboard.set(keys.ACCESSIBILITY, _raised_approach())
+    assert tick_until_done(leaf)[-1] == Status.FAILURE
+    assert "stepping in with the bear raised: timed out" in leaf.feedback_message
+    assert not skills.calls["plan_seating"]

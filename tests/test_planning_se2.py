@@ -27,6 +27,7 @@ from skills.planning.se2 import (
     reach_validator,
     seat_support_heights,
     slide_on_seat,
+    stepped_back,
 )
 
 PELVIS_ABOVE_SEAT_M = 0.05
@@ -234,17 +235,17 @@ def test_out_of_reach_preplan_slides_p_closer_and_retries(monkeypatch: pytest.Mo
     calls: list[float] = []
     reach_m = [0.29]
 
-    def preplan_seating(chair_mesh, sitting_pose, se2_goal):
+    def preplan_approach(chair_mesh, sitting_pose, se2_goal):
         forward = math.hypot(
             sitting_pose.position[0] - se2_goal.x, sitting_pose.position[1] - se2_goal.y
         )
         calls.append(forward)
         if forward > reach_m[0]:
             raise InfeasibleSeating("bear placement", f"out of reach: {forward:.2f} m forward")
-        return "plan"
+        return None
 
     module = types.ModuleType("skills.planning.wholebody")
-    module.preplan_seating = preplan_seating
+    module.preplan_approach = preplan_approach
     module.InfeasibleSeating = InfeasibleSeating
     monkeypatch.setitem(sys.modules, "skills.planning.wholebody", module)
 
@@ -334,3 +335,18 @@ def test_accessible_sitting_yaws_leave_room_to_stand_inside_the_arena() -> None:
     # Beside the arena's side edge, turning toward that edge is excluded.
     yaws = accessible_sitting_yaws(DEFAULT_ARENA, (0.85, 0.25))
     assert yaws.max() < math.radians(10.0)
+
+
+def test_a_raised_approach_ends_the_path_where_the_bear_is_raised() -> None:
+    chair_mesh, sitting_pose = _placed_chair(0.6, 0.1, 20.0)
+
+    def raise_first(chair_mesh, sitting_pose, se2_goal) -> SeatingCheck:
+        return SeatingCheck(raise_at=stepped_back(se2_goal, 0.06))
+
+    result = check_accessibility(
+        chair_mesh, sitting_pose, START, DEFAULT_ARENA, seed=0, seating_validator=raise_first
+    )
+    assert result.accessible, result.reason
+    assert result.raise_at == stepped_back(result.se2_goal, 0.06)
+    assert result.path[-1] == result.raise_at
+    assert result.summary()["raise_at"]["x_m"] == pytest.approx(result.raise_at.x, abs=1e-3)

@@ -14,13 +14,16 @@ from skills.geometry import SE2Pose, SittingPose
 from skills.meshes import box_chair_mesh
 from skills.nao_carrying import BEAR_SEAT_BELOW_HANDS_M
 from skills.planning.wholebody import (
+    RAISED_POSTURE,
     STANCE,
     STANDING_POSTURE,
     InfeasibleSeating,
     SeatingCancelled,
     execute_seating,
+    plan_raise,
     plan_seating,
     plan_seating_where_standing,
+    preplan_approach,
     preplan_seating,
     release_and_stand,
 )
@@ -363,3 +366,28 @@ def test_cancel_stops_execution(plan):
     with pytest.raises(SeatingCancelled):
         release_and_stand(humanoid, plan, cancel=cancel)
     assert [c[0] for c in humanoid.calls] == ["play"]
+
+
+def test_over_a_seat_higher_than_the_carried_bear_the_nao_raises_it_first(chair) -> None:
+    high_chair = box_chair_mesh(seat_height_m=0.33, overall_height_m=0.6)
+    sitting = SittingPose(np.array([0.02, 0.0, 0.35]), 0.0)
+    se2_goal = SE2Pose(0.28, 0.0, math.pi)
+    # Carried low (seat point 0.32 m), the bear would stand in the seat.
+    with pytest.raises(InfeasibleSeating) as info:
+        plan_seating(high_chair, sitting, se2_goal)
+    assert info.value.constraint == STANCE and info.value.carried_bear
+    raise_at = preplan_approach(high_chair, sitting, se2_goal)
+    assert raise_at is not None
+    # Back along the ray (the NAO faces -x), facing the same way.
+    assert raise_at.x > se2_goal.x and raise_at.y == pytest.approx(0.0)
+    assert raise_at.theta == pytest.approx(se2_goal.theta)
+    times_s, positions = plan_raise(high_chair, sitting, raise_at)
+    assert np.all(np.diff(times_s) > 0.0)
+    np.testing.assert_allclose(_planar(positions)[-1], RAISED_POSTURE, atol=1e-6)
+    # Raising at s_goal itself would put the bear through the seat's front.
+    with pytest.raises(InfeasibleSeating):
+        plan_raise(high_chair, sitting, se2_goal)
+    plan = plan_seating(high_chair, sitting, se2_goal, raised=True)
+    np.testing.assert_allclose(_planar(plan.positions_rad)[0], RAISED_POSTURE, atol=1e-6)
+    # A seat under the carried bear needs no raise.
+    assert preplan_approach(chair, SITTING_POSE, NAO_POSE) is None

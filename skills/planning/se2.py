@@ -79,11 +79,14 @@ class SeatingCheck(NamedTuple):
             closer to the NAO may fix it.
         too_close: the NAO stands too close to the chair (its feet, or the bear it
             carries, in the chair), so standing farther back may fix it.
+        raise_at: feasible only with the bear raised, which the NAO does here (back
+            along the ray from s_goal) before it steps in; None: walk in as it carries.
     """
 
     reason: str = ""
     bear_placement: bool = False
     too_close: bool = False
+    raise_at: SE2Pose | None = None
 
 
 SeatingValidator = Callable[[trimesh.Trimesh, SittingPose, SE2Pose], SeatingCheck]
@@ -306,7 +309,7 @@ def default_seating_validator() -> SeatingValidator:
         if error.name and "skills.planning.wholebody".startswith(error.name):
             return reach_validator
         raise
-    preplan = getattr(module, "preplan_seating", None)
+    preplan = getattr(module, "preplan_approach", None)
     if preplan is None:
         return reach_validator
     infeasible = getattr(module, "InfeasibleSeating", ValueError)
@@ -316,7 +319,7 @@ def default_seating_validator() -> SeatingValidator:
         chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
     ) -> SeatingCheck:
         try:
-            preplan(chair_mesh, sitting_pose, se2_goal)
+            raise_at = preplan(chair_mesh, sitting_pose, se2_goal)
         except infeasible as error:
             constraint = getattr(error, "constraint", "")
             return SeatingCheck(
@@ -324,12 +327,12 @@ def default_seating_validator() -> SeatingValidator:
                 bear_placement=constraint == "bear placement",
                 too_close=constraint == stance,
             )
-        return SeatingCheck()
+        return SeatingCheck(raise_at=raise_at)
 
     return wholebody_validator
 
 
-def _stepped_back(se2_goal: SE2Pose, distance_m: float) -> SE2Pose:
+def stepped_back(se2_goal: SE2Pose, distance_m: float) -> SE2Pose:
     """s_goal moved ``distance_m`` back along the sitting ray (the NAO faces the chair)."""
     return SE2Pose(
         se2_goal.x - distance_m * math.cos(se2_goal.theta),
@@ -520,7 +523,7 @@ def check_accessibility(
     slide = placement.slide_m
     for _ in range(MAX_SLIDE_RETRIES):
         if check.reason and check.too_close:
-            backed = _stepped_back(se2_goal, STANCE_RETRY_STEP_M)
+            backed = stepped_back(se2_goal, STANCE_RETRY_STEP_M)
             if goal_blocked_reason(checker, backed):
                 break
             se2_goal = backed
@@ -534,8 +537,15 @@ def check_accessibility(
         check = validator(chair_mesh, sitting_pose, se2_goal)
     if check.reason:
         return AccessibilityResult(False, se2_goal, sitting_pose, (), check.reason)
+    if check.raise_at is not None:
+        # The path ends where the bear is raised; the NAO then steps straight in.
+        blocked = _step_in_blocked_by(checker, check.raise_at, se2_goal)
+        if blocked:
+            reason = f"the step in from raising the bear to s_goal touches the {blocked}"
+            return AccessibilityResult(False, se2_goal, sitting_pose, (), reason)
 
-    planned = plan_se2_path(checker, humanoid_pose, se2_goal, seed=seed, check_budget=check_budget)
+    path_goal = check.raise_at or se2_goal
+    planned = plan_se2_path(checker, humanoid_pose, path_goal, seed=seed, check_budget=check_budget)
     return AccessibilityResult(
         not planned.reason,
         se2_goal,
@@ -543,4 +553,18 @@ def check_accessibility(
         planned.waypoints,
         planned.reason,
         planned.seconds,
+        raise_at=check.raise_at,
     )
+
+
+def _step_in_blocked_by(checker: NaoCollisionChecker, start: SE2Pose, goal: SE2Pose) -> str:
+    """What the NAO touches on the straight step from ``start`` to ``goal`` ("" if none)."""
+    steps = max(2, math.ceil(start.distance_to(goal) / CHECK_RESOLUTION_M) + 1)
+    for t in np.linspace(0.0, 1.0, steps):
+        pose = SE2Pose(
+            start.x + t * (goal.x - start.x), start.y + t * (goal.y - start.y), goal.theta
+        )
+        blocker = checker.blocked_by(pose)
+        if blocker:
+            return blocker
+    return ""

@@ -35,7 +35,7 @@ from scipy.optimize import least_squares
 from hardware.interfaces import Humanoid
 from skills.geometry import SE2Pose, SittingPose, transform_points, wrap_angle
 from skills.nao_carrying import BEAR_SEAT_CLEARANCE_M
-from skills.planning.se2 import slide_on_seat
+from skills.planning.se2 import slide_on_seat, stepped_back
 from skills.planning.wholebody.chair_profile import (
     ChairProfile,
     ChairProfileError,
@@ -58,6 +58,15 @@ STANDING_POSTURE = np.array([0.0, 0.0, 0.0, 0.9208, 1.3629])
 straight, the palms where the carrying posture (:data:`skills.nao_carrying.CARRYING_POSTURE_RAD`)
 has them (within 3 mm and 2 deg, checked by a test), so the bear barely moves when the
 arms switch to the planar posture during the lead-in."""
+RAISED_POSTURE = np.array([0.0, 0.0, 0.0, 0.0, 0.41])
+"""q with the bear raised for stepping up to a high seat: standing straight, the arms
+forward, the bear's seat point 0.40 m high and 0.20 m ahead (0.32 m and 0.16 m in
+:data:`STANDING_POSTURE`), tilted 0.2 deg. Over a seat higher than the carried bear (a
+director's chair at 0.33 m) the NAO stops where the carried bear is clear, raises it,
+and steps in: standing there with the bear low, it could not reach the seat."""
+LIFT_STEP_M = 0.02
+"""The raising pose steps back from s_goal in these steps until the raise is clear."""
+MAX_LIFT_BACKOFF_M = 0.2
 REST_POSTURE = np.array([0.0, 0.0, 0.0, 1.4, 0.4])
 """q after the retract: standing straight, arms down along the body."""
 LEAD_IN_S = 1.0
@@ -102,11 +111,14 @@ class InfeasibleSeating(ValueError):
 
     Attributes:
         constraint: the violated constraint group (for example ``"bear placement"``).
+        carried_bear: a :data:`STANCE` failure caused by the carried bear (not the feet):
+            raising the bear before stepping in may help.
     """
 
-    def __init__(self, constraint: str, detail: str) -> None:
+    def __init__(self, constraint: str, detail: str, *, carried_bear: bool = False) -> None:
         super().__init__(f"{constraint}: {detail}" if detail else constraint)
         self.constraint = constraint
+        self.carried_bear = carried_bear
 
 
 class SeatingCancelled(RuntimeError):
@@ -415,7 +427,11 @@ def withdrawn_hands_posture(
 
 
 def plan_seating(
-    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, humanoid_pose: SE2Pose
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    humanoid_pose: SE2Pose,
+    *,
+    raised: bool = False,
 ) -> SeatingPlan:
     """The whole-body motion that seats the bear at g from the NAO's current pose.
 
@@ -423,6 +439,8 @@ def plan_seating(
         chair_mesh: the chair in the world frame (z up, metres).
         sitting_pose: the imagined sitting pose g (world frame).
         humanoid_pose: the NAO's planar pose (the point on the floor between its feet).
+        raised: the NAO holds the bear in :data:`RAISED_POSTURE` (it stepped in with it
+            raised, see :func:`plan_raise`), not in :data:`STANDING_POSTURE`.
 
     Returns:
         The plan: qibullet joint names (both sides), knot times, joint angles (the last
@@ -440,9 +458,10 @@ def plan_seating(
         )
     # Standing there with the bear held in front must be clear of the chair too: a high
     # seat (a director's chair) reaches the carried bear before the NAO's ellipsoid.
+    start_posture = RAISED_POSTURE if raised else STANDING_POSTURE
     standing = exact_posture_violation(
         problems,
-        STANDING_POSTURE,
+        start_posture,
         scene.profile,
         g_xz=None,
         tilt_rad=BEAR_TILT_MOTION_RAD,
@@ -452,8 +471,9 @@ def plan_seating(
     if standing[0] > CHECK_TOLERANCE and standing[1] == "chair collision":
         too_close = InfeasibleSeating(
             STANCE,
-            f"{standing[2]} {standing[0]:.3f} m inside the chair in the standing posture "
-            "(the NAO stands too close)",
+            f"{standing[2]} {standing[0]:.3f} m inside the chair in the "
+            f"{'raised' if raised else 'standing'} posture (the NAO stands too close)",
+            carried_bear=standing[2].startswith("bear"),
         )
     # A goal from which the trajectory or the retract is infeasible may have a sibling
     # (another local optimum) from which both are feasible: try each in turn.
@@ -472,7 +492,7 @@ def plan_seating(
             # Only now: an unreachable g is the first thing to report (no stance helps).
             raise too_close
         try:
-            motion = _motion_from_goal(problems, scene.profile, q_goal)
+            motion = _motion_from_goal(problems, scene.profile, q_goal, start_posture)
         except InfeasibleSeating as error:
             failure = error
             continue
@@ -493,7 +513,11 @@ REACHED_POSE_SLIDES_M = (0.01, 0.02, 0.03)
 
 
 def plan_seating_where_standing(
-    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, humanoid_pose: SE2Pose
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    humanoid_pose: SE2Pose,
+    *,
+    raised: bool = False,
 ) -> SeatingPlan:
     """:func:`plan_seating` from where the NAO stopped, sliding p closer when needed.
 
@@ -506,7 +530,7 @@ def plan_seating_where_standing(
         InfeasibleSeating: the first failure, when no slide helps.
     """
     try:
-        return plan_seating(chair_mesh, sitting_pose, humanoid_pose)
+        return plan_seating(chair_mesh, sitting_pose, humanoid_pose, raised=raised)
     except InfeasibleSeating as error:
         if error.constraint != "bear placement":
             raise
@@ -516,7 +540,7 @@ def plan_seating_where_standing(
         if moved_m < slide_m - 1e-6:
             break  # the seat ends here
         try:
-            return plan_seating(chair_mesh, moved, humanoid_pose)
+            return plan_seating(chair_mesh, moved, humanoid_pose, raised=raised)
         except InfeasibleSeating as error:
             if error.constraint != "bear placement":
                 raise
@@ -524,7 +548,7 @@ def plan_seating_where_standing(
 
 
 def _motion_from_goal(
-    problems: SeatingProblems, profile: ChairProfile, q_goal: np.ndarray
+    problems: SeatingProblems, profile: ChairProfile, q_goal: np.ndarray, q_start: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float]:
     """(times, knots, retract times, retract knots, trajectory s, retract s) to q_goal.
 
@@ -532,7 +556,7 @@ def _motion_from_goal(
         InfeasibleSeating: the trajectory or the retract is infeasible.
     """
     started = time.perf_counter()
-    times, knots = solve_trajectory(problems, profile, STANDING_POSTURE, q_goal, bear_held=True)
+    times, knots = solve_trajectory(problems, profile, q_start, q_goal, bear_held=True)
     trajectory_s = time.perf_counter() - started
     started = time.perf_counter()
     q_folded = _clear_withdrawn_posture(problems, profile, q_goal)
@@ -583,6 +607,105 @@ def preplan_seating(
         InfeasibleSeating: naming the violated constraint.
     """
     return plan_seating(chair_mesh, sitting_pose, se2_goal)
+
+
+def preplan_approach(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
+) -> SE2Pose | None:
+    """The accessibility check's pre-plan: can the NAO seat the bear from s_goal?
+
+    First as it walks, with the bear carried low; when only the carried bear is in the
+    chair there (a seat higher than the bear), with the bear raised instead, which the
+    NAO does before it steps in from the raising pose this returns.
+
+    Returns:
+        None when the NAO can walk to s_goal with the bear carried low; else the pose,
+        on the way back from s_goal, where it raises the bear before stepping in.
+
+    Raises:
+        InfeasibleSeating: naming the violated constraint (of the low carry when the
+            raised one does not help).
+    """
+    try:
+        plan_seating(chair_mesh, sitting_pose, se2_goal)
+        return None
+    except InfeasibleSeating as error:
+        if not error.carried_bear:
+            raise
+        low_failure = error
+    try:
+        plan_seating(chair_mesh, sitting_pose, se2_goal, raised=True)
+        return raising_pose(chair_mesh, sitting_pose, se2_goal)
+    except InfeasibleSeating:
+        raise low_failure from None
+
+
+def raising_pose(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
+) -> SE2Pose:
+    """Where to raise the bear before stepping in to s_goal: the first pose back along
+    the NAO's heading, in :data:`LIFT_STEP_M` steps, from which the raise is clear.
+
+    Raises:
+        InfeasibleSeating: none within :data:`MAX_LIFT_BACKOFF_M`.
+    """
+    failure: InfeasibleSeating | None = None
+    for back_m in np.arange(LIFT_STEP_M, MAX_LIFT_BACKOFF_M + 1e-9, LIFT_STEP_M):
+        pose = stepped_back(se2_goal, float(back_m))
+        try:
+            plan_raise(chair_mesh, sitting_pose, pose)
+            return pose
+        except InfeasibleSeating as error:
+            failure = error
+    assert failure is not None
+    raise InfeasibleSeating(
+        STANCE, f"no pose within {MAX_LIFT_BACKOFF_M:.2f} m to raise the bear ({failure})"
+    )
+
+
+def plan_raise(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, humanoid_pose: SE2Pose
+) -> tuple[np.ndarray, np.ndarray]:
+    """The arms' motion from :data:`STANDING_POSTURE` to :data:`RAISED_POSTURE` where the
+    NAO stands, legs still, clear of the chair.
+
+    Returns:
+        (knot times from the start of the motion, seconds; (K, J) joint angles of
+        :data:`DRIVEN_JOINTS`).
+
+    Raises:
+        InfeasibleSeating: the raise touches the chair (or the carried bear is in it).
+    """
+    problems = seating_problems()
+    scene = seating_scene(chair_mesh, sitting_pose, humanoid_pose)
+    times, knots = solve_trajectory(
+        problems,
+        scene.profile,
+        STANDING_POSTURE,
+        RAISED_POSTURE,
+        bear_held=True,
+        freeze_legs=True,
+        phase="raise",
+    )
+    return LEAD_IN_S + times, to_joint_positions(knots)
+
+
+def raise_bear(
+    humanoid: Humanoid,
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    humanoid_pose: SE2Pose,
+    *,
+    cancel: threading.Event | None = None,
+) -> None:
+    """Plans (:func:`plan_raise`) and plays the raise where the NAO stands; blocks.
+
+    Raises:
+        InfeasibleSeating: the raise is not clear of the chair from here.
+        SeatingCancelled: ``cancel`` was set before or during the motion.
+    """
+    times_s, positions_rad = plan_raise(chair_mesh, sitting_pose, humanoid_pose)
+    _play(humanoid, DRIVEN_JOINTS, times_s, positions_rad, cancel, "raising the bear")
 
 
 def _play(
