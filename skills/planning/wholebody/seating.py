@@ -11,6 +11,9 @@ The plan (the paper, "Motion Planning"):
 3. The trajectory from :data:`STANDING_POSTURE` to q_goal minimises
    Σ ½‖q(k) − q_goal‖² under joint velocity limits, with the same stability and
    collision constraints at every knot. Knots after the goal is reached are dropped.
+   Over a seat higher than the carried bear, the NAO first raises the bear
+   (:func:`plan_raise`, a step back from s_goal) and steps in; the trajectory then
+   starts from :data:`RAISED_POSTURE` (:func:`preplan_approach` decides).
 4. The retract motion, with the bear released: the legs hold still while the arms
    withdraw the hands back (toward the NAO) and a little up beside the bear,
    then the body stands up to
@@ -64,9 +67,10 @@ forward, the bear's seat point 0.40 m high and 0.20 m ahead (0.32 m and 0.16 m i
 :data:`STANDING_POSTURE`), tilted 0.2 deg. Over a seat higher than the carried bear (a
 director's chair at 0.33 m) the NAO stops where the carried bear is clear, raises it,
 and steps in: standing there with the bear low, it could not reach the seat."""
-LIFT_STEP_M = 0.02
-"""The raising pose steps back from s_goal in these steps until the raise is clear."""
-MAX_LIFT_BACKOFF_M = 0.2
+RAISE_STEP_M = 0.02
+"""The raising pose steps back from s_goal in these steps until the raise is clear..."""
+MAX_RAISE_BACKOFF_M = 0.2
+"""... up to this far (metres)."""
 REST_POSTURE = np.array([0.0, 0.0, 0.0, 1.4, 0.4])
 """q after the retract: standing straight, arms down along the body."""
 LEAD_IN_S = 1.0
@@ -644,13 +648,13 @@ def raising_pose(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
 ) -> SE2Pose:
     """Where to raise the bear before stepping in to s_goal: the first pose back along
-    the NAO's heading, in :data:`LIFT_STEP_M` steps, from which the raise is clear.
+    the NAO's heading, in :data:`RAISE_STEP_M` steps, from which the raise is clear.
 
     Raises:
-        InfeasibleSeating: none within :data:`MAX_LIFT_BACKOFF_M`.
+        InfeasibleSeating: none within :data:`MAX_RAISE_BACKOFF_M`.
     """
     failure: InfeasibleSeating | None = None
-    for back_m in np.arange(LIFT_STEP_M, MAX_LIFT_BACKOFF_M + 1e-9, LIFT_STEP_M):
+    for back_m in np.arange(RAISE_STEP_M, MAX_RAISE_BACKOFF_M + 1e-9, RAISE_STEP_M):
         pose = stepped_back(se2_goal, float(back_m))
         try:
             plan_raise(chair_mesh, sitting_pose, pose)
@@ -659,7 +663,7 @@ def raising_pose(
             failure = error
     assert failure is not None
     raise InfeasibleSeating(
-        STANCE, f"no pose within {MAX_LIFT_BACKOFF_M:.2f} m to raise the bear ({failure})"
+        STANCE, f"no pose within {MAX_RAISE_BACKOFF_M:.2f} m to raise the bear ({failure})"
     )
 
 
