@@ -428,3 +428,43 @@ def test_the_nao_reaching_into_the_chair_is_recorded(world):
     touch = world.chair_touch.deepest
     assert touch.depth_m > 0.01 and touch.nao_link
     world.place_nao(DEFAULT_ARENA.humanoid_start)
+
+
+def test_a_bear_reclining_against_a_reclined_back_is_seated(tmp_path):
+    import trimesh
+
+    from hardware.sim.judge import MAX_RECLINE_DEG, MAX_TILT_DEG, _leans_back
+    from skills.geometry import make_transform, rot_z
+
+    # A garden chair: seat top 0.24 m, its backrest reclined 38 deg from vertical.
+    seat = trimesh.creation.box(extents=(0.28, 0.32, 0.03)).apply_translation((0, 0, 0.225))
+    legs = [
+        trimesh.creation.box(extents=(0.03, 0.03, 0.21)).apply_translation((sx, sy, 0.105))
+        for sx in (-0.125, 0.125)
+        for sy in (-0.145, 0.145)
+    ]
+    recline = np.radians(38.0)
+    back = trimesh.creation.box(extents=(0.03, 0.32, 0.34))
+    back.apply_transform(trimesh.transformations.rotation_matrix(-recline, (0, 1, 0)))
+    back.apply_translation((-0.14 - 0.17 * np.sin(recline), 0, 0.24 + 0.17 * np.cos(recline)))
+    path = tmp_path / "garden.ply"
+    trimesh.util.concatenate([seat, *legs, back]).export(path)
+    with SimWorld(SimConfig(chair_path=path, front_yaw_deg=0.0, camera_noise=False)) as world:
+        world.nao.set_hands(True)
+        T_world_chair = world.T_world_chair_true()
+        yaw = world.sitting_yaw_true()
+        # Sat 12 cm in front of the backrest, leaning back: it falls back against it.
+        seat_point = T_world_chair @ np.array([-0.02, 0.0, 0.245, 1.0])
+        lean_back = make_transform(rot_z(yaw), np.zeros(3)) @ make_transform(
+            trimesh.transformations.rotation_matrix(-recline, (0, 1, 0))[:3, :3], np.zeros(3)
+        )
+        lean_back[:3, 3] = seat_point[:3]
+        world.bear.set_T_world_bear(lean_back)
+        verdict = world.judge.judge(yaw, settle_s=1.5)
+        assert MAX_TILT_DEG < verdict.torso_tilt_deg < MAX_RECLINE_DEG
+        assert verdict.seated, verdict.reason
+    # Leaning back, not forward or sideways: only then does the back support count.
+    facing = np.array([1.0, 0.0, 0.0])
+    assert _leans_back(np.array([-0.5, 0.0, 0.8]), facing)
+    assert not _leans_back(np.array([0.5, 0.0, 0.8]), facing)
+    assert not _leans_back(np.array([0.0, 0.5, 0.8]), facing)

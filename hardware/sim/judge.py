@@ -14,6 +14,14 @@ from hardware.sim.clock import SimClock
 from skills.geometry import wrap_angle
 
 MAX_TILT_DEG = 30.0
+MAX_RECLINE_DEG = 45.0
+"""How far a bear leaning back against the chair may recline. The paper counts a trial by
+asking annotators whether the robot seated the bear; a bear whose head rests on a
+reclined backrest (chair-chairgen-10, a garden chair: 35 deg) is seated, as a child on it
+would be. Leaning forward or sideways, or back into nothing, the limit stays 30 deg."""
+BACK_SUPPORT_HEIGHT_M = 0.12
+"""A contact with the chair this high up the bear (from its seat point along its torso;
+the torso is 0.12 m tall, the head above it) supports its back."""
 MAX_FACING_ERROR_DEG = 45.0
 
 
@@ -22,11 +30,13 @@ class SimJudge:
 
     After ``settle_s`` of simulated time:
         * on_seat: the bear touches the chair and does not touch the floor;
-        * torso tilt: angle between the bear's z axis and the world's z axis;
+        * torso tilt: angle between the bear's z axis and the world's z axis, at most
+          30 deg, or 45 deg when the bear leans back (within 45 deg of straight back)
+          against the chair (touching it at its head or upper torso);
         * facing error: angle between the bear's x axis projected on the floor and the
           sitting direction: the chair's TRUE one when the world knows it (so that a wrong
           imagination cannot pass its own exam), else the one the mission imagined;
-    seated = on_seat, tilt <= 30 deg and facing error <= 45 deg.
+    seated = on_seat, tilt within its limit and facing error <= 45 deg.
     """
 
     def __init__(
@@ -52,12 +62,23 @@ class SimJudge:
         if true_yaw is not None:
             sitting_yaw_rad = true_yaw
         with self._bullet.lock:
-            on_chair = bool(self._bullet.getContactPoints(self._bear.body, self._chair_body))
+            chair_contacts = self._bullet.getContactPoints(self._bear.body, self._chair_body)
+            on_chair = bool(chair_contacts)
             on_floor = bool(self._bullet.getContactPoints(self._bear.body, self._floor_body))
             T_world_bear = self._bear.T_world_bear()
         up = T_world_bear[:3, 2]
         tilt_deg = math.degrees(math.acos(float(np.clip(up[2], -1.0, 1.0))))
         forward = T_world_bear[:3, 0]
+        heights_up_bear = [
+            float(np.dot(np.asarray(contact[5]) - T_world_bear[:3, 3], up))
+            for contact in chair_contacts
+        ]
+        back_supported = any(h >= BACK_SUPPORT_HEIGHT_M for h in heights_up_bear)
+        max_tilt_deg = (
+            MAX_RECLINE_DEG
+            if back_supported and _leans_back(up, forward) and on_chair
+            else MAX_TILT_DEG
+        )
         if math.hypot(forward[0], forward[1]) < 1e-6:
             facing_deg = 180.0
         else:
@@ -70,8 +91,8 @@ class SimJudge:
             reasons.append("the bear does not touch the chair")
         if on_floor:
             reasons.append("the bear touches the floor")
-        if tilt_deg > MAX_TILT_DEG:
-            reasons.append(f"torso tilted {tilt_deg:.0f} deg > {MAX_TILT_DEG:.0f}")
+        if tilt_deg > max_tilt_deg:
+            reasons.append(f"torso tilted {tilt_deg:.0f} deg > {max_tilt_deg:.0f}")
         if facing_deg > MAX_FACING_ERROR_DEG:
             reasons.append(f"facing off by {facing_deg:.0f} deg > {MAX_FACING_ERROR_DEG:.0f}")
         return SeatingJudgement(
@@ -81,3 +102,12 @@ class SimJudge:
             facing_error_deg=facing_deg,
             reason="; ".join(reasons),
         )
+
+
+def _leans_back(up: np.ndarray, forward: np.ndarray) -> bool:
+    """The torso axis leans within 45 deg of straight back from the bear's facing."""
+    lean, facing = np.asarray(up[:2], float), np.asarray(forward[:2], float)
+    if np.linalg.norm(lean) < 1e-6 or np.linalg.norm(facing) < 1e-6:
+        return False
+    cosine = -float(np.dot(lean, facing)) / (np.linalg.norm(lean) * np.linalg.norm(facing))
+    return cosine >= math.cos(math.radians(45.0))
