@@ -13,7 +13,7 @@ planner, working from the scan of the true surface, kept clear (chairgen-06's ch
 shoved 9 cm). Of 7 trials lost that way, 6 succeeded with the exact surface. What a static
 chair cannot do is slide when pushed: nothing dynamic that touches it (the 0.2 kg bear)
 could push a 2 kg chair far, and the NAO is kinematic in this world, so contacts between
-the NAO and the chair are reported by the judge instead of moving the chair.
+the NAO and the chair are recorded (:mod:`hardware.sim.contacts`) instead of moving it.
 """
 
 from __future__ import annotations
