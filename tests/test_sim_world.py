@@ -400,12 +400,14 @@ def test_simulated_run_records_the_ground_truth(tmp_path):
 
 @pytest.mark.skipif(not SHARED_CHAIRS.exists(), reason="../shared/chairs is absent")
 def test_the_chair_collides_as_its_own_surface_not_as_convex_pieces():
+    from executive.config import front_yaw_from_manifest
     from skills.geometry import make_transform, rot_z
 
     # A director's chair: the seat sits between higher side rails and armrests, and the
     # convex pieces of seat and rails stood 2-4 cm above the seat.
     chair_path = SHARED_CHAIRS / "chair-chairgen-09.obj"
-    config = SimConfig(chair_path=chair_path, front_yaw_deg=324.07, camera_noise=False)
+    front_yaw_deg = front_yaw_from_manifest(chair_path)
+    config = SimConfig(chair_path=chair_path, front_yaw_deg=front_yaw_deg, camera_noise=False)
     with SimWorld(config) as world:
         world.nao.set_hands(True)
         T_world_chair = world.T_world_chair_true()

@@ -75,9 +75,7 @@ class SimJudge:
         ]
         back_supported = any(h >= BACK_SUPPORT_HEIGHT_M for h in heights_up_bear)
         max_tilt_deg = (
-            MAX_RECLINE_DEG
-            if back_supported and _leans_back(up, forward) and on_chair
-            else MAX_TILT_DEG
+            MAX_RECLINE_DEG if back_supported and _leans_back(up, forward) else MAX_TILT_DEG
         )
         if math.hypot(forward[0], forward[1]) < 1e-6:
             facing_deg = 180.0
