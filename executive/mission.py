@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 import math
+import signal
 import sys
 import time
 from collections.abc import Callable
@@ -11,8 +12,11 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from executive.config import RunConfig, front_yaw_from_manifest
-from executive.record import RunRecorder
+from executive.interrupts import signal_name
+from executive.outputs import atomic_path
+from executive.record import RecordWriteError, RunRecorder
 from executive.runner import MissionRunner, summarise
+from skills.errors import one_line
 from skills.geometry import wrap_angle
 from skills.meshes import load_mesh
 from skills.toolbox import DefaultSkills, MissionSkills
@@ -127,7 +131,18 @@ def run_in_simulation(
         arena=config.arena,
         voice=voice,
     )
-    world = SimWorld(sim_config)
+    try:
+        world = SimWorld(sim_config)
+    except BaseException as error:
+        # Interrupted (or failed) before the first tick: the record still gets a summary.
+        summary = summary_before_start(root, run_info, error, "building the simulated world")
+        try:
+            recorder.write_summary(summary)
+        finally:
+            recorder.close()
+        if isinstance(error, KeyboardInterrupt):
+            return summary
+        raise
     if config.snapshots:
         on_tick = _both(on_tick, StageSnapshots(world.render_png, config.out_dir / "snapshots"))
     try:
@@ -195,7 +210,8 @@ def _run_tree(
         summary = summarise(runner.run(), run_info)
         if render_png is not None:
             try:
-                render_png(config.out_dir / "final_scene.png")
+                with atomic_path(config.out_dir / "final_scene.png") as scratch:
+                    render_png(scratch)
                 summary["picture"] = "final_scene.png"
             except Exception as error:  # a missing picture must not lose the record
                 logger.warning("could not render the final scene: %s", error)
@@ -205,9 +221,35 @@ def _run_tree(
             except Exception as error:  # nor must a missing comparison
                 logger.warning("could not compare with the ground truth: %s", error)
         recorder.write_summary(summary)
+        if summary.get("record_error"):
+            raise RecordWriteError(f"{summary['record_error']} (robots stopped)")
         return summary
     finally:
         recorder.close()
+
+
+def summary_before_start(
+    root: Any, run_info: dict[str, Any], error: BaseException, doing: str
+) -> dict[str, Any]:
+    """The summary of a run that ended before its first tick (Ctrl-C, a failed world)."""
+    from py_trees.common import Status
+
+    from executive.runner import MissionOutcome, StageTiming
+
+    interrupted = isinstance(error, KeyboardInterrupt)
+    outcome = MissionOutcome(
+        status=Status.FAILURE,
+        stages=[StageTiming(child.name) for child in root.children],
+        ticks=0,
+        wall_s=0.0,
+        interrupted=interrupted,
+        stop_signal=signal_name(getattr(error, "signum", signal.SIGINT)) if interrupted else None,
+    )
+    summary = summarise(outcome, run_info)
+    summary["reason"] = (
+        f"interrupted while {doing}" if interrupted else f"failed while {doing}: {one_line(error)}"
+    )
+    return summary
 
 
 def _ground_truth(world: Any, summary: dict[str, Any]) -> dict[str, Any]:
@@ -257,5 +299,7 @@ def format_summary(summary: dict[str, Any]) -> str:
 
 
 def default_out_dir(config: RunConfig) -> Path:
-    """``runs/<date>-<time>-seed<N>``: a new directory per run."""
-    return Path("runs") / f"{time.strftime('%Y%m%d-%H%M%S')}-seed{config.seed}"
+    """``runs/<date>-<time>-seed<N>``: a new directory per run, made now (unique)."""
+    from executive.outputs import default_run_dir
+
+    return default_run_dir(config.seed)
