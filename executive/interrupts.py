@@ -50,6 +50,17 @@ def received() -> int | None:
     return _first_signal
 
 
+def raise_if_received() -> None:
+    """Raises :class:`Interrupted` if a stop signal came and its exception was swallowed.
+
+    Some libraries catch ``BaseException`` (trimesh around its optional imports, for
+    one), so the handler's exception can vanish; loops and stage boundaries call this
+    so the signal is honoured all the same.
+    """
+    if _first_signal is not None:
+        raise Interrupted(_first_signal)
+
+
 def signal_name(signum: int | None = None) -> str:
     """``SIGINT`` / ``SIGTERM`` of ``signum`` (default: the first received)."""
     signum = signum if signum is not None else (_first_signal or signal.SIGINT)

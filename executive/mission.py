@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from executive.config import RunConfig, front_yaw_from_manifest
-from executive.interrupts import signal_name
+from executive.interrupts import raise_if_received, signal_name
 from executive.outputs import atomic_path
 from executive.record import RecordWriteError, RunRecorder
 from executive.runner import MissionRunner, summarise
@@ -131,9 +131,14 @@ def run_in_simulation(
         arena=config.arena,
         voice=voice,
     )
+    world = None
     try:
+        raise_if_received()
         world = SimWorld(sim_config)
+        raise_if_received()
     except BaseException as error:
+        if world is not None:
+            world.close()
         # Interrupted (or failed) before the first tick: the record still gets a summary.
         summary = summary_before_start(root, run_info, error, "building the simulated world")
         try:

@@ -13,7 +13,11 @@ import py_trees
 from py_trees.common import Status
 
 from behaviours import keys
-from executive.interrupts import emergency_stop_on_second_signal, signal_name
+from executive.interrupts import (
+    emergency_stop_on_second_signal,
+    raise_if_received,
+    signal_name,
+)
 from executive.jsonable import to_jsonable
 from executive.record import RecordWriteError, RunRecorder
 from hardware.interfaces import Robot
@@ -151,6 +155,7 @@ class MissionRunner:
 
     def _tick_until_done(self) -> None:
         while True:
+            raise_if_received()
             tick_start = self.elapsed()
             self.tree.tick()
             self._time_stages(tick_start)
