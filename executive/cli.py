@@ -279,13 +279,16 @@ def _user_errors() -> tuple[type[BaseException], ...]:
         UnicodeError,
         sqlite3.Error,
     ]
-    # Other packages' one-line errors that do not derive from BearchairError (yet).
+    # Other packages' one-line errors that do not derive from BearchairError (yet). Only
+    # from modules already loaded: one that was not cannot have raised (and importing
+    # open3d just to classify an error costs seconds).
     for module_name, class_name in (
         ("hardware.real", "BackendUnavailable"),
         ("skills.perception", "PerceptionError"),
     ):
-        with contextlib.suppress(ImportError, AttributeError):
-            found.append(getattr(importlib.import_module(module_name), class_name))
+        module = sys.modules.get(module_name)
+        if module is not None and isinstance(getattr(module, class_name, None), type):
+            found.append(getattr(module, class_name))
     return tuple(found)
 
 

@@ -213,6 +213,8 @@ def _run_tree(
             on_tick=on_tick,
         )
         summary = summarise(runner.run(), run_info)
+        # The summary first: a SIGKILL while the picture renders must not lose it.
+        recorder.write_summary(summary)
         if render_png is not None:
             try:
                 with atomic_path(config.out_dir / "final_scene.png") as scratch:

@@ -211,7 +211,8 @@ def test_a_full_disk_while_ticking_is_one_line_and_the_robots_stop(tmp_path, mon
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no space left on the device" in err[0], err
     assert "robots stopped" in err[0]
-    assert fake.robot.humanoid.stopped >= 1 and "imagine_sitting" in fake.skills.cancelled
+    # The running skill (the scan or the imagination, as the timing goes) was cancelled.
+    assert fake.robot.humanoid.stopped >= 1 and fake.skills.cancelled
     # What reached the disk is still a readable record (its first tick), with its summary.
     assert len(RecordedRun(out).ticks) == 1
     assert "no space" in read_summary(out)["record_error"]
