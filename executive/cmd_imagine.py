@@ -15,6 +15,7 @@ import json
 import math
 from pathlib import Path
 
+from executive import interrupts
 from executive.cli_types import positive_int, seed_value
 
 
@@ -42,7 +43,12 @@ def run(args: argparse.Namespace) -> int:
     mesh = load_chair_mesh(args.mesh)
     if args.image is not None:  # before the minutes of simulation, not after
         check_output_file(args.image, "--image", (".png",))
-    result = imagine_sitting(mesh, seed=args.seed, workers=args.workers)
+    # Ctrl-C cancels the drops (within their polling period) even if a library swallowed
+    # the KeyboardInterrupt; the interrupt is then raised here.
+    result = imagine_sitting(
+        mesh, seed=args.seed, workers=args.workers, cancel=interrupts.stop_requested
+    )
+    interrupts.raise_if_received()
     seconds = result.seconds.get("total", 0.0)
     if args.image is not None:
         from skills.imagination.render import render_sitting

@@ -25,6 +25,10 @@ _first_signal: int | None = None
 _emergency_stops: list[Callable[[], None]] = []
 _owner_pid: int | None = None
 
+stop_requested = threading.Event()
+"""Set by the first stop signal: long computations take it as their ``cancel`` event,
+so they end within their polling period even when a library swallowed the exception."""
+
 
 class Interrupted(KeyboardInterrupt):
     """The operator (Ctrl-C) or the system (SIGTERM) asked the process to stop."""
@@ -73,6 +77,7 @@ def _handle(signum: int, frame: Any) -> None:
         return  # a forked child inherited the handler: its parent decides
     if _first_signal is None:
         _first_signal = signum
+        stop_requested.set()
         raise Interrupted(signum)
     for stop in list(_emergency_stops):
         with contextlib.suppress(BaseException):
@@ -91,6 +96,7 @@ def handling_signals() -> Iterator[None]:
         return
     previous = {sig: signal.getsignal(sig) for sig in HANDLED_SIGNALS}
     _first_signal, _owner_pid = None, os.getpid()
+    stop_requested.clear()
     for sig in HANDLED_SIGNALS:
         signal.signal(sig, _handle)
     try:
@@ -99,6 +105,7 @@ def handling_signals() -> Iterator[None]:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         _first_signal = None
+        stop_requested.clear()
         _emergency_stops.clear()
 
 

@@ -498,3 +498,16 @@ def test_the_console_process_exits_2_with_one_line(argv, problem):
     assert done.returncode == 2 and done.stdout == ""
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and problem in lines[0] and "Traceback" not in done.stderr
+
+
+def test_a_full_file_system_is_refused_before_the_run(tmp_path, capsys, monkeypatch):
+    import shutil
+
+    import executive.outputs
+
+    usage = shutil.disk_usage(tmp_path)
+    monkeypatch.setattr(
+        executive.outputs.shutil, "disk_usage", lambda path: usage._replace(free=3_000_000)
+    )
+    line = refused(["run", "--mute", "--out", str(tmp_path / "run")], capsys)
+    assert "only 3.0 MB free" in line and "free some space" in line
