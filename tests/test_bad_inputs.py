@@ -511,3 +511,19 @@ def test_a_full_file_system_is_refused_before_the_run(tmp_path, capsys, monkeypa
     )
     line = refused(["run", "--mute", "--out", str(tmp_path / "run")], capsys)
     assert "only 3.0 MB free" in line and "free some space" in line
+
+
+def test_a_read_only_database_is_refused_before_the_first_trial(tmp_path, capsys, monkeypatch):
+    from executive.trials import store
+
+    folder = chair_set(tmp_path, GOOD)
+    db = tmp_path / "t.sqlite"
+    store.TrialStore(db).close()
+    connect = sqlite3.connect  # as root, file modes do not stop writes: open it read-only
+    monkeypatch.setattr(
+        store.sqlite3, "connect", lambda path: connect(f"file:{path}?mode=ro", uri=True)
+    )
+    argv = ["trials", "--chairs", str(folder), "--db", str(db), "--out", str(tmp_path / "o")]
+    line = refused([*argv, "--worker-cmd", "false"], capsys)
+    assert "read-only; give a writable --db" in line and str(db) in line
+    assert not (tmp_path / "o" / "runs").exists()
