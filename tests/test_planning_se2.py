@@ -13,12 +13,6 @@ from skills.geometry import SE2Pose, SittingPose, yaw_transform
 from skills.meshes import box_chair_mesh
 from skills.planning import collision
 from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
-from skills.planning.seat import (
-    BEAR_EDGE_MARGIN_M,
-    STEP_M,
-    seat_support_heights,
-    slide_on_seat,
-)
 from skills.planning.se2 import (
     AccessibilityError,
     SeatingCheck,
@@ -26,6 +20,12 @@ from skills.planning.se2 import (
     goal_on_ray,
     reach_validator,
     stepped_back,
+)
+from skills.planning.seat import (
+    BEAR_EDGE_MARGIN_M,
+    STEP_M,
+    seat_support_heights,
+    slide_on_seat,
 )
 from skills.planning.stance import check_seat_reachable, choose_stance
 from skills.planning.wholebody.reach_model import reach_model
