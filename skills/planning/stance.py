@@ -45,6 +45,7 @@ from skills.geometry import SE2Pose, SittingPose, wrap_angle
 from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
 from skills.planning.seat import STEP_M, SeatRay, seat_ray
 from skills.planning.wholebody.chair_profile import BAND_HALF_WIDTH_M
+from skills.planning.wholebody.optimisation import BEAR_CHAIR_MARGIN_M, BEAR_DEPTH_M
 from skills.planning.wholebody.reach_model import ReachModel, reach_model
 from skills.results import SeatReachability
 
@@ -115,21 +116,39 @@ def goal_on_ray(sitting_pose: SittingPose, distance_m: float) -> SE2Pose:
     return SE2Pose(float(x), float(y), wrap_angle(sitting_pose.yaw + math.pi))
 
 
-def chair_front_ahead(
+class ChairAlongRay(NamedTuple):
+    """The chair in the band the NAO's body sweeps, along the sitting ray (metres, from p₀
+    along u, positive toward the NAO).
+
+    Attributes:
+        front_m: f₀, the farthest the chair reaches at or below the seat top (plus 1 cm):
+            the seat block's front as the whole-body planner sees it.
+        above_seat_m: the farthest anything above the seat (a backrest, armrests)
+            reaches; -inf when nothing stands on the seat in the band.
+    """
+
+    front_m: float
+    above_seat_m: float
+
+
+def chair_along_ray(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, seat_top_m: float
-) -> float:
-    """f₀ (metres): how far ahead of p along the sitting direction the chair reaches at or
-    below the seat top (plus 1 cm), within ``BAND_HALF_WIDTH_M`` of the ray: the seat
-    block's front as the whole-body planner sees it (:mod:`.wholebody.chair_profile`)."""
+) -> ChairAlongRay:
+    """Where the chair lies along the sitting ray within ``BAND_HALF_WIDTH_M`` of it,
+    below and above the seat top (:mod:`.wholebody.chair_profile`'s two blocks)."""
     p = np.asarray(sitting_pose.position, dtype=float)
     u = sitting_pose.direction()
     points, _ = trimesh.sample.sample_surface(chair_mesh, 20000, seed=0)
     points = np.vstack([points, chair_mesh.vertices])
     rel = points[:, :2] - p[:2]
     along = rel @ u
-    across = rel @ np.array([-u[1], u[0]])
-    mask = (np.abs(across) <= BAND_HALF_WIDTH_M) & (points[:, 2] <= seat_top_m + 0.01)
-    return float(along[mask].max()) if mask.any() else 0.0
+    in_band = np.abs(rel @ np.array([-u[1], u[0]])) <= BAND_HALF_WIDTH_M
+    below = in_band & (points[:, 2] <= seat_top_m + 0.01)
+    above = in_band & (points[:, 2] > seat_top_m + 0.015)
+    return ChairAlongRay(
+        float(along[below].max()) if below.any() else 0.0,
+        float(along[above].max()) if above.any() else -math.inf,
+    )
 
 
 def _first_clear(
@@ -187,7 +206,19 @@ def choose_stance(
     ray = seat_ray(chair_mesh, sitting_pose)
     if len(ray.slides_m) == 0:
         return StanceChoice(None, sitting_pose, "no seat under the sitting position")
-    front = chair_front_ahead(chair_mesh, sitting_pose, float(np.max(ray.seat_heights_m)))
+    chair = chair_along_ray(chair_mesh, sitting_pose, float(np.max(ray.seat_heights_m)))
+    # The bear's back must clear whatever stands on the seat in the band (backrest,
+    # armrests): the planar planner holds everything below that block's top as solid.
+    clear_of_above = ray.slides_m >= chair.above_seat_m + BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M
+    if not clear_of_above.any():
+        return StanceChoice(
+            None,
+            sitting_pose,
+            _blocked_above_reason(chair, ray),
+            seat_height_m=float(ray.seat_heights_m[0]),
+        )
+    ray = SeatRay(ray.slides_m[clear_of_above], ray.seat_heights_m[clear_of_above])
+    front = chair.front_m
     none = StanceChoice(None, sitting_pose, "", seat_height_m=float(ray.seat_heights_m[0]))
     chair_clear, _ = _first_clear(checker, sitting_pose, 0.0, scene=False)
     if math.isnan(chair_clear):
@@ -205,7 +236,9 @@ def choose_stance(
     pairs += _model_pairs(ray, front, step_stances, model)
     if not pairs:
         return none._replace(
-            reason=_out_of_reach_reason(ray, min(nearest, walk_in), model),
+            reason=_out_of_reach_reason(
+                ray, front, np.concatenate([walk_stances, step_stances]), model
+            ),
             depends_on_scene=scene and walk_in > chair_clear + 1e-9,
         )
     p0 = np.asarray(sitting_pose.position, dtype=float)
@@ -266,7 +299,20 @@ def _model_pairs(
     return pairs
 
 
-def _out_of_reach_reason(ray: SeatRay, first_stance_m: float, model: ReachModel) -> str:
+def _blocked_above_reason(chair: ChairAlongRay, ray: SeatRay) -> str:
+    overhang = chair.above_seat_m + BEAR_DEPTH_M / 2.0 - float(ray.slides_m[-1])
+    return (
+        f"the seat is closed in the NAO's way: something on it within "
+        f"{BAND_HALF_WIDTH_M:.2f} m of the sitting ray (armrests, a backrest) leaves no room "
+        f"for the bear ({BEAR_DEPTH_M:.2f} m deep) on the seat's front "
+        f"({overhang:.2f} m short); the NAO's hands hold the bear "
+        f"{BAND_HALF_WIDTH_M:.2f} m either side of it"
+    )
+
+
+def _out_of_reach_reason(
+    ray: SeatRay, front_m: float, stances_m: np.ndarray, model: ReachModel
+) -> str:
     """Why the reach model places the bear nowhere on this seat from any stance."""
     height = float(ray.seat_heights_m[0])
     highest, lowest = model.max_seat_height_m(), model.min_seat_height_m()
@@ -277,18 +323,22 @@ def _out_of_reach_reason(ray: SeatRay, first_stance_m: float, model: ReachModel)
         )
     if height < lowest:
         return (
-            f"seat too low for the NAO: seat {height:.2f} m, the NAO places a bear at least "
-            f"{lowest:.2f} m high"
+            f"seat too low for the NAO: seat {height:.2f} m, the NAO places a bear on seats "
+            f"at least {lowest:.2f} m high"
         )
-    nearest = first_stance_m - float(ray.slides_m[-1])
-    reach = max(
-        (model.max_forward(height, float(front)) for front in model.seat_fronts_m),
-        key=lambda d: -math.inf if math.isnan(d) else d,
-    )
-    reach_text = "nowhere" if math.isnan(reach) else f"at most {reach:.2f} m ahead"
+    # The stance that comes closest: the nearest sitting point against the reach there.
+    best = (math.inf, math.nan, math.nan)
+    for stance in stances_m:
+        d_max = model.max_forward(height, float(stance - front_m))
+        needed = float(stance - ray.slides_m[-1])
+        if not math.isnan(d_max) and needed - d_max < best[0]:
+            best = (needed - d_max, needed, d_max)
+    if math.isnan(best[1]):
+        return f"seat out of the NAO's reach: no posture places a bear on a {height:.2f} m seat"
     return (
-        f"seat out of the NAO's reach: the nearest supported sitting point is {nearest:.2f} m "
-        f"ahead of the nearest stance, the NAO reaches {reach_text} on a {height:.2f} m seat"
+        f"seat out of the NAO's reach: the nearest supported sitting point is {best[1]:.2f} m "
+        f"ahead of the NAO at best, which reaches {best[2]:.2f} m there on a {height:.2f} m "
+        f"seat"
     )
 
 

@@ -90,8 +90,9 @@ class ReachModel(NamedTuple):
     def max_forward(self, seat_height_m: float, seat_front_m: float) -> float:
         """d_max (metres) at a seat height and front, NaN when nothing is reachable.
 
-        Conservative between grid points: the smallest of the surrounding cells (a
-        neighbour with no posture makes the point unreachable); a front beyond the grid
+        Conservative between grid points: the grid column at or before the front (d_max
+        grows with the front), the smaller of the rows above and below the height (a
+        row with no posture there makes the point unreachable); a front beyond the grid
         counts as its last column (the knees have room enough there), a front nearer
         than the grid's first column or a height outside the grid is unreachable.
         """
@@ -100,13 +101,11 @@ class ReachModel(NamedTuple):
             return math.nan
         if seat_front_m < fronts[0]:
             return math.nan
-        front = min(seat_front_m, float(fronts[-1]))
-        i = int(
-            np.clip(np.searchsorted(heights, seat_height_m, side="right") - 1, 0, len(heights) - 2)
-        )
-        j = int(np.clip(np.searchsorted(fronts, front, side="right") - 1, 0, len(fronts) - 2))
-        rows = [i] if math.isclose(seat_height_m, heights[i]) else [i, i + 1]
-        # d_max grows with the front (more room for the knees): the nearer column bounds it.
+        # d_max grows with the front (more room for the knees): the nearest grid column at
+        # or before it bounds it; between two heights, both rows do.
+        j = int(np.searchsorted(fronts, seat_front_m + 1e-9, side="right") - 1)
+        i = int(np.searchsorted(heights, seat_height_m + 1e-9, side="right") - 1)
+        rows = [i] if math.isclose(seat_height_m, heights[i], abs_tol=1e-9) else [i, i + 1]
         cells = self.max_forward_m[rows, j]
         return math.nan if np.any(np.isnan(cells)) else float(np.min(cells))
 
