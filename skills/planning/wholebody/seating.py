@@ -38,7 +38,7 @@ from scipy.optimize import least_squares
 from hardware.interfaces import Humanoid
 from skills.geometry import SE2Pose, SittingPose, transform_points, wrap_angle
 from skills.nao_carrying import BEAR_SEAT_CLEARANCE_M
-from skills.planning.se2 import slide_on_seat, stepped_back
+from skills.planning.seat import slide_on_seat
 from skills.planning.wholebody.chair_profile import (
     ChairProfile,
     ChairProfileError,
@@ -528,7 +528,7 @@ def plan_seating_where_standing(
     The walk stops within 5 mm of s_goal, and some chairs leave the pre-plan at s_goal
     less reach to spare than that (a director's chair's high seat). Then p slides toward
     the NAO along the seat, up to 3 cm, as the accessibility check slides it
-    (:func:`skills.planning.se2.slide_on_seat`, which keeps it off the seat's edge).
+    (:func:`skills.planning.seat.slide_on_seat`, which keeps it off the seat's edge).
 
     Raises:
         InfeasibleSeating: the first failure, when no slide helps.
@@ -655,7 +655,7 @@ def raising_pose(
     """
     failure: InfeasibleSeating | None = None
     for back_m in np.arange(RAISE_STEP_M, MAX_RAISE_BACKOFF_M + 1e-9, RAISE_STEP_M):
-        pose = stepped_back(se2_goal, float(back_m))
+        pose = se2_goal.stepped_back(float(back_m))
         try:
             plan_raise(chair_mesh, sitting_pose, pose)
             return pose
