@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 import math
+import os
 import signal
 import sys
 import time
@@ -28,7 +29,7 @@ logger = logging.getLogger(__name__)
 class StageProgress:
     """Prints a line whenever a stage starts or ends (long stages are the norm here)."""
 
-    def __init__(self, stream: TextIO = sys.stderr) -> None:
+    def __init__(self, stream: TextIO | None = None) -> None:
         self._stream = stream
         self._seen: dict[str, str] = {}
 
@@ -41,7 +42,10 @@ class StageProgress:
                 line = f"[{runner.elapsed():7.1f} s] {stage.name} ..."
             else:
                 line = f"[{runner.elapsed():7.1f} s] {stage.name}: {stage.status} ({stage.seconds:.1f} s) {stage.feedback}"
-            print(line, file=self._stream, flush=True)
+            try:
+                print(line, file=self._stream or sys.stderr, flush=True)
+            except (OSError, ValueError):  # nobody reads stderr any more: the run goes on
+                self._stream = open(os.devnull, "w")  # noqa: SIM115 - lives with the run
 
 
 class StageSnapshots:
