@@ -524,7 +524,7 @@ def test_a_killed_worker_is_retried_once_and_marked(tmp_path, monkeypatch):
 
 def test_a_sigkilled_campaign_resumes_to_the_same_table_with_no_orphan(tmp_path, monkeypatch):
     command = fake_worker_command(tmp_path, monkeypatch)
-    folder = write_chairs(tmp_path / "chairs", ["a.obj", "b.obj"])
+    folder = write_chairs(tmp_path / "chairs", ["a.obj"])
 
     def campaign(out: Path) -> list[str]:
         return [
@@ -540,7 +540,7 @@ def test_a_sigkilled_campaign_resumes_to_the_same_table_with_no_orphan(tmp_path,
 
     (tmp_path / "fake_worker.log").unlink()
     out = tmp_path / "killed"
-    env["FAKE_SLEEP_S"] = "0.7"
+    env["FAKE_SLEEP_S"] = "0.6"
     harness = subprocess.Popen(campaign(out), cwd=REPO, env=env, stderr=subprocess.PIPE)
     db = out / "trials.sqlite"
     deadline = time.monotonic() + 30
@@ -549,7 +549,7 @@ def test_a_sigkilled_campaign_resumes_to_the_same_table_with_no_orphan(tmp_path,
             rows = sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0]
         except sqlite3.Error:
             rows = 0
-        if rows >= 3:
+        if rows >= 2:
             break
         time.sleep(0.05)
     harness.kill()
@@ -557,18 +557,19 @@ def test_a_sigkilled_campaign_resumes_to_the_same_table_with_no_orphan(tmp_path,
     time.sleep(0.5)
     assert not [pid for pid in worker_pids(tmp_path) if process_alive(pid)]  # none orphaned
     kept = sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0]
-    assert 3 <= kept < 12
+    assert 2 <= kept < 6
 
     env["FAKE_SLEEP_S"] = "0"
     resumed = subprocess.run(campaign(out), cwd=REPO, env=env, capture_output=True, text=True)
     assert resumed.returncode == 0, resumed.stderr
     with TrialStore(db) as store, TrialStore(tmp_path / "straight" / "trials.sqlite") as other:
-        assert len(store.records()) == 12
+        assert len(store.records()) == 6
         assert table_without_timing(store.records()) == table_without_timing(other.records())
         run_dirs = {Path(r["run_dir"]) for r in store.records()}
     # Every run folder on disk belongs to a recorded trial: the killed ones were redone.
-    on_disk = {p.parent for p in (out / "runs").glob("*/*/summary.json")}
+    on_disk = {p for p in (out / "runs").glob("*/*") if p.is_dir()}
     assert on_disk == run_dirs
+    assert all((run_dir / "summary.json").is_file() for run_dir in run_dirs)
 
 
 def test_a_closed_stderr_does_not_stop_a_campaign(tmp_path, monkeypatch):
