@@ -128,6 +128,7 @@ class MissionRunner:
             stop_signal = signal_name(getattr(error, "signum", signal.SIGINT))
             how = "the operator (Ctrl-C)" if stop_signal == "SIGINT" else stop_signal
             self._stop(f"interrupted by {how}")
+            logger.warning("writing the run record; a second %s exits at once", stop_signal)
         except RecordWriteError as error:
             record_error = str(error)
             self._stop(f"stopped: {error}")
