@@ -375,6 +375,9 @@ def check_seat_reachable(
     from skills.planning.se2 import default_seating_validator
 
     began = time.perf_counter()
+    if len(seat_ray(chair_mesh, sitting_pose).slides_m) == 0:
+        p_z = float(sitting_pose.position[2])
+        return SeatReachability(False, "no seat under the sitting position", p_z)
     checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_convex_pieces(chair_mesh))
     validator = seating_validator or default_seating_validator()
     choice = choose_stance(chair_mesh, sitting_pose, checker, validator, scene=False)
