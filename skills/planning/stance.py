@@ -259,6 +259,12 @@ def choose_stance(
         pose = SittingPose(moved, sitting_pose.yaw)
         goal = goal_on_ray(sitting_pose, stance)
         if scene and (checker.collides_with_walls(goal) or checker.collides_with_obstacles(goal)):
+            blocked = "the wall" if checker.collides_with_walls(goal) else "the obstacle"
+            if not last.reason:
+                last = none._replace(
+                    reason=f"every stance that reaches the seat touches {blocked}",
+                    depends_on_scene=True,
+                )
             continue
         check = validator(chair_mesh, pose, goal)
         preplans += 1
