@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -143,15 +144,22 @@ class SimPanda:
 
     def capture(self) -> RGBDFrame:
         """Renders one RGB-D frame (640x480) at the current arm configuration."""
+        timers = self._clock.timers
         with self._bullet.lock:
+            started = time.perf_counter()
             T_world_camera = self.T_world_camera()
             view = render_view(self._bullet, T_world_camera, self.intrinsics)
             stamp_s = self._clock.now()
+            timers.render_s += time.perf_counter() - started
+            timers.frames += 1
+            timers.pixels += self.intrinsics.width * self.intrinsics.height
         self.last_view = view
+        started = time.perf_counter()
         if self._noise is None:
             rgb, depth = view.rgb.copy(), clip_range(view.depth_m)
         else:
             rgb, depth = self._noise.apply(view.rgb, view.depth_m, self.intrinsics, self._rng)
+        timers.noise_s += time.perf_counter() - started
         return RGBDFrame(rgb, depth, self.intrinsics, T_world_camera, stamp_s)
 
     def joints_looking_at(

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -222,7 +223,11 @@ class SimWorld:
         T_world_camera = make_transform(np.column_stack([right, down, forward]), eye)
         focal = 480.0 / math.tan(math.radians(30.0))
         intrinsics = CameraIntrinsics(960, 720, focal, focal, 479.5, 359.5)
+        started = time.perf_counter()
         rendered = render_view(self._bullet, T_world_camera, intrinsics)
+        self.clock.timers.render_s += time.perf_counter() - started
+        self.clock.timers.frames += 1
+        self.clock.timers.pixels += intrinsics.width * intrinsics.height
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         Image.fromarray(rendered.rgb).save(path)
 
