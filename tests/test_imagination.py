@@ -125,6 +125,35 @@ def test_solid_below_surface_fills_an_open_scan_like_surface(box_chair: trimesh.
     assert _volume_m3(solid_open) == pytest.approx(_volume_m3(solid_closed), rel=0.05)
 
 
+def test_column_tops_close_cracks_as_a_3d_binary_closing_does() -> None:
+    from scipy import ndimage
+
+    from skills.meshes import _column_tops, surface_samples
+
+    # An open seat with one-cell cracks and a missing corner, at a 1 cm pitch.
+    rng = np.random.default_rng(5)
+    seat = _seen_from_above(box_chair_mesh())
+    kept = rng.random(len(seat.faces)) > 0.1
+    mesh = trimesh.Trimesh(seat.vertices, seat.faces[kept], process=False)
+    top, pitch, origin = _column_tops(mesh, 0.01, 256)
+    # The same solid built cell by cell in 3D, closed by scipy.
+    shape = np.floor(np.asarray(mesh.extents) / pitch).astype(int) + 1
+    cells = np.clip(
+        np.floor((surface_samples(mesh, 0.5 * pitch) - origin) / pitch).astype(int), 0, shape - 1
+    )
+    highest = np.full(shape[:2], -1)
+    np.maximum.at(highest, (cells[:, 0], cells[:, 1]), cells[:, 2])
+    filled = np.arange(shape[2])[None, None, :] <= highest[:, :, None]
+    filled |= ndimage.binary_closing(filled, structure=np.ones((3, 3, 3), dtype=bool))
+    expected = np.where(
+        filled.any(axis=2), shape[2] - 1 - np.argmax(filled[:, :, ::-1], axis=2), -1
+    )
+    assert np.any(expected != highest), (
+        "the cracks must need closing for this test to mean anything"
+    )
+    np.testing.assert_array_equal(top, expected)
+
+
 ARMCHAIR = {"seat_width_m": 0.30, "armrest_height_m": 0.38}
 """A box chair with armrest panels: 0.24 m between them, 0.14 m above the seat."""
 
