@@ -82,6 +82,8 @@ class SimNao:
         joint_limits: name -> (lower, upper) radians.
         motion_count: goes up whenever the body's links may have moved (for caches of
             link poses).
+        posture_count: goes up whenever the joint angles may have changed (links fixed
+            in the feet frame stay so until then).
     """
 
     def __init__(
@@ -135,6 +137,7 @@ class SimNao:
         self._T_feet_base: np.ndarray | None = None
         self.on_hands: Callable[[bool], None] | None = None
         self.motion_count = 0
+        self.posture_count = 0
         with bullet.lock:
             for index in self.joint_indices.values():
                 bullet.changeDynamics(self.body, index, linearDamping=0.0, angularDamping=0.0)
@@ -226,6 +229,7 @@ class SimNao:
                 self._T_feet_base = None
                 self._place_body()
                 self.motion_count += 1
+                self.posture_count += 1
 
     def set_hands(self, open_hands: bool) -> None:
         """Opens or closes both hands; opening releases the bear if it is held."""
@@ -234,6 +238,7 @@ class SimNao:
             self._apply_joints()
             self._T_feet_base = None
             self.motion_count += 1
+            self.posture_count += 1
         if self.on_hands is not None:
             self.on_hands(open_hands)
         self._clock.sleep(0.25)
@@ -300,6 +305,7 @@ class SimNao:
             for name, value in zip(trajectory.joints, trajectory.at(now_s), strict=True):
                 self._positions[name] = float(value)
             self._T_feet_base = None
+            self.posture_count += 1
         # The joints are kinematic: re-imposed every step, or gravity would fold the body.
         self._apply_joints()
         if moved or trajectory is not None:

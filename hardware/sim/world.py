@@ -100,6 +100,7 @@ class SimWorld:
             raise ValueError(f"unknown placement {config.placement!r} (accessible or inaccessible)")
         self.config = config
         self._hands_cache: tuple[int, np.ndarray] | None = None
+        self._hands_in_feet: tuple[int, np.ndarray] | None = None
         chair_mesh = box_chair_mesh() if config.chair_path is None else load_mesh(config.chair_path)
         front_yaw_deg = (
             0.0
@@ -254,13 +255,20 @@ class SimWorld:
         """The frame between the NAO's palms: mean position, averaged orientation.
 
         The carried bear asks for it before every physics step; it is computed again only
-        when the NAO has moved (the same array is returned until then).
+        when the NAO has moved (the same array is returned until then), by forward
+        kinematics only when its joints have moved.
         """
         with self._bullet.lock:
-            if self._hands_cache is not None and self._hands_cache[0] == self.nao.motion_count:
+            nao = self.nao
+            if self._hands_cache is not None and self._hands_cache[0] == nao.motion_count:
                 return self._hands_cache[1]
-            frame = self._hands_frame_now()
-            self._hands_cache = (self.nao.motion_count, frame)
+            # Walking moves the whole body rigidly with the feet frame: forward kinematics
+            # only when the posture changed.
+            if self._hands_in_feet is None or self._hands_in_feet[0] != nao.posture_count:
+                T_feet_hands = np.linalg.inv(nao.T_world_feet()) @ self._hands_frame_now()
+                self._hands_in_feet = (nao.posture_count, T_feet_hands)
+            frame = nao.T_world_feet() @ self._hands_in_feet[1]
+            self._hands_cache = (nao.motion_count, frame)
             return frame
 
     def _hands_frame_now(self) -> np.ndarray:
