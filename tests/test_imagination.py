@@ -130,11 +130,21 @@ def test_column_tops_close_cracks_as_a_3d_binary_closing_does() -> None:
 
     from skills.meshes import _column_tops, surface_samples
 
-    # An open seat with one-cell cracks and a missing corner, at a 1 cm pitch.
+    # A scan-like seat: a 0.3 m plate 0.2 m up, of 1 cm quads with 5 % of them missing
+    # (one-cell holes at a 1 cm pitch), on one leg.
     rng = np.random.default_rng(5)
-    seat = _seen_from_above(box_chair_mesh())
-    kept = rng.random(len(seat.faces)) > 0.1
-    mesh = trimesh.Trimesh(seat.vertices, seat.faces[kept], process=False)
+    u, v = np.meshgrid(np.arange(31) * 0.01, np.arange(31) * 0.01, indexing="ij")
+    vertices = np.column_stack([u.ravel(), v.ravel(), np.full(u.size, 0.2)])
+    quads = [
+        (i * 31 + j, (i + 1) * 31 + j, (i + 1) * 31 + j + 1, i * 31 + j + 1)
+        for i in range(30)
+        for j in range(30)
+    ]
+    kept = [q for q in quads if rng.random() > 0.05]
+    faces = [(a, b, c) for a, b, c, _ in kept] + [(a, c, d) for a, _, c, d in kept]
+    leg = trimesh.creation.box(extents=(0.02, 0.02, 0.2))
+    leg.apply_translation((0.01, 0.01, 0.1))
+    mesh = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), leg])
     top, pitch, origin = _column_tops(mesh, 0.01, 256)
     # The same solid built cell by cell in 3D, closed by scipy.
     shape = np.floor(np.asarray(mesh.extents) / pitch).astype(int) + 1
