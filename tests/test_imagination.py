@@ -164,6 +164,21 @@ def test_column_tops_close_cracks_as_a_3d_binary_closing_does() -> None:
     np.testing.assert_array_equal(top, expected)
 
 
+def test_a_sliver_is_sampled_in_rows_and_covered_within_the_spacing() -> None:
+    from scipy.spatial import cKDTree
+
+    from skills.meshes import surface_samples
+
+    # 1 m long, 1 cm wide: a lattice at 5 mm would put 20,000 points on it.
+    sliver = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0.5, 0.01, 0]], [[0, 1, 2]], process=False)
+    samples = surface_samples(sliver, 0.005)
+    assert len(samples) < 1000
+    weights = np.random.default_rng(2).dirichlet(np.ones(3), size=2000)
+    on_triangle = weights @ np.asarray(sliver.vertices, dtype=float)
+    distances, _ = cKDTree(samples).query(on_triangle)
+    assert distances.max() <= 0.005
+
+
 ARMCHAIR = {"seat_width_m": 0.30, "armrest_height_m": 0.38}
 """A box chair with armrest panels: 0.24 m between them, 0.14 m above the seat."""
 
