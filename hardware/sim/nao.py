@@ -130,6 +130,7 @@ class SimNao:
         self._yaw_drift_radps = 0.0
         self._trajectory: _Trajectory | None = None
         self._stop_trajectory = threading.Event()
+        self._emergency_stopped = False
         self._T_feet_base: np.ndarray | None = None
         self.on_hands: Callable[[bool], None] | None = None
         with bullet.lock:
@@ -151,6 +152,7 @@ class SimNao:
 
     def set_velocity(self, vx_mps: float, vy_mps: float, omega_radps: float) -> None:
         """Commands a walking velocity in the robot frame, clipped to 0.1 m/s and 0.5 rad/s."""
+        self._refuse_if_stopped()
         command = np.array([vx_mps, vy_mps, omega_radps], dtype=float)
         if not np.all(np.isfinite(command)):
             raise ValueError(f"walking velocity must be finite, got {command}")
@@ -185,6 +187,7 @@ class SimNao:
             ValueError: unknown joint names, mismatched shapes, non-increasing times or
                 positions outside the joint limits.
         """
+        self._refuse_if_stopped()
         names = list(joint_names)
         unknown = [name for name in names if name not in self.joint_indices]
         if unknown:
@@ -214,6 +217,7 @@ class SimNao:
             self._trajectory = trajectory
         while not trajectory.finished(self._clock.now()) and not self._stop_trajectory.is_set():
             self._clock.sleep(min(0.05, max(self._clock.dt_s, trajectory.times_s[-1])))
+        self._refuse_if_stopped()
         with self._bullet.lock:
             if self._trajectory is trajectory:
                 self._trajectory = None
@@ -225,6 +229,7 @@ class SimNao:
 
     def set_hands(self, open_hands: bool) -> None:
         """Opens or closes both hands; opening releases the bear if it is held."""
+        self._refuse_if_stopped()
         with self._bullet.lock:
             self._positions["LHand"] = self._positions["RHand"] = 1.0 if open_hands else 0.0
             self._apply_joints()
@@ -240,6 +245,19 @@ class SimNao:
             self._velocity = np.zeros(3)
             self._stop_trajectory.set()
             self._trajectory = None
+
+    def emergency_stop(self) -> None:
+        """Stops walking and any trajectory at once and refuses every later motion.
+
+        The simulated NAO is kinematic, so it is still from the next physics step on.
+        """
+        with self._bullet.lock:
+            self._emergency_stopped = True
+        self.stop()
+
+    def _refuse_if_stopped(self) -> None:
+        if self._emergency_stopped:
+            raise RuntimeError("the NAO is emergency-stopped: motion refused")
 
     # --- ground truth and helpers --------------------------------------------------------
     def place(self, pose: SE2Pose) -> None:
