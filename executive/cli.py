@@ -18,7 +18,12 @@ from pathlib import Path
 from executive.config import RunConfig
 
 # Skill commands live beside their skills' owners: each module has register(subparsers).
-SKILL_COMMANDS = ("executive.cmd_imagine", "executive.cmd_scan", "executive.cmd_trials")
+SKILL_COMMANDS = (
+    "executive.cmd_imagine",
+    "executive.cmd_scan",
+    "executive.cmd_trials",
+    "executive.cmd_check_hardware",
+)
 
 
 class CliError(Exception):
@@ -57,6 +62,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="CELL_JSON",
         help="run on the real NAO and Panda described by this file instead of the simulation",
     )
+    run.add_argument("--yes", action="store_true", help="with --robots: start without asking")
     run.set_defaults(func=_run)
 
     tree = subparsers.add_parser("tree", help="render the mission tree")
@@ -111,12 +117,22 @@ def _run(args: argparse.Namespace) -> int:
     out_dir = args.out or default_out_dir(config)
     config = RunConfig(**{**config.__dict__, "out_dir": out_dir})
     if args.robots is not None:
-        summary = run_on_robots(config, args.robots, on_tick=StageProgress())
+        summary = run_on_robots(
+            config, args.robots, on_tick=StageProgress(), confirm=None if args.yes else _ask
+        )
     else:
         summary = run_in_simulation(config, on_tick=StageProgress())
     print(format_summary(summary))
     print(f"run record: {out_dir}")
     return 0 if summary["outcome"] == "success" else 1
+
+
+def _ask(question: str) -> bool:
+    """The operator's yes (no terminal: no)."""
+    try:
+        return input(question).strip().lower() in ("y", "yes")
+    except EOFError:
+        return False
 
 
 def _tree(args: argparse.Namespace) -> int:

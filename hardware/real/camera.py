@@ -1,0 +1,146 @@
+"""The PrimeSense Carmine 1.09 through OpenNI2 (the ``openni`` binding, extra ``bearchair[carmine]``).
+
+What the PS1080 driver does unless told otherwise, and what :class:`CarmineCamera` does
+about it:
+
+* It opens depth at 320x240: both streams are set to 640x480 at 30 fps, depth in
+  ``PIXEL_FORMAT_DEPTH_1_MM`` and colour in ``PIXEL_FORMAT_RGB888``, and the modes read
+  back are checked.
+* Registration is off: depth-to-colour registration is required (checked supported,
+  then set), so one pinhole model serves both images.
+* Frames are unsynchronised: depth/colour sync is enabled, and a pair whose timestamps
+  differ by more than :data:`MAX_PAIR_SKEW_S` is read again.
+* A frame's buffer belongs to the frame object: it is copied while the frame is alive.
+* Debian's ``libopenni2-0`` puts ``libOpenNI2.so`` in ``/usr/lib/<triplet>/``, which the
+  binding does not search: the folder is given by the cell file (``openni_library_dir``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from hardware.interfaces import CameraIntrinsics
+from hardware.real import BackendUnavailable, import_sdk
+
+# The Carmine 1.09's factory depth intrinsics at 640x480 (replace with a calibration).
+CARMINE_INTRINSICS = CameraIntrinsics(640, 480, 570.3, 570.3, 319.5, 239.5)
+FPS = 30
+MAX_PAIR_SKEW_S = 1.0 / 60.0
+"""Half a frame period: a depth and colour pair further apart is not one moment."""
+PAIR_ATTEMPTS = 5
+
+
+class CarmineCamera:
+    """RGB-D frames from a Carmine through OpenNI2, depth registered to colour.
+
+    Args:
+        openni2: the ``openni.openni2`` module (tests pass a fake with its signatures).
+        library_dir: folder of ``libOpenNI2.so``; None for the binding's search path.
+        intrinsics: the pinhole model of the registered 640x480 images.
+
+    Raises:
+        BackendUnavailable: no library, no device, a missing stream, no registration, or
+            the driver refuses the 640x480 modes (each says which).
+    """
+
+    def __init__(
+        self,
+        openni2: Any | None = None,
+        library_dir: str | None = None,
+        intrinsics: CameraIntrinsics = CARMINE_INTRINSICS,
+    ) -> None:
+        ni = openni2 or import_sdk("openni.openni2", "bearchair[carmine]")
+        self._ni = ni
+        self.intrinsics = intrinsics
+        try:
+            if library_dir is None:
+                ni.initialize()
+            else:
+                ni.initialize(library_dir)
+        except Exception as error:
+            where = library_dir or "the binding's default folders"
+            raise BackendUnavailable(
+                f"cannot load libOpenNI2.so from {where} ({error}); install libopenni2-0 and "
+                "set openni_library_dir in the cell file (Debian: /usr/lib/x86_64-linux-gnu)"
+            ) from error
+        try:
+            self._device = ni.Device.open_any()
+        except Exception as error:
+            raise BackendUnavailable(f"no OpenNI2 camera found: {error}") from error
+        self._depth = self._device.create_depth_stream()
+        self._colour = self._device.create_color_stream()
+        if self._depth is None or self._colour is None:
+            missing = "depth" if self._depth is None else "colour"
+            raise BackendUnavailable(f"the OpenNI2 camera has no {missing} stream")
+        registration = ni.IMAGE_REGISTRATION_DEPTH_TO_COLOR
+        if not self._device.is_image_registration_mode_supported(registration):
+            raise BackendUnavailable("the OpenNI2 camera cannot register depth to colour")
+        self._depth.configure_mode(
+            intrinsics.width, intrinsics.height, FPS, ni.PIXEL_FORMAT_DEPTH_1_MM
+        )
+        self._colour.configure_mode(
+            intrinsics.width, intrinsics.height, FPS, ni.PIXEL_FORMAT_RGB888
+        )
+        for name, stream, pixel_format in (
+            ("depth", self._depth, ni.PIXEL_FORMAT_DEPTH_1_MM),
+            ("colour", self._colour, ni.PIXEL_FORMAT_RGB888),
+        ):
+            mode = stream.get_video_mode()
+            if (mode.resolutionX, mode.resolutionY, mode.pixelFormat) != (
+                intrinsics.width,
+                intrinsics.height,
+                pixel_format,
+            ):
+                raise BackendUnavailable(
+                    f"the OpenNI2 {name} stream runs at {mode.resolutionX}x{mode.resolutionY} "
+                    f"format {mode.pixelFormat}, not {intrinsics.width}x{intrinsics.height}"
+                )
+        self._device.set_image_registration_mode(registration)
+        self._device.set_depth_color_sync_enabled(True)
+        self._depth.start()
+        self._colour.start()
+
+    def mode(self) -> dict[str, Any]:
+        """The streams' modes, for check-hardware."""
+        depth, colour = self._depth.get_video_mode(), self._colour.get_video_mode()
+        return {
+            "depth": f"{depth.resolutionX}x{depth.resolutionY}@{depth.fps} DEPTH_1_MM",
+            "colour": f"{colour.resolutionX}x{colour.resolutionY}@{colour.fps} RGB888",
+            "registration": "depth to colour",
+        }
+
+    def read(self) -> tuple[np.ndarray, np.ndarray]:
+        """One (rgb uint8 HxWx3, depth metres float32 HxW, 0 = missing) pair, synchronised.
+
+        Raises:
+            RuntimeError: no pair within :data:`MAX_PAIR_SKEW_S` in five attempts.
+        """
+        for _ in range(PAIR_ATTEMPTS):
+            depth_mm, depth_stamp_us = self._copy(self._depth, np.uint16, 1)
+            rgb, colour_stamp_us = self._copy(self._colour, np.uint8, 3)
+            if abs(depth_stamp_us - colour_stamp_us) * 1e-6 <= MAX_PAIR_SKEW_S:
+                return rgb, depth_mm.astype(np.float32) / 1000.0
+        raise RuntimeError(
+            f"the Carmine's depth and colour frames stayed more than {MAX_PAIR_SKEW_S * 1e3:.0f} ms apart"
+        )
+
+    def close(self) -> None:
+        for stream in (self._depth, self._colour):
+            stream.stop()
+
+    def _copy(self, stream: Any, dtype: type, channels: int) -> tuple[np.ndarray, int]:
+        h, w = self.intrinsics.height, self.intrinsics.width
+        frame = stream.read_frame()
+        if (frame.width, frame.height) != (w, h):
+            raise RuntimeError(
+                f"the Carmine sent a {frame.width}x{frame.height} frame, not {w}x{h}"
+            )
+        buffer = frame.get_buffer_as_uint16() if dtype is np.uint16 else frame.get_buffer_as_uint8()
+        # Copy now: the buffer is released with the frame object.
+        pixels = np.array(np.frombuffer(buffer, dtype=dtype), copy=True)
+        stamp_us = int(frame.timestamp)
+        del frame
+        shape = (h, w) if channels == 1 else (h, w, channels)
+        return pixels.reshape(shape), stamp_us
