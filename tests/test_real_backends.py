@@ -38,6 +38,16 @@ def test_missing_sdk_names_the_extra_to_install():
 # --- NAO over qi --------------------------------------------------------------------------
 
 
+def _eventually(condition, timeout_s: float = 3.0) -> bool:
+    """Polls ``condition``: async qi calls reach the stand-in a moment after they are sent."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(0.005)
+    return condition()
+
+
 @pytest.fixture
 def naoqi():
     pytest.importorskip("qi")
@@ -89,7 +99,8 @@ def test_odometry_counts_from_the_first_reading(naoqi, nao):
     )
     nao.activate()
     nao.set_velocity(0.1, 0.0, 0.0)
-    time.sleep(0.2)  # 0.8 s of robot time: the 0.5 s walk command has run out
+    assert _eventually(lambda: naoqi.called("moveTo"))
+    assert _eventually(lambda: not naoqi.motion.walking())  # the 0.5 s command ran out
     pose = nao.pose()
     # Forward from a start facing -x: 5 cm toward -x.
     assert pose.x == pytest.approx(1.9 - 0.05, abs=2e-3) and pose.y == pytest.approx(0.0, abs=2e-3)
@@ -98,11 +109,13 @@ def test_odometry_counts_from_the_first_reading(naoqi, nao):
 def test_walking_commands_are_bounded_moves_that_end_by_themselves(naoqi, nao):
     nao.activate()
     nao.set_velocity(1.0, 0.0, -3.0)  # clipped to 0.1 m/s and 0.5 rad/s
+    assert _eventually(lambda: naoqi.called("moveTo"))
+    sent = time.monotonic()
     x, y, theta = naoqi.called("moveTo")[-1]
     assert x == pytest.approx(0.05) and y == 0.0 and theta == pytest.approx(-0.25)
-    assert naoqi.motion.walking()
-    time.sleep(0.2)  # the process "dies": no more commands
-    assert not naoqi.motion.walking()
+    # The process "dies": no more commands. The walk ends 0.5 s of robot time later.
+    assert _eventually(lambda: not naoqi.motion.walking())
+    assert time.monotonic() - sent < 0.5 / naoqi.time_scale + 0.1
 
 
 def test_trajectory_is_one_cancellable_angle_interpolation(naoqi, nao):

@@ -183,14 +183,15 @@ def _make_motion(qi: Any, owner: NaoqiStandin, boot: np.ndarray) -> Any:
             # for WALK_HORIZON_S: the displacement over that time, replacing any walk.
             from hardware.real.nao import WALK_HORIZON_S
 
-            owner.record("ALMotion", "moveTo", x, y, theta)
             if not self.awake:
+                owner.record("ALMotion", "moveTo", x, y, theta)
                 raise RuntimeError("ALMotion.moveTo: the robot is not awake (call wakeUp)")
             with self._lock:
                 self._settle()
                 now = self._now()
                 velocity = np.array([x, y, theta]) / WALK_HORIZON_S
                 self._walk = (velocity, now, now + WALK_HORIZON_S)
+            owner.record("ALMotion", "moveTo", x, y, theta)
 
         @qi.bind(qi.Void, [])
         def stopMove(self) -> None:
