@@ -41,24 +41,109 @@ STANDIN_HOST = "standin"
 # --- NAOqi ------------------------------------------------------------------------------
 
 
+class KinematicNao:
+    """The body behind :class:`NaoqiStandin` when no simulation is given: motions take
+    their time (divided by ``time_scale``) on the wall clock and change nothing else."""
+
+    def __init__(self, boot_odometry: np.ndarray, time_scale: float) -> None:
+        self.time_scale = time_scale
+        self.joints: dict[str, float] = {}
+        self._odometry = np.asarray(boot_odometry, dtype=float).copy()
+        self._walk: tuple[np.ndarray, float, float] | None = None  # velocity, start, end
+        self._lock = threading.Lock()
+
+    def _now(self) -> float:
+        return time.monotonic() * self.time_scale
+
+    def _settle(self) -> None:
+        """Integrates the walk up to now (robot-frame velocity, midpoint heading)."""
+        if self._walk is None:
+            return
+        velocity, start, end = self._walk
+        now = self._now()
+        dt = max(0.0, min(now, end) - start)
+        x, y, theta = self._odometry
+        heading = theta + 0.5 * velocity[2] * dt
+        c, s = math.cos(heading), math.sin(heading)
+        self._odometry = np.array(
+            [
+                x + (c * velocity[0] - s * velocity[1]) * dt,
+                y + (s * velocity[0] + c * velocity[1]) * dt,
+                theta + velocity[2] * dt,
+            ]
+        )
+        self._walk = None if now >= end else (velocity, now, end)
+
+    def odometry(self) -> np.ndarray:
+        with self._lock:
+            self._settle()
+            return self._odometry.copy()
+
+    def walk(self, velocity: np.ndarray, duration_s: float) -> None:
+        with self._lock:
+            self._settle()
+            now = self._now()
+            self._walk = (np.asarray(velocity, dtype=float), now, now + duration_s)
+
+    def stop_walk(self) -> None:
+        with self._lock:
+            self._settle()
+            self._walk = None
+
+    def walking(self) -> bool:
+        with self._lock:
+            self._settle()
+            return self._walk is not None
+
+    def play(
+        self,
+        names: list[str],
+        angles: list[list[float]],
+        times: list[list[float]],
+        cancelled: threading.Event,
+    ) -> None:
+        if not cancelled.wait(max(t[-1] for t in times) / self.time_scale):
+            self.joints.update({name: a[-1] for name, a in zip(names, angles, strict=True)})
+
+    def hand(self, hand: str, open_hand: bool, cancelled: threading.Event) -> None:
+        if not cancelled.wait(0.3 / self.time_scale):
+            self.joints[hand] = 1.0 if open_hand else 0.0
+
+    def posture(self, name: str, cancelled: threading.Event) -> None:
+        cancelled.wait(0.3 / self.time_scale)
+
+    def cancel_motions(self) -> None:
+        """NAOqi killed the joint tasks: the waits end through their events."""
+
+    def say(self, sentence: str) -> None:
+        """The kinematic NAO is mute."""
+
+
 class NaoqiStandin:
     """A local NAOqi: ``with NaoqiStandin() as nao: connect(nao.url)``.
 
     Args:
-        time_scale: robot seconds per wall second (larger: motions finish sooner).
+        time_scale: robot seconds per wall second for the default body.
         boot_odometry: NAOqi's odometry reading when the stand-in starts [x, y, theta].
+        body: what the services move (:class:`KinematicNao` by default;
+            :class:`hardware.real.sim_standins.SimulatedNaoBody` puts the simulated NAO
+            behind them).
     """
 
     def __init__(
-        self, time_scale: float = 1.0, boot_odometry: tuple[float, float, float] = (3.0, -1.0, 0.7)
+        self,
+        time_scale: float = 1.0,
+        boot_odometry: tuple[float, float, float] = (3.0, -1.0, 0.7),
+        body: Any | None = None,
     ) -> None:
         qi = import_sdk("qi", "bearchair[nao]")
         self.calls: list[tuple[str, str, tuple[Any, ...]]] = []
         self.time_scale = time_scale
+        self.body = body or KinematicNao(np.asarray(boot_odometry, dtype=float), time_scale)
         self._session = qi.Session()
         self._session.listenStandalone("tcp://127.0.0.1:0")
         self.url = self._session.endpoints()[0]
-        self.motion = _make_motion(qi, self, np.asarray(boot_odometry, dtype=float))
+        self.motion = _make_motion(qi, self)
         services = {
             "ALMotion": self.motion,
             "ALRobotPosture": _make_posture(qi, self),
@@ -89,71 +174,74 @@ class NaoqiStandin:
         self.close()
 
 
-def _timed_promise(
-    qi: Any, duration_s: float, on_done: Callable[[], None], value: Any = None
+def _task(
+    qi: Any,
+    run: Callable[[threading.Event], None],
+    value: Any = None,
+    on_cancel: Callable[[], None] | None = None,
 ) -> tuple[Any, threading.Event]:
-    """A qi future that finishes after ``duration_s`` unless cancelled (then nothing is applied)."""
+    """A qi future for ``run(cancelled)`` in a thread; cancelling it sets ``cancelled``."""
     cancelled = threading.Event()
 
-    def on_cancel(promise: Any) -> None:
+    def cancel(promise: Any) -> None:
         cancelled.set()
+        if on_cancel is not None:
+            on_cancel()
         promise.setCanceled()
 
-    promise = qi.Promise(on_cancel)
+    promise = qi.Promise(cancel)
 
-    def run() -> None:
-        if not cancelled.wait(max(0.0, duration_s)):
-            on_done()
+    def worker() -> None:
+        try:
+            run(cancelled)
+        except Exception as error:
+            if not cancelled.is_set():
+                promise.setError(str(error))
+            return
+        if not cancelled.is_set():
             promise.setValue(value)
 
-    threading.Thread(target=run, daemon=True).start()
+    threading.Thread(target=worker, daemon=True).start()
     return promise.future(), cancelled
 
 
-def _make_motion(qi: Any, owner: NaoqiStandin, boot: np.ndarray) -> Any:
+def _make_motion(qi: Any, owner: NaoqiStandin) -> Any:
+    body = owner.body
+
     class ALMotion:
         def __init__(self) -> None:
             self.awake = False
             self.arm_swing = True
-            self.joints: dict[str, float] = {}
-            self._odometry = boot.copy()
-            self._walk: tuple[np.ndarray, float, float] | None = None  # velocity, start, end
             self._tasks: list[threading.Event] = []
             self._lock = threading.Lock()
 
-        def _now(self) -> float:
-            return time.monotonic() * owner.time_scale
+        @property
+        def joints(self) -> dict[str, float]:
+            return body.joints
 
-        def _settle(self) -> None:
-            """Integrates the walk up to now (robot frame velocity, midpoint heading)."""
-            if self._walk is None:
-                return
-            velocity, start, end = self._walk
-            now = self._now()
-            dt = max(0.0, min(now, end) - start)
-            x, y, theta = self._odometry
-            heading = theta + 0.5 * velocity[2] * dt
-            c, s = math.cos(heading), math.sin(heading)
-            self._odometry = np.array(
-                [
-                    x + (c * velocity[0] - s * velocity[1]) * dt,
-                    y + (s * velocity[0] + c * velocity[1]) * dt,
-                    theta + velocity[2] * dt,
-                ]
-            )
-            self._walk = None if now >= end else (velocity, now, end)
-
+        @qi.nobind
         def walking(self) -> bool:
-            with self._lock:
-                self._settle()
-                return self._walk is not None
+            return body.walking()
 
+        @qi.nobind
         def halt(self) -> None:
+            body.stop_walk()
+            self._kill()
+
+        @qi.nobind
+        def _kill(self) -> None:
             with self._lock:
-                self._settle()
-                self._walk = None
-                for task in self._tasks:
-                    task.set()
+                tasks, self._tasks = self._tasks, []
+            for task in tasks:
+                task.set()
+            body.cancel_motions()
+
+        @qi.nobind
+        def _start(self, run: Callable[[threading.Event], None]) -> Any:
+            future, cancelled = _task(qi, run, on_cancel=body.cancel_motions)
+            with self._lock:
+                self._tasks.append(cancelled)
+            return future
 
         @qi.bind(qi.Void, [])
         def wakeUp(self) -> None:
@@ -173,40 +261,29 @@ def _make_motion(qi: Any, owner: NaoqiStandin, boot: np.ndarray) -> Any:
         @qi.bind(qi.List(qi.Float), [qi.Bool])
         def getRobotPosition(self, use_sensors: bool) -> list[float]:
             owner.record("ALMotion", "getRobotPosition", use_sensors)
-            with self._lock:
-                self._settle()
-                return [float(v) for v in self._odometry]
+            return [float(v) for v in body.odometry()]
 
         @qi.bind(qi.Void, [qi.Float, qi.Float, qi.Float])
         def moveTo(self, x: float, y: float, theta: float) -> None:
-            # Blocking on the robot; the backend calls it with _async=True. The walk runs
-            # for WALK_HORIZON_S: the displacement over that time, replacing any walk.
+            # Blocking on the robot; the backend calls it with _async=True. The stand-in
+            # walks the displacement in WALK_HORIZON_S, replacing any walk.
             from hardware.real.nao import WALK_HORIZON_S
 
             if not self.awake:
                 owner.record("ALMotion", "moveTo", x, y, theta)
                 raise RuntimeError("ALMotion.moveTo: the robot is not awake (call wakeUp)")
-            with self._lock:
-                self._settle()
-                now = self._now()
-                velocity = np.array([x, y, theta]) / WALK_HORIZON_S
-                self._walk = (velocity, now, now + WALK_HORIZON_S)
+            body.walk(np.array([x, y, theta]) / WALK_HORIZON_S, WALK_HORIZON_S)
             owner.record("ALMotion", "moveTo", x, y, theta)
 
         @qi.bind(qi.Void, [])
         def stopMove(self) -> None:
             owner.record("ALMotion", "stopMove")
-            with self._lock:
-                self._settle()
-                self._walk = None
+            body.stop_walk()
 
         @qi.bind(qi.Void, [qi.List(qi.String)])
         def killTasksUsingResources(self, names: list[str]) -> None:
             owner.record("ALMotion", "killTasksUsingResources", list(names))
-            with self._lock:
-                for task in self._tasks:
-                    task.set()
-                self._tasks.clear()
+            self._kill()
 
         @qi.bind(qi.Void, [qi.Bool, qi.Bool])
         def setMoveArmsEnabled(self, left: bool, right: bool) -> None:
@@ -239,11 +316,9 @@ def _make_motion(qi: Any, owner: NaoqiStandin, boot: np.ndarray) -> Any:
                     or joint_times[0] <= 0.0
                 ):
                     raise RuntimeError("angleInterpolation: times must be positive and increasing")
-            duration = max(t[-1] for t in times) / owner.time_scale
-            return self._task(
-                duration,
-                lambda: self.joints.update({n: a[-1] for n, a in zip(names, angles, strict=True)}),
-            )
+            if not absolute:
+                raise RuntimeError("the stand-in plays absolute angles only")
+            return self._start(lambda cancelled: body.play(names, angles, times, cancelled))
 
         @qi.bind(qi.Void, [qi.Dynamic, qi.Dynamic, qi.Float])
         def angleInterpolationWithSpeed(
@@ -254,28 +329,28 @@ def _make_motion(qi: Any, owner: NaoqiStandin, boot: np.ndarray) -> Any:
             )
             if not 0.0 < max_speed_fraction <= 1.0:
                 raise RuntimeError("angleInterpolationWithSpeed: speed fraction in (0, 1]")
-            return self._task(0.5 / owner.time_scale, lambda: None)
+            names = [names] if isinstance(names, str) else list(names)
+            targets = list(targets) if isinstance(targets, list) else [targets]
+            if len(targets) != len(names):
+                raise RuntimeError("angleInterpolationWithSpeed: one target per joint")
+            angle_lists = [[float(a)] for a in targets]
+            return self._start(
+                lambda cancelled: body.play(names, angle_lists, [[0.5]] * len(names), cancelled)
+            )
 
         @qi.bind(qi.Void, [qi.String])
         def openHand(self, hand: str) -> Any:
             owner.record("ALMotion", "openHand", hand)
             if hand not in ("LHand", "RHand"):
                 raise RuntimeError(f"openHand: unknown hand {hand!r}")
-            return self._task(0.3 / owner.time_scale, lambda: self.joints.update({hand: 1.0}))
+            return self._start(lambda cancelled: body.hand(hand, True, cancelled))
 
         @qi.bind(qi.Void, [qi.String])
         def closeHand(self, hand: str) -> Any:
             owner.record("ALMotion", "closeHand", hand)
             if hand not in ("LHand", "RHand"):
                 raise RuntimeError(f"closeHand: unknown hand {hand!r}")
-            return self._task(0.3 / owner.time_scale, lambda: self.joints.update({hand: 0.0}))
-
-        @qi.nobind
-        def _task(self, duration_s: float, on_done: Callable[[], None]) -> Any:
-            future, cancelled = _timed_promise(qi, duration_s, on_done)
-            with self._lock:
-                self._tasks.append(cancelled)
-            return future
+            return self._start(lambda cancelled: body.hand(hand, False, cancelled))
 
     return ALMotion()
 
@@ -289,9 +364,12 @@ def _make_posture(qi: Any, owner: NaoqiStandin) -> Any:
             owner.record("ALRobotPosture", "goToPosture", name, speed)
             if name not in ("Stand", "StandInit", "StandZero", "Crouch", "Sit", "LyingBack"):
                 raise RuntimeError(f"goToPosture: unknown posture {name!r}")
-            future, _ = _timed_promise(
-                qi, 0.3 / owner.time_scale, lambda: setattr(self, "posture", name), True
-            )
+
+            def run(cancelled: threading.Event) -> None:
+                owner.body.posture(name, cancelled)
+                self.posture = name
+
+            future, _ = _task(qi, run, value=True)
             return future
 
         @qi.bind(qi.String, [])
@@ -307,6 +385,7 @@ def _make_tts(qi: Any, owner: NaoqiStandin) -> Any:
         @qi.bind(qi.Void, [qi.String])
         def say(self, sentence: str) -> None:
             owner.record("ALTextToSpeech", "say", sentence)
+            owner.body.say(sentence)
 
     return ALTextToSpeech()
 
