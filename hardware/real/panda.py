@@ -175,7 +175,12 @@ class PandaArm:
 
         worker = threading.Thread(target=run, name="panda-move", daemon=True)
         worker.start()
-        worker.join(timeout_s)
+        deadline = time.monotonic() + timeout_s
+        while worker.is_alive() and time.monotonic() < deadline:
+            worker.join(min(0.05, max(0.0, deadline - time.monotonic())))
+            if self._stopped and worker.is_alive():
+                # A stop sent just before the move began has nothing to stop: repeat it.
+                self._stop_robot()
         if worker.is_alive():
             self._stop_robot()
             worker.join(2.0)

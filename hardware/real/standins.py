@@ -520,7 +520,7 @@ class _LibfrankaRobot:
 
     def stop(self) -> None:
         self._panda.calls.append(("Robot.stop", ()))
-        self._panda._abort.set()
+        self._panda.stop_motion()
 
     def read_once(self) -> _State:
         return self._panda.get_state()
@@ -553,6 +553,10 @@ class FakePanda:
         self._abort = threading.Event()
         self._last_error: Exception | None = None
         self._lock = threading.Lock()
+
+    def stop_motion(self) -> None:
+        """What libfranka's ``Robot::stop`` does to a running motion: aborts it."""
+        self._abort.set()
 
     def get_state(self) -> _State:
         with self._lock:
@@ -671,7 +675,7 @@ class _Stream:
             raise RuntimeError("OpenNI: stream not started")
         w, h = self._mode.resolutionX, self._mode.resolutionY
         rgb, depth_mm = self._source.render(w, h)
-        stamp_us = int(time.monotonic() * 1e6)
+        stamp_us = self._source.stamp_us()
         data = depth_mm.astype(np.uint16) if self._kind == "depth" else rgb.astype(np.uint8)
         return _Frame(np.ascontiguousarray(data), w, h, stamp_us)
 
@@ -683,6 +687,8 @@ class FakeOpenNI2:
         render: ``(width, height) -> (rgb uint8 HxWx3, depth uint16 mm HxW)``; default a
             grey wall 1 m away.
         library_dir: the only folder from which ``initialize`` loads the library.
+        devices: how many cameras are plugged in.
+        stamp_us: the frames' timestamps in microseconds (default: the wall clock).
     """
 
     PIXEL_FORMAT_DEPTH_1_MM = 100
@@ -694,8 +700,10 @@ class FakeOpenNI2:
         render: Callable[[int, int], tuple[np.ndarray, np.ndarray]] | None = None,
         library_dir: str | None = None,
         devices: int = 1,
+        stamp_us: Callable[[], int] | None = None,
     ) -> None:
         self.render = render or _wall
+        self.stamp_us = stamp_us or (lambda: int(time.monotonic() * 1e6))
         self._library_dir = library_dir
         self._devices = devices
         self.registration: int | None = None

@@ -161,6 +161,7 @@ class SimNao:
             command[:2] *= MAX_SPEED_MPS / speed
         command[2] = float(np.clip(command[2], -MAX_TURN_RADPS, MAX_TURN_RADPS))
         with self._bullet.lock:
+            self._refuse_if_stopped()  # again under the lock: a stop may have come meanwhile
             if not np.allclose(command, self._command):
                 self._scale = np.array(
                     [
@@ -212,6 +213,7 @@ class SimNao:
                 current = np.array([self._positions[name] for name in names])
                 times = np.concatenate([[0.0], times])
                 positions = np.vstack([current, positions])
+            self._refuse_if_stopped()
             self._stop_trajectory.clear()
             trajectory = _Trajectory(names, self._clock.now(), times, positions)
             self._trajectory = trajectory
@@ -229,8 +231,8 @@ class SimNao:
 
     def set_hands(self, open_hands: bool) -> None:
         """Opens or closes both hands; opening releases the bear if it is held."""
-        self._refuse_if_stopped()
         with self._bullet.lock:
+            self._refuse_if_stopped()
             self._positions["LHand"] = self._positions["RHand"] = 1.0 if open_hands else 0.0
             self._apply_joints()
             self._T_feet_base = None

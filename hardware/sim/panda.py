@@ -124,7 +124,9 @@ class SimPanda:
         if np.any(outside):
             joints = ", ".join(f"joint {index + 1}" for index in np.flatnonzero(outside))
             raise ValueError(f"target outside the Panda's joint limits at {joints}")
-        self._command(target)
+        with self._bullet.lock:
+            self._refuse_if_stopped()  # again under the lock: a stop may have come meanwhile
+            self._command(target)
         start_s = self._clock.now()
         while True:
             self._refuse_if_stopped()
