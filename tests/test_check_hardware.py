@@ -62,3 +62,28 @@ def test_check_hardware_names_an_unreachable_nao_within_five_seconds(tmp_path, c
     assert time.monotonic() - started < 5.0
     assert status == 1 and "[FAIL] nao:" in out
     assert out.strip().splitlines()[-1] == "check-hardware: FAILED: nao"
+
+
+def test_run_on_robots_asks_first_then_records_the_cell_and_sdk_versions(
+    tmp_path, capsys, monkeypatch
+):
+    from hardware.real.standins import NaoqiStandin
+
+    with NaoqiStandin(time_scale=20.0) as naoqi:
+        cell = _cell(tmp_path, naoqi.url)
+        monkeypatch.setattr("builtins.input", lambda prompt: "n")
+        status = main(["run", "--robots", str(cell), "--out", str(tmp_path / "no")])
+        assert status == 2 and "did not confirm: nothing moved" in capsys.readouterr().err
+        assert not naoqi.called("wakeUp") and not naoqi.called("moveTo")
+
+        out = tmp_path / "yes"
+        status = main(
+            ["run", "--robots", str(cell), "--yes", "--out", str(out), "--timeout", "120"]
+        )
+        capsys.readouterr()
+        assert naoqi.called("setState") == [("disabled",)] and naoqi.called("wakeUp")
+    # The stand-in camera sees a flat wall: the mission fails, its record survives.
+    assert status in (0, 1)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["backend"] == "real" and summary["sdk_versions"]["qi"]
+    assert json.loads((out / "cell.json").read_text())["nao_url"] == naoqi.url

@@ -25,8 +25,10 @@ def connect_panda(config: Any) -> PandaArm:
         from hardware.real.camera import CarmineCamera
 
         camera = CarmineCamera(FakeOpenNI2(), library_dir=config.openni_library_dir)
+        panda = FakePanda(STANDIN_HOST)
+        panda.time_scale = 100.0  # a dry run: the stand-in arm moves 100 times faster
         return PandaArm(
-            FakePanda(STANDIN_HOST),
+            panda,
             camera,
             config.T_world_base,
             config.T_flange_camera,
