@@ -93,7 +93,7 @@ def check_hardware(args: argparse.Namespace) -> int:
     for distribution, version in sdk_versions().items():
         extra = SDK_DISTRIBUTIONS[distribution]
         status = "ok" if version else ("FAIL" if extra in ("nao", "panda") else "warn")
-        if cell.camera == "carmine" and extra == "carmine" and not version:
+        if extra == cell.camera and not version:
             status = "FAIL"
         detail = version or f"not installed (pip install 'bearchair[{extra}]')"
         report.line(status, f"sdk {distribution}", detail)

@@ -342,3 +342,46 @@ def test_fake_openni_matches_the_installed_binding():
         "fps",
         "pixel_format",
     ]
+
+
+# --- RealSense ----------------------------------------------------------------------------
+
+
+def test_realsense_aligns_depth_to_colour_in_metres():
+    from hardware.real.camera import RealSenseCamera
+    from hardware.real.standins import FakeRealSense
+
+    rs = FakeRealSense(depth_scale_m=0.0001)  # a D405-like 0.1 mm unit
+    camera = RealSenseCamera(rs)
+    rgb, depth_m = camera.read()
+    assert rgb.shape == (480, 640, 3) and depth_m.dtype == np.float32
+    assert np.all(depth_m == pytest.approx(1.0))
+    assert rs.aligned_to == rs.stream.color
+    assert (rs.stream.depth, 640, 480, rs.format.z16, 30) in rs.enabled
+    assert camera.intrinsics.fx == 615.0 and "0.1 mm" in camera.mode()["depth"]
+    with pytest.raises(BackendUnavailable, match="no RealSense camera"):
+        RealSenseCamera(FakeRealSense(devices=0))
+
+
+def test_fake_realsense_matches_the_installed_sdk():
+    rs = pytest.importorskip("pyrealsense2")
+    assert {"depth", "color"} <= set(dir(rs.stream)) and {"z16", "rgb8"} <= set(dir(rs.format))
+    for owner, name in (
+        (rs.config, "enable_stream"),
+        (rs.config, "enable_device"),
+        (rs.pipeline, "start"),
+        (rs.pipeline, "wait_for_frames"),
+        (rs.pipeline, "stop"),
+        (rs.align, "process"),
+        (rs.device, "first_depth_sensor"),
+        (rs.depth_sensor, "get_depth_scale"),
+        (rs.pipeline_profile, "get_stream"),
+        (rs.stream_profile, "as_video_stream_profile"),
+        (rs.video_stream_profile, "get_intrinsics"),
+        (rs.composite_frame, "get_depth_frame"),
+        (rs.composite_frame, "get_color_frame"),
+    ):
+        assert hasattr(owner, name), f"{owner.__name__}.{name}"
+    assert "width: int, height: int, format: pyrealsense2.pyrealsense2.format, framerate: int" in (
+        rs.config.enable_stream.__doc__
+    )

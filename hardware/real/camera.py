@@ -1,4 +1,5 @@
-"""The PrimeSense Carmine 1.09 through OpenNI2 (the ``openni`` binding, extra ``bearchair[carmine]``).
+"""The wrist depth cameras: the PrimeSense Carmine 1.09 through OpenNI2 (the ``openni``
+binding, extra ``bearchair[carmine]``) and the RealSense D4xx (:class:`RealSenseCamera`).
 
 What the PS1080 driver does unless told otherwise, and what :class:`CarmineCamera` does
 about it:
@@ -144,3 +145,66 @@ class CarmineCamera:
         del frame
         shape = (h, w) if channels == 1 else (h, w, channels)
         return pixels.reshape(shape), stamp_us
+
+
+class RealSenseCamera:
+    """RGB-D frames from an Intel RealSense D4xx through ``pyrealsense2`` (extra
+    ``bearchair[realsense]``), depth aligned to colour.
+
+    Both streams are asked for at 640x480, 30 fps (depth ``z16``, colour ``rgb8``); each
+    frameset is aligned to the colour camera (``rs.align(rs.stream.color)``), so the
+    colour intrinsics the device reports serve both images; depth units come from the
+    depth sensor's ``get_depth_scale()`` (metres per unit). Pixels are copied out of the
+    frames before they go back to the SDK's pool.
+
+    Args:
+        rs: the ``pyrealsense2`` module (tests pass a fake with its signatures).
+        serial: the camera's serial number; None for the first one found.
+        timeout_s: how long one frameset may take.
+
+    Raises:
+        BackendUnavailable: no camera, or it refuses 640x480.
+    """
+
+    def __init__(self, rs: Any | None = None, serial: str | None = None, timeout_s: float = 2.0):
+        rs = rs or import_sdk("pyrealsense2", "bearchair[realsense]")
+        self._rs = rs
+        self._timeout_ms = int(timeout_s * 1000)
+        width, height = CARMINE_INTRINSICS.width, CARMINE_INTRINSICS.height
+        config = rs.config()
+        if serial is not None:
+            config.enable_device(serial)
+        config.enable_stream(rs.stream.depth, width, height, rs.format.z16, FPS)
+        config.enable_stream(rs.stream.color, width, height, rs.format.rgb8, FPS)
+        self._pipeline = rs.pipeline()
+        try:
+            profile = self._pipeline.start(config)
+        except RuntimeError as error:
+            raise BackendUnavailable(f"no RealSense camera at 640x480 found: {error}") from error
+        self.depth_scale_m = float(profile.get_device().first_depth_sensor().get_depth_scale())
+        colour = profile.get_stream(rs.stream.color).as_video_stream_profile().get_intrinsics()
+        self.intrinsics = CameraIntrinsics(
+            int(colour.width), int(colour.height), colour.fx, colour.fy, colour.ppx, colour.ppy
+        )
+        self._align = rs.align(rs.stream.color)
+
+    def mode(self) -> dict[str, Any]:
+        return {
+            "depth": f"{self.intrinsics.width}x{self.intrinsics.height}@{FPS} z16 "
+            f"({self.depth_scale_m * 1000:.3g} mm per unit)",
+            "colour": f"{self.intrinsics.width}x{self.intrinsics.height}@{FPS} rgb8",
+            "registration": "depth aligned to colour",
+        }
+
+    def read(self) -> tuple[np.ndarray, np.ndarray]:
+        """One aligned (rgb uint8 HxWx3, depth metres float32 HxW, 0 = missing) pair."""
+        frames = self._align.process(self._pipeline.wait_for_frames(self._timeout_ms))
+        depth, colour = frames.get_depth_frame(), frames.get_color_frame()
+        if not depth or not colour:
+            raise RuntimeError("the RealSense frameset lacks depth or colour")
+        depth_units = np.array(np.asanyarray(depth.get_data()), dtype=np.float32, copy=True)
+        rgb = np.array(np.asanyarray(colour.get_data()), dtype=np.uint8, copy=True)
+        return rgb, depth_units * np.float32(self.depth_scale_m)
+
+    def close(self) -> None:
+        self._pipeline.stop()

@@ -119,15 +119,22 @@ class PandaArm:
         T_flange_camera: np.ndarray,
         speed_factor: float = 0.2,
         openni_library_dir: str | None = None,
+        camera: str = "carmine",
     ) -> PandaArm:
-        """Connects to the arm's controller at ``host`` and opens the wrist camera (moves nothing)."""
+        """Connects to the arm's controller at ``host`` and opens the wrist camera
+        ("carmine" or "realsense"); moves nothing."""
         panda_py = import_sdk("panda_py", "bearchair[panda]")
         try:
             robot = panda_py.Panda(host)
         except Exception as error:
             raise BackendUnavailable(f"cannot reach the Panda at {host}: {error}") from error
-        camera = CarmineCamera(library_dir=openni_library_dir)
-        return cls(robot, camera, T_world_base, T_flange_camera, speed_factor)
+        if camera == "realsense":
+            from hardware.real.camera import RealSenseCamera
+
+            wrist: Any = RealSenseCamera()
+        else:
+            wrist = CarmineCamera(library_dir=openni_library_dir)
+        return cls(robot, wrist, T_world_base, T_flange_camera, speed_factor)
 
     @property
     def camera(self) -> Any:

@@ -9,7 +9,6 @@ from __future__ import annotations
 from typing import Any
 
 from hardware.interfaces import Robot
-from hardware.real import BackendUnavailable
 from hardware.real.nao import NaoHumanoid, NaoSpeaker, WallClock, connect
 from hardware.real.panda import PandaArm
 from hardware.real.standins import STANDIN_HOST, FakeOpenNI2, FakePanda
@@ -17,10 +16,6 @@ from hardware.real.standins import STANDIN_HOST, FakeOpenNI2, FakePanda
 
 def connect_panda(config: Any) -> PandaArm:
     """The arm and its camera (``panda_host`` "standin": the SDK stand-ins)."""
-    if config.camera != "carmine":
-        raise BackendUnavailable(
-            f"the {config.camera} camera backend is not written yet: use camera 'carmine'"
-        )
     if config.panda_host == STANDIN_HOST:
         from hardware.real.camera import CarmineCamera
 
@@ -40,6 +35,7 @@ def connect_panda(config: Any) -> PandaArm:
         config.T_flange_camera,
         config.panda_speed_factor,
         config.openni_library_dir,
+        camera=config.camera,
     )
 
 
