@@ -175,7 +175,10 @@ def run_on_robots(
         raise BackendUnavailable("the operator did not confirm: nothing moved")
     try:
         activate(robot)
-    except BaseException:
+    except Exception as error:
+        robot.emergency_stop()
+        raise BackendUnavailable(f"could not set the NAO up for carrying: {error}") from error
+    except BaseException:  # Ctrl-C while setting up: stop, then let it through
         robot.emergency_stop()
         raise
     root = create_tree()
