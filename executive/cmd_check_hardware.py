@@ -1,8 +1,8 @@
 """``bearchair check-hardware --robots cell.json [--move]``: check the cell without moving it.
 
 Prints one line per check, ``ok``, ``warn`` or ``FAIL``: the cell file, the SDK versions,
-every arm configuration the mission uses against panda-py's joint walls, the NAO's state
-(awake, Autonomous Life, BasicAwareness, battery, arm swing), the Panda's mode and errors,
+the NAO's state (awake, Autonomous Life, BasicAwareness, battery, arm swing), the Panda's
+mode and errors, every arm configuration the mission uses against panda-py's joint walls,
 one camera frame (modes, depth units, valid pixels) and whether the NAO's tag is in it.
 Each device gets ``--timeout`` seconds (default 5), so an unreachable one fails, never
 hangs. Only ``--move`` moves anything: the arm to HOME, then its overview configuration
@@ -77,11 +77,6 @@ def check_hardware(args: argparse.Namespace) -> int:
     from executive.cell_config import load_cell_config
     from hardware.real import SDK_DISTRIBUTIONS, sdk_versions
     from hardware.real.panda import into_walls
-    from skills.perception.views import (
-        HOME_CONFIGURATION,
-        OVERVIEW_CONFIGURATION,
-        SCAN_CONFIGURATIONS,
-    )
 
     if not args.timeout > 0:
         from executive.cli import CliError
@@ -98,6 +93,16 @@ def check_hardware(args: argparse.Namespace) -> int:
         detail = version or f"not installed (pip install 'bearchair[{extra}]')"
         report.line(status, f"sdk {distribution}", detail)
 
+    # The devices first: an unreachable one is reported before the slower checks.
+    _check_nao(cell, args.timeout, report)
+    arm = _check_panda(cell, args.timeout, report)
+
+    from skills.perception.views import (
+        HOME_CONFIGURATION,
+        OVERVIEW_CONFIGURATION,
+        SCAN_CONFIGURATIONS,
+    )
+
     views = {"HOME": HOME_CONFIGURATION, "OVERVIEW": OVERVIEW_CONFIGURATION}
     views.update({f"scan{i}": q for i, q in enumerate(SCAN_CONFIGURATIONS)})
     for name, joints in views.items():
@@ -113,8 +118,6 @@ def check_hardware(args: argparse.Namespace) -> int:
         else:
             report.line("ok", f"view {name}", "clear of the joint walls")
 
-    _check_nao(cell, args.timeout, report)
-    arm = _check_panda(cell, args.timeout, report)
     if arm is not None:
         _check_camera(arm, args.timeout, report, move=args.move)
     if report.failed:
