@@ -25,7 +25,8 @@ logger = logging.getLogger(__name__)
 class StageProgress:
     """Prints a line whenever a stage starts or ends (long stages are the norm here)."""
 
-    def __init__(self, stream: TextIO = sys.stderr) -> None:
+    def __init__(self, stream: TextIO | None = None) -> None:
+        # None: whatever sys.stderr is when printing (not the one at import time).
         self._stream = stream
         self._seen: dict[str, str] = {}
 
@@ -38,7 +39,7 @@ class StageProgress:
                 line = f"[{runner.elapsed():7.1f} s] {stage.name} ..."
             else:
                 line = f"[{runner.elapsed():7.1f} s] {stage.name}: {stage.status} ({stage.seconds:.1f} s) {stage.feedback}"
-            print(line, file=self._stream, flush=True)
+            print(line, file=self._stream or sys.stderr, flush=True)
 
 
 class StageSnapshots:
