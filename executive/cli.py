@@ -29,7 +29,12 @@ from executive.interrupts import exit_status, handling_signals, received, signal
 from skills.errors import BearchairError, InputError, one_line
 
 # Skill commands live beside their skills' owners: each module has register(subparsers).
-SKILL_COMMANDS = ("executive.cmd_imagine", "executive.cmd_scan", "executive.cmd_trials")
+SKILL_COMMANDS = (
+    "executive.cmd_imagine",
+    "executive.cmd_scan",
+    "executive.cmd_trials",
+    "executive.cmd_check_hardware",
+)
 
 
 EXIT_SUCCESS = 0
@@ -81,6 +86,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="CELL_JSON",
         help="run on the real NAO and Panda described by this file instead of the simulation",
     )
+    run.add_argument("--yes", action="store_true", help="with --robots: start without asking")
     run.set_defaults(func=_run)
 
     tree = subparsers.add_parser("tree", help="render the mission tree")
@@ -147,7 +153,9 @@ def _run(args: argparse.Namespace) -> int:
     config = RunConfig(**{**config.__dict__, "out_dir": out_dir})
     with _log_to(out_dir / LOG_FILE):
         if args.robots is not None:
-            summary = run_on_robots(config, args.robots, on_tick=StageProgress())
+            summary = run_on_robots(
+                config, args.robots, on_tick=StageProgress(), confirm=None if args.yes else _ask
+            )
         else:
             summary = run_in_simulation(config, on_tick=StageProgress())
     print(format_summary(summary))
@@ -174,6 +182,14 @@ def _log_to(path: Path):
         if handler is not None:
             logging.getLogger().removeHandler(handler)
             handler.close()
+
+
+def _ask(question: str) -> bool:
+    """The operator's yes (no terminal: no)."""
+    try:
+        return input(question).strip().lower() in ("y", "yes")
+    except EOFError:
+        return False
 
 
 def _tree(args: argparse.Namespace) -> int:

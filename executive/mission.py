@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import logging
 import math
 import os
@@ -175,19 +176,46 @@ def run_on_robots(
     cell_file: Path,
     skills: MissionSkills | None = None,
     on_tick: Callable[[MissionRunner], None] | None = None,
+    confirm: Callable[[str], bool] | None = None,
 ) -> dict[str, Any]:
-    """Runs the mission on the real NAO and Panda described by ``cell_file``."""
-    from hardware.real.robots import connect_robots
+    """Runs the mission on the real NAO and Panda described by ``cell_file``.
 
-    robot = connect_robots(cell_file)
+    The cell file is checked first; connecting moves nothing; the robots are activated
+    (the NAO set up for carrying) only once ``confirm`` agrees (None: agreed, ``--yes``).
+
+    Raises:
+        executive.cell_config.CellConfigError: the cell file is wrong (one line).
+        hardware.real.BackendUnavailable: an SDK or a robot is missing, or the operator
+            said no.
+    """
+    from executive.cell_config import load_cell_config
+    from hardware.real import BackendUnavailable, sdk_versions
+    from hardware.real.robots import activate, connect_robots
+
+    cell = load_cell_config(cell_file, config.arena)
+    robot = connect_robots(cell)
+    if confirm is not None and not confirm("The NAO and the Panda will move now. Go on? [y/N] "):
+        robot.close()
+        raise BackendUnavailable("the operator did not confirm: nothing moved")
+    try:
+        activate(robot)
+    except Exception as error:
+        robot.emergency_stop()
+        raise BackendUnavailable(f"could not set the NAO up for carrying: {error}") from error
+    except BaseException:  # Ctrl-C while setting up: stop, then let it through
+        robot.emergency_stop()
+        raise
     root = create_tree()
     recorder = RunRecorder(config.out_dir, root)
+    (config.out_dir / "cell.json").write_text(json.dumps(cell.to_json(), indent=2))
     run_info = {
         "chair": "real",
         "placement": "real",
         "helper": "person",
         "seed": config.seed,
         "backend": "real",
+        "cell_file": str(cell_file),
+        "sdk_versions": sdk_versions(),
         "started_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
     return _run_tree(root, recorder, robot, config, run_info, skills, on_tick, None)

@@ -209,9 +209,8 @@ def stop_robots(robot: Robot) -> None:
     Called when a mission ends, fails, is interrupted, or on a second stop signal; it
     must never raise.
     """
-    # TODO(issue 15 merge): switch to the robots' emergency_stop() here.
     try:
-        robot.close()
+        robot.emergency_stop()
     except Exception as error:  # stopping must not hide why we stopped
         logger.error("stopping the robots raised: %s", error)
 

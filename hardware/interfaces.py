@@ -83,6 +83,13 @@ class ScanningArm(Protocol):
         """Captures one RGB-D frame with the camera pose from forward kinematics."""
         ...
 
+    def emergency_stop(self) -> None:
+        """Stops the arm now from any thread: a running ``move_to`` ends with an error.
+
+        Latching: later motions are refused. Must not raise.
+        """
+        ...
+
 
 @runtime_checkable
 class Humanoid(Protocol):
@@ -114,6 +121,14 @@ class Humanoid(Protocol):
 
     def stop(self) -> None:
         """Stops walking and holds the current posture."""
+        ...
+
+    def emergency_stop(self) -> None:
+        """Stops every motion now from any thread (walk, trajectory, hands).
+
+        A blocking ``play_joint_trajectory`` returns or raises; latching: later motions
+        are refused. Must not raise.
+        """
         ...
 
 
@@ -182,8 +197,17 @@ class Robot:
     helper: Helper | None = None
     judge: SeatingJudge | None = None
 
+    def emergency_stop(self) -> None:
+        """Stops every actuator now (Ctrl-C, SIGTERM, a timeout, an error); never raises.
+
+        Safe from any thread and more than once; motions are refused afterwards.
+        """
+        # Stopping must never raise, whatever state the robot is in: one device's error
+        # must not keep the other moving.
+        for device in (self.humanoid, self.arm):
+            with contextlib.suppress(Exception):
+                device.emergency_stop()
+
     def close(self) -> None:
         """Stops every actuator; safe to call more than once."""
-        # Stopping must never raise during shutdown, whatever state the robot is in.
-        with contextlib.suppress(Exception):
-            self.humanoid.stop()
+        self.emergency_stop()

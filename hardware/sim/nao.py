@@ -134,6 +134,7 @@ class SimNao:
         self._yaw_drift_radps = 0.0
         self._trajectory: _Trajectory | None = None
         self._stop_trajectory = threading.Event()
+        self._emergency_stopped = False
         self._T_feet_base: np.ndarray | None = None
         self.on_hands: Callable[[bool], None] | None = None
         self.motion_count = 0
@@ -157,6 +158,7 @@ class SimNao:
 
     def set_velocity(self, vx_mps: float, vy_mps: float, omega_radps: float) -> None:
         """Commands a walking velocity in the robot frame, clipped to 0.1 m/s and 0.5 rad/s."""
+        self._refuse_if_stopped()
         command = np.array([vx_mps, vy_mps, omega_radps], dtype=float)
         if not np.all(np.isfinite(command)):
             raise ValueError(f"walking velocity must be finite, got {command}")
@@ -165,6 +167,7 @@ class SimNao:
             command[:2] *= MAX_SPEED_MPS / speed
         command[2] = float(np.clip(command[2], -MAX_TURN_RADPS, MAX_TURN_RADPS))
         with self._bullet.lock:
+            self._refuse_if_stopped()  # again under the lock: a stop may have come meanwhile
             if not np.allclose(command, self._command):
                 self._scale = np.array(
                     [
@@ -191,6 +194,7 @@ class SimNao:
             ValueError: unknown joint names, mismatched shapes, non-increasing times or
                 positions outside the joint limits.
         """
+        self._refuse_if_stopped()
         names = list(joint_names)
         unknown = [name for name in names if name not in self.joint_indices]
         if unknown:
@@ -215,11 +219,13 @@ class SimNao:
                 current = np.array([self._positions[name] for name in names])
                 times = np.concatenate([[0.0], times])
                 positions = np.vstack([current, positions])
+            self._refuse_if_stopped()
             self._stop_trajectory.clear()
             trajectory = _Trajectory(names, self._clock.now(), times, positions)
             self._trajectory = trajectory
         while not trajectory.finished(self._clock.now()) and not self._stop_trajectory.is_set():
             self._clock.sleep(min(0.05, max(self._clock.dt_s, trajectory.times_s[-1])))
+        self._refuse_if_stopped()
         with self._bullet.lock:
             if self._trajectory is trajectory:
                 self._trajectory = None
@@ -234,6 +240,7 @@ class SimNao:
     def set_hands(self, open_hands: bool) -> None:
         """Opens or closes both hands; opening releases the bear if it is held."""
         with self._bullet.lock:
+            self._refuse_if_stopped()
             self._positions["LHand"] = self._positions["RHand"] = 1.0 if open_hands else 0.0
             self._apply_joints()
             self._T_feet_base = None
@@ -250,6 +257,19 @@ class SimNao:
             self._velocity = np.zeros(3)
             self._stop_trajectory.set()
             self._trajectory = None
+
+    def emergency_stop(self) -> None:
+        """Stops walking and any trajectory at once and refuses every later motion.
+
+        The simulated NAO is kinematic, so it is still from the next physics step on.
+        """
+        with self._bullet.lock:
+            self._emergency_stopped = True
+        self.stop()
+
+    def _refuse_if_stopped(self) -> None:
+        if self._emergency_stopped:
+            raise RuntimeError("the NAO is emergency-stopped: motion refused")
 
     # --- ground truth and helpers --------------------------------------------------------
     def place(self, pose: SE2Pose) -> None:

@@ -112,6 +112,7 @@ class SimPanda:
         self.lower_limits = np.array([item[8] for item in info])
         self.upper_limits = np.array([item[9] for item in info])
         self.last_view: RenderedView | None = None
+        self._emergency_stopped = False
         with bullet.lock:
             for joint, angle in enumerate(initial_joints):
                 bullet.resetJointState(self.body, joint, angle)
@@ -141,6 +142,7 @@ class SimPanda:
             ValueError: not 7 finite angles, or outside the joint limits.
             TimeoutError: not reached within ``timeout_s`` simulated seconds.
         """
+        self._refuse_if_stopped()
         target = np.asarray(joint_positions_rad, dtype=float).reshape(-1)
         if target.shape != (ARM_JOINTS,) or not np.all(np.isfinite(target)):
             raise ValueError(f"the Panda needs {ARM_JOINTS} finite joint angles, got {target}")
@@ -148,9 +150,12 @@ class SimPanda:
         if np.any(outside):
             joints = ", ".join(f"joint {index + 1}" for index in np.flatnonzero(outside))
             raise ValueError(f"target outside the Panda's joint limits at {joints}")
-        self._command(target)
+        with self._bullet.lock:
+            self._refuse_if_stopped()  # again under the lock: a stop may have come meanwhile
+            self._command(target)
         start_s = self._clock.now()
         while True:
+            self._refuse_if_stopped()
             error = np.max(np.abs(self.joint_positions() - target))
             speed = np.max(np.abs(self.joint_velocities()))
             if error < REACHED_TOLERANCE_RAD and speed < SETTLED_SPEED_RADPS:
@@ -161,6 +166,25 @@ class SimPanda:
                     f"(largest joint error {math.degrees(error):.1f} deg)"
                 )
             self._clock.sleep(1.0 / 60.0)
+
+    def emergency_stop(self) -> None:
+        """Brakes every joint (zero velocity at full torque, as the Panda's stop does) and
+        refuses later moves; a ``move_to`` running in another thread raises at its next check.
+        """
+        with self._bullet.lock:
+            self._emergency_stopped = True
+            for joint in range(ARM_JOINTS):
+                self._bullet.setJointMotorControl2(
+                    self.body,
+                    joint,
+                    pybullet.VELOCITY_CONTROL,
+                    targetVelocity=0.0,
+                    force=JOINT_FORCE_LIMITS_NM[joint],
+                )
+
+    def _refuse_if_stopped(self) -> None:
+        if self._emergency_stopped:
+            raise RuntimeError("the Panda is emergency-stopped: motion refused")
 
     def T_world_camera(self) -> np.ndarray:
         """Camera pose: forward kinematics of the hand link composed with the hand-eye extrinsic."""
