@@ -18,7 +18,12 @@ from pathlib import Path
 from executive.config import RunConfig
 
 # Skill commands live beside their skills' owners: each module has register(subparsers).
-SKILL_COMMANDS = ("executive.cmd_imagine", "executive.cmd_scan", "executive.cmd_trials")
+SKILL_COMMANDS = (
+    "executive.cmd_imagine",
+    "executive.cmd_scan",
+    "executive.cmd_trials",
+    "executive.cmd_view",
+)
 
 
 class CliError(Exception):
@@ -51,6 +56,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="in simulation, also save a picture whenever a stage ends (OUT/snapshots)",
     )
+    add_recording_arguments(run, record_default=False)
     run.add_argument(
         "--robots",
         type=Path,
@@ -105,9 +111,12 @@ def _run(args: argparse.Namespace) -> int:
         mute=args.mute,
         timeout_s=args.timeout,
         snapshots=args.snapshots,
+        record=args.record,
+        live=args.live,
     )
     if args.timeout <= 0:
         raise CliError("bearchair run: --timeout must be positive")
+    check_recording_arguments("bearchair run", args)
     out_dir = args.out or default_out_dir(config)
     config = RunConfig(**{**config.__dict__, "out_dir": out_dir})
     if args.robots is not None:
@@ -117,6 +126,45 @@ def _run(args: argparse.Namespace) -> int:
     print(format_summary(summary))
     print(f"run record: {out_dir}")
     return 0 if summary["outcome"] == "success" else 1
+
+
+def add_recording_arguments(parser: argparse.ArgumentParser, *, record_default: bool) -> None:
+    """``--record/--no-record`` and ``--live`` (Rerun recordings, ``executive.recording``)."""
+    parser.add_argument(
+        "--record",
+        action=argparse.BooleanOptionalAction,
+        default=record_default,
+        help="write a Rerun recording of the run, OUT/mission.rrd (open it with "
+        f"'bearchair view OUT'; default: {'on' if record_default else 'off'})",
+    )
+    parser.add_argument(
+        "--live",
+        nargs="?",
+        const="spawn",
+        metavar="WHERE",
+        help="stream the run to a Rerun viewer as it happens: no value starts the native "
+        "viewer, 'web' serves the web viewer, or a viewer's URL (rerun+http://HOST:9876/proxy)",
+    )
+
+
+def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
+    """One line before any work when a recording was asked for and cannot be made."""
+    from executive.recording import INSTALL_HINT, has_display, rerun_available
+
+    live = getattr(args, "live", None)
+    if (args.record or live) and not rerun_available():
+        flag = "--record" if args.record else "--live"
+        raise CliError(f"{command}: {flag} needs rerun-sdk: {INSTALL_HINT}")
+    if live == "spawn" and not has_display():
+        raise CliError(
+            f"{command}: --live: no display for the native viewer; use --live web "
+            "(a web viewer on a port) or --live rerun+http://HOST:9876/proxy"
+        )
+    if live not in (None, "spawn", "web") and not live.startswith(("rerun://", "rerun+http")):
+        raise CliError(
+            f"{command}: --live takes no value, 'web', or a viewer URL "
+            f"(rerun+http://HOST:9876/proxy), not {live!r}"
+        )
 
 
 def _tree(args: argparse.Namespace) -> int:

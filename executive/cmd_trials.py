@@ -48,6 +48,13 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--max-chairs", type=int, help="only the first N chairs with a front")
     parser.add_argument(
+        "--record",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="write a Rerun recording in each trial's run folder, mission.rrd (default: on "
+        "when rerun-sdk is installed; open one with 'bearchair view RUN_DIR')",
+    )
+    parser.add_argument(
         "--worker-cmd",
         help="run each trial with this command instead of 'python -m executive.trial_worker' "
         "(the trial's JSON is appended)",
@@ -67,6 +74,8 @@ def resume_command(args: argparse.Namespace) -> str:
         words += ["--max-chairs", str(args.max_chairs)]
     if args.worker_cmd:
         words += ["--worker-cmd", args.worker_cmd]
+    if not args.record:
+        words += ["--no-record"]
     return shlex.join(words)
 
 
@@ -86,6 +95,16 @@ def _sigterm_as_interrupt() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def _recording_available() -> bool:
+    """Recordings are on by default; without rerun-sdk the campaign runs without them."""
+    from executive.recording import INSTALL_HINT, rerun_available
+
+    if rerun_available():
+        return True
+    print(f"bearchair trials: no recordings (mission.rrd): {INSTALL_HINT}", file=sys.stderr)
+    return False
 
 
 def _db_path(args: argparse.Namespace) -> Path:
@@ -122,6 +141,7 @@ def run(args: argparse.Namespace) -> int:
     except BackendUnavailableError as error:
         raise CliError(f"bearchair trials: {error}") from error
 
+    record = args.record and _recording_available()
     specs = expand_protocol(chairs, args.protocol, args.seed)
     db_path = _db_path(args)
     try:
@@ -140,7 +160,13 @@ def run(args: argparse.Namespace) -> int:
         try:
             with _sigterm_as_interrupt():
                 result = run_campaign(
-                    specs, store, backend, args.out / "runs", args.timeout, progress=progress
+                    specs,
+                    store,
+                    backend,
+                    args.out / "runs",
+                    args.timeout,
+                    progress=progress,
+                    record=record,
                 )
         except BackendUnavailableError as error:
             raise CliError(f"bearchair trials: {error}") from error

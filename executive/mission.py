@@ -12,6 +12,7 @@ from typing import Any, TextIO
 
 from executive.config import RunConfig, front_yaw_from_manifest
 from executive.record import RunRecorder
+from executive.recording import RECORDING_FILE, open_recording
 from executive.runner import MissionRunner, summarise
 from skills.geometry import wrap_angle
 from skills.meshes import load_mesh
@@ -181,16 +182,24 @@ def _run_tree(
     ground_truth: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """Ticks the tree on ``robot`` and writes the summary; the record survives any error."""
+    recording = None
     try:
+        skills = skills or DefaultSkills()
+        recording = open_recording(root, config.out_dir, record=config.record, live=config.live)
+        if recording is not None:
+            skills = recording.watch_skills(skills, robot.clock)
+            if recording.viewer_url:
+                print(f"live viewer: {recording.viewer_url}", file=sys.stderr, flush=True)
         runner = MissionRunner(
             root,
-            skills or DefaultSkills(),
+            skills,
             robot,
             seed=config.seed,
             arena=config.arena,
             recorder=recorder,
             timeout_s=config.timeout_s,
             on_tick=on_tick,
+            post_tick=() if recording is None else (recording,),
         )
         summary = summarise(runner.run(), run_info)
         if render_png is not None:
@@ -204,10 +213,18 @@ def _run_tree(
                 summary["ground_truth"] = ground_truth(summary)
             except Exception as error:  # nor must a missing comparison
                 logger.warning("could not compare with the ground truth: %s", error)
+        if recording is not None:
+            summary["recording"] = {
+                "file": RECORDING_FILE if recording.path else None,
+                "seconds": round(recording.seconds, 3),
+            }
+            recording.log_summary(summary)
         recorder.write_summary(summary)
         return summary
     finally:
         recorder.close()
+        if recording is not None:
+            recording.close()
 
 
 def _ground_truth(world: Any, summary: dict[str, Any]) -> dict[str, Any]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -65,6 +65,8 @@ class MissionRunner:
         tick_period_s: wall time between ticks; the leaves' workers run meanwhile.
         timeout_s: wall time after which the mission is stopped as failed.
         on_tick: called after each tick (progress display).
+        post_tick: hooks called after each tick and once more when the run has ended
+            (the tree stopped): recordings and viewers (``executive.recording``).
     """
 
     def __init__(
@@ -79,6 +81,7 @@ class MissionRunner:
         tick_period_s: float = 0.05,
         timeout_s: float = 900.0,
         on_tick: Callable[[MissionRunner], None] | None = None,
+        post_tick: Sequence[Callable[[MissionRunner], None]] = (),
     ) -> None:
         self.root = root
         self.tree = py_trees.trees.BehaviourTree(root)
@@ -88,6 +91,7 @@ class MissionRunner:
         self.tick_period_s = tick_period_s
         self.timeout_s = timeout_s
         self.on_tick = on_tick
+        self.post_tick = tuple(post_tick)
         self.stages = [StageTiming(child.name) for child in root.children]
         self._seed = seed
         self._arena = arena
@@ -113,6 +117,8 @@ class MissionRunner:
                 self._time_stages(tick_start)
                 if self.recorder:
                     self.recorder.record_tick(self.tree.count, self.elapsed())
+                for hook in self.post_tick:
+                    hook(self)
                 if self.on_tick:
                     self.on_tick(self)
                 if self.root.status in (Status.SUCCESS, Status.FAILURE):
@@ -129,6 +135,8 @@ class MissionRunner:
             self.robot.close()
             if self.recorder:
                 self.recorder.record_tick(self.tree.count, self.elapsed())
+            for hook in self.post_tick:
+                hook(self)
         return MissionOutcome(
             status=self.root.status,
             stages=self.stages,
