@@ -12,7 +12,7 @@ from typing import Any, TextIO
 
 from executive.config import RunConfig, front_yaw_from_manifest
 from executive.record import RunRecorder
-from executive.recording import RECORDING_FILE, open_recording
+from executive.recording import open_recording
 from executive.runner import MissionRunner, summarise
 from skills.geometry import wrap_angle
 from skills.meshes import load_mesh
@@ -214,10 +214,7 @@ def _run_tree(
             except Exception as error:  # nor must a missing comparison
                 logger.warning("could not compare with the ground truth: %s", error)
         if recording is not None:
-            summary["recording"] = {
-                "file": RECORDING_FILE if recording.path else None,
-                "seconds": round(recording.seconds, 3),
-            }
+            summary["recording"] = recording.cost()
             recording.log_summary(summary)
         recorder.write_summary(summary)
         return summary

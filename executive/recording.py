@@ -63,6 +63,13 @@ ODOMETRY_STEP_M = 0.02
 POSE_STEP_M = 0.005
 POSE_STEP_RAD = math.radians(1.0)
 """The NAO's pose is re-logged when it moved 5 mm or turned 1 degree since the last one."""
+ODOMETRY_PERIOD_S = 0.5
+"""Wall seconds between two readings of the humanoid's odometry. Reading it waits for the
+simulated world's lock, which the walk holds while it renders a frame; the tag's
+detections (every control step) draw the walk in finer detail anyway."""
+FEEDBACK_PERIOD_S = 0.5
+"""Wall seconds between two logs of the tree when only feedback changed (a running
+leaf's message counts its seconds every tick); status changes are logged at their tick."""
 FEEDBACK_LABEL_CHARS = 48
 """Feedback shown in a node's label is cut here; the full text is in ``tree/log``."""
 
@@ -165,6 +172,8 @@ class MissionRecording:
         self.viewer_url: str | None = None
         self.seconds = 0.0
         """Wall time spent in the hook so far (what recording costs the run)."""
+        self.seconds_by_part: dict[str, float] = collections.defaultdict(float)
+        """The same, per thing logged (``tree``, ``odometry``, a blackboard key, ...)."""
         self._stream = rr.RecordingStream("bearchair")
         sinks = []
         if self.path is not None:
@@ -177,6 +186,8 @@ class MissionRecording:
         self._stream.set_sinks(*sinks)
         self._nodes = tree_nodes(root)
         self._last_tree: list[tuple[str, str]] | None = None
+        self._last_tree_s = -math.inf
+        self._last_odometry_s = -math.inf
         self._last_values: dict[str, Any] = {}
         self._skill_calls: SkillCalls | None = None
         self._odometry: list[SE2Pose] = []
@@ -240,6 +251,16 @@ class MissionRecording:
             self._guarded("odometry", self._log_odometry, runner)
         self.seconds += time.perf_counter() - started
 
+    def cost(self) -> dict[str, Any]:
+        """What the recording cost the run so far: the hook's wall seconds, in all and
+        for the five most expensive things logged (``summary.json``'s ``recording``)."""
+        parts = sorted(self.seconds_by_part.items(), key=lambda kv: -kv[1])[:5]
+        return {
+            "file": None if self.path is None else self.path.name,
+            "seconds": round(self.seconds, 3),
+            "seconds_by_part": {name: round(seconds, 3) for name, seconds in parts},
+        }
+
     def log_summary(self, summary: dict[str, Any]) -> None:
         """The run's summary (``summary.json``) as a text document at the end."""
         text = json.dumps(to_jsonable(summary), indent=2)
@@ -251,7 +272,10 @@ class MissionRecording:
         )
 
     def close(self) -> None:
-        """Flushes and closes the file (the viewer keeps what it received)."""
+        """Logs the tree's last feedback, flushes and closes the file (the viewer keeps
+        what it received)."""
+        with self._lock:
+            self._guarded("tree", self._log_tree, True)
         try:
             self._stream.flush()
             self._stream.disconnect()
@@ -262,19 +286,27 @@ class MissionRecording:
 
     def _guarded(self, what: str, log: Callable[..., None], *args: Any) -> None:
         # A recording that fails must never stop the mission: warn once and go on.
+        started = time.perf_counter()
         try:
             log(*args)
         except Exception as error:
             if what not in self._warned:
                 self._warned.add(what)
                 logger.warning("recording: could not log %s: %s", what, error)
+        finally:
+            self.seconds_by_part[what] += time.perf_counter() - started
 
-    def _log_tree(self) -> None:
+    def _log_tree(self, force: bool = False) -> None:
         state = [(node.status.value, node.feedback_message or "") for _, node, _ in self._nodes]
         if state == self._last_tree:
             return
-        rr = self._rr
         previous = self._last_tree or [(Status.INVALID.value, "")] * len(state)
+        now = time.monotonic()
+        statuses_changed = [s for s, _ in state] != [s for s, _ in previous]
+        if not (force or statuses_changed) and now - self._last_tree_s < FEEDBACK_PERIOD_S:
+            return
+        self._last_tree_s = now
+        rr = self._rr
         for (_, node, _), (status, feedback), (old, _) in zip(
             self._nodes, state, previous, strict=True
         ):
@@ -357,8 +389,10 @@ class MissionRecording:
 
     def _log_odometry(self, runner: MissionRunner) -> None:
         humanoid = getattr(runner.robot, "humanoid", None)
-        if humanoid is None:
+        now = time.monotonic()
+        if humanoid is None or now - self._last_odometry_s < ODOMETRY_PERIOD_S:
             return
+        self._last_odometry_s = now
         pose = humanoid.pose()
         last = self._last_pose
         if (

@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import math
 
+import cv2
 import numpy as np
 import pytest
 
@@ -235,7 +236,11 @@ def test_scan_views_carry_depth_in_millimetres_and_the_camera_pose(recorded, box
     ]
     assert np.allclose(pose["Transform3D:translation"], frame.T_world_camera[:3, 3], atol=1e-6)
     (depth,) = read_entity(out_dir / RECORDING_FILE, "world/scan/views/4/depth")
-    assert depth["DepthImage:meter"] == [1000.0]
+    assert depth["EncodedDepthImage:meter"] == [1000.0]
+    png = np.frombuffer(bytes(depth["EncodedDepthImage:blob"][0]), dtype=np.uint8)
+    depth_mm = cv2.imdecode(png, cv2.IMREAD_UNCHANGED)
+    assert depth_mm.dtype == np.uint16 and depth_mm.shape == frame.depth_m.shape
+    assert np.abs(depth_mm / 1000.0 - frame.depth_m).max() <= 0.001  # millimetres
 
 
 def test_asked_and_measured_rotations_and_tag_detections(recorded):
