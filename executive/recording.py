@@ -58,15 +58,11 @@ STATUS_COLOURS = {
     Status.RUNNING.value: (245, 200, 40),
     Status.INVALID.value: (170, 170, 170),
 }
-ODOMETRY_STEP_M = 0.02
-"""The odometry path gets a point every 2 cm of walking (the walk stops within 5 mm)."""
+PATH_STEP_M = 0.02
+"""The NAO's walked path gets a point every 2 cm (the walk stops within 5 mm)."""
 POSE_STEP_M = 0.005
 POSE_STEP_RAD = math.radians(1.0)
 """The NAO's pose is re-logged when it moved 5 mm or turned 1 degree since the last one."""
-ODOMETRY_PERIOD_S = 0.5
-"""Wall seconds between two readings of the humanoid's odometry. Reading it waits for the
-simulated world's lock, which the walk holds while it renders a frame; the tag's
-detections (every control step) draw the walk in finer detail anyway."""
 FEEDBACK_PERIOD_S = 0.5
 """Wall seconds between two logs of the tree when only feedback changed (a running
 leaf's message counts its seconds every tick); status changes are logged at their tick."""
@@ -149,6 +145,7 @@ class MissionRecording:
             (``rerun+http://HOST:9876/proxy``: a viewer already running, e.g. on the
             operator's laptop while the robots run).
         web_port: the web viewer's HTTP port with ``live="web"``.
+        grpc_port: the port a spawned viewer or the web viewer's server listens on.
 
     Raises:
         RecordingUnavailable: rerun-sdk is missing, or a native viewer was asked for
@@ -162,6 +159,7 @@ class MissionRecording:
         path: Path | None,
         live: str | None = None,
         web_port: int = DEFAULT_WEB_PORT,
+        grpc_port: int = DEFAULT_VIEWER_PORT,
     ) -> None:
         rr = _rerun()
         from executive import recording_scene
@@ -173,24 +171,23 @@ class MissionRecording:
         self.seconds = 0.0
         """Wall time spent in the hook so far (what recording costs the run)."""
         self.seconds_by_part: dict[str, float] = collections.defaultdict(float)
-        """The same, per thing logged (``tree``, ``odometry``, a blackboard key, ...)."""
+        """The same, per thing logged (``tree``, ``skill calls``, a blackboard key, ...)."""
         self._stream = rr.RecordingStream("bearchair")
         sinks = []
         if self.path is not None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             sinks.append(rr.FileSink(str(self.path)))
         if live:
-            sinks.append(self._live_sink(live, web_port))
+            sinks.append(self._live_sink(live, web_port, grpc_port))
         if not sinks:
             raise ValueError("a recording needs a file, a viewer or both")
         self._stream.set_sinks(*sinks)
         self._nodes = tree_nodes(root)
         self._last_tree: list[tuple[str, str]] | None = None
         self._last_tree_s = -math.inf
-        self._last_odometry_s = -math.inf
         self._last_values: dict[str, Any] = {}
         self._skill_calls: SkillCalls | None = None
-        self._odometry: list[SE2Pose] = []
+        self._path: list[SE2Pose] = []
         self._last_pose: SE2Pose | None = None
         self._warned: set[str] = set()
         self._lock = threading.Lock()
@@ -198,18 +195,18 @@ class MissionRecording:
 
     # -- set-up ---------------------------------------------------------------------
 
-    def _live_sink(self, live: str, web_port: int) -> Any:
+    def _live_sink(self, live: str, web_port: int, grpc_port: int) -> Any:
         rr = self._rr
         if live == "spawn":
             if not has_display():
                 raise RecordingUnavailable(
                     "no display for a native viewer: use --live web (a web viewer on a port)"
                 )
-            self._stream.spawn(port=DEFAULT_VIEWER_PORT, connect=False)
-            self.viewer_url = f"rerun+http://127.0.0.1:{DEFAULT_VIEWER_PORT}/proxy"
+            self._stream.spawn(port=grpc_port, connect=False)
+            self.viewer_url = f"rerun+http://127.0.0.1:{grpc_port}/proxy"
             return rr.GrpcSink(self.viewer_url)
         if live == "web":
-            server = rr.GrpcServerSink(port=DEFAULT_VIEWER_PORT)
+            server = rr.GrpcServerSink(port=grpc_port)
             rr.serve_web_viewer(web_port=web_port, open_browser=False, connect_to=server.uri)
             self.viewer_url = f"http://127.0.0.1:{web_port}?url={server.uri}"
             return server
@@ -238,17 +235,20 @@ class MissionRecording:
     def __call__(self, runner: MissionRunner) -> None:
         started = time.perf_counter()
         with self._lock:
-            try:
-                robot_s = float(runner.robot.clock.now())
-            except Exception:  # a real robot's clock may fail at shutdown
-                robot_s = runner.elapsed()
-            self._stream.set_time("tick", sequence=int(runner.tree.count))
-            # The skill calls returned between the last tick and this one, at their times.
-            self._guarded("skill calls", self._log_skill_calls)
-            self._stream.set_time("robot", duration=robot_s)
-            self._guarded("tree", self._log_tree)
-            self._guarded("blackboard", self._log_blackboard)
-            self._guarded("odometry", self._log_odometry, runner)
+            events = self._skill_calls.drain() if self._skill_calls is not None else []
+            tree = self._tree_to_log()
+            changed = self._changed_values()
+            # Most ticks change nothing: then nothing reaches Rerun, not even the time
+            # (each call into it hands the GIL to the skills' threads and waits for it back).
+            if events or tree is not None or changed:
+                self._stream.set_time("tick", sequence=int(runner.tree.count))
+                # The skill calls returned since the last tick, each at its own time.
+                self._guarded("skill calls", self._log_skill_calls, events)
+                self._stream.set_time("robot", duration=_robot_seconds(runner))
+                if tree is not None:
+                    self._guarded("tree", self._log_tree, *tree)
+                for key, value, previous in changed:
+                    self._guarded(key, self._log_value, key, value, previous)
         self.seconds += time.perf_counter() - started
 
     def cost(self) -> dict[str, Any]:
@@ -275,7 +275,9 @@ class MissionRecording:
         """Logs the tree's last feedback, flushes and closes the file (the viewer keeps
         what it received)."""
         with self._lock:
-            self._guarded("tree", self._log_tree, True)
+            tree = self._tree_to_log(force=True)
+            if tree is not None:
+                self._guarded("tree", self._log_tree, *tree)
         try:
             self._stream.flush()
             self._stream.disconnect()
@@ -296,16 +298,22 @@ class MissionRecording:
         finally:
             self.seconds_by_part[what] += time.perf_counter() - started
 
-    def _log_tree(self, force: bool = False) -> None:
+    def _tree_to_log(
+        self, force: bool = False
+    ) -> tuple[list[tuple[str, str]], list[tuple[str, str]]] | None:
+        """(state, previous state) when the tree is to be logged now, else None."""
         state = [(node.status.value, node.feedback_message or "") for _, node, _ in self._nodes]
         if state == self._last_tree:
-            return
+            return None
         previous = self._last_tree or [(Status.INVALID.value, "")] * len(state)
         now = time.monotonic()
         statuses_changed = [s for s, _ in state] != [s for s, _ in previous]
         if not (force or statuses_changed) and now - self._last_tree_s < FEEDBACK_PERIOD_S:
-            return
-        self._last_tree_s = now
+            return None
+        self._last_tree, self._last_tree_s = state, now
+        return state, previous
+
+    def _log_tree(self, state: list[tuple[str, str]], previous: list[tuple[str, str]]) -> None:
         rr = self._rr
         for (_, node, _), (status, feedback), (old, _) in zip(
             self._nodes, state, previous, strict=True
@@ -318,7 +326,6 @@ class MissionRecording:
                         level=_text_level(rr, status),
                     ),
                 )
-        self._last_tree = state
         self._stream.log(
             "tree",
             rr.GraphNodes(
@@ -334,24 +341,22 @@ class MissionRecording:
             ),
         )
 
-    def _log_blackboard(self) -> None:
+    def _changed_values(self) -> list[tuple[str, Any, Any]]:
+        """(key, value, previous value) of the blackboard values replaced since the last
+        tick. Behaviours replace values, never mutate them, so identity says it."""
         storage = py_trees.blackboard.Blackboard.storage
+        changed = []
         for key in sorted(storage):
             value = storage[key]
             if key in self._last_values and self._last_values[key] is value:
                 continue
-            previous = self._last_values.get(key)
+            changed.append((key, value, self._last_values.get(key)))
             self._last_values[key] = value
-            text = json.dumps(to_jsonable(value), indent=1, sort_keys=True)
-            self._guarded(
-                f"blackboard {key}",
-                self._stream.log,
-                f"blackboard{key}",
-                self._rr.TextDocument(text, media_type="text/plain"),
-            )
-            self._guarded(key, self._log_result, key, value, previous)
+        return changed
 
-    def _log_result(self, key: str, value: Any, previous: Any) -> None:
+    def _log_value(self, key: str, value: Any, previous: Any) -> None:
+        text = json.dumps(to_jsonable(value), indent=1, sort_keys=True)
+        self._stream.log(f"blackboard{key}", self._rr.TextDocument(text, media_type="text/plain"))
         scene, stream = self._scene, self._stream
         if value is None:
             return
@@ -367,6 +372,8 @@ class MissionRecording:
             scene.log_sitting_pose(stream, value)
         elif key == keys.ACCESSIBILITY:
             scene.log_accessibility(stream, value)
+        elif key == keys.HUMANOID_POSE:
+            self._log_humanoid_pose(value)
         elif key == keys.MEASURED_ROTATIONS:
             for rotation in value[len(previous or []) :]:
                 scene.log_rotation(stream, rotation)
@@ -377,23 +384,18 @@ class MissionRecording:
         elif key == keys.JUDGEMENT:
             scene.log_judgement(stream, value)
 
-    def _log_skill_calls(self) -> None:
-        if self._skill_calls is None:
-            return
-        for name, result, robot_s in self._skill_calls.drain():
+    def _log_skill_calls(self, events: list[tuple[str, Any, float]]) -> None:
+        for name, result, robot_s in events:
             self._stream.set_time("robot", duration=robot_s)
             if name == "locate_humanoid":
                 self._scene.log_tag_detection(self._stream, result)
+                if result is not None:
+                    self._log_humanoid_pose(result)
             elif name == "compose_instruction":
                 self._scene.log_instruction(self._stream, result)
 
-    def _log_odometry(self, runner: MissionRunner) -> None:
-        humanoid = getattr(runner.robot, "humanoid", None)
-        now = time.monotonic()
-        if humanoid is None or now - self._last_odometry_s < ODOMETRY_PERIOD_S:
-            return
-        self._last_odometry_s = now
-        pose = humanoid.pose()
+    def _log_humanoid_pose(self, pose: SE2Pose) -> None:
+        """Moves the NAO to its tracked pose; its path gets a point every 2 cm."""
         last = self._last_pose
         if (
             last is None
@@ -402,10 +404,10 @@ class MissionRecording:
         ):
             self._last_pose = pose
             self._scene.log_humanoid_pose(self._stream, pose)
-        if not self._odometry or self._odometry[-1].distance_to(pose) >= ODOMETRY_STEP_M:
-            self._odometry.append(pose)
-            if len(self._odometry) >= 2:
-                self._scene.log_odometry_path(self._stream, self._odometry)
+        if not self._path or self._path[-1].distance_to(pose) >= PATH_STEP_M:
+            self._path.append(pose)
+            if len(self._path) >= 2:
+                self._scene.log_walked_path(self._stream, self._path)
 
 
 def open_recording(
@@ -439,6 +441,13 @@ def read_entity(path: Path, entity_path: str) -> list[dict[str, Any]]:
         )
     rows.sort(key=lambda row: (row.get("tick") is not None, row.get("tick") or 0))
     return rows
+
+
+def _robot_seconds(runner: MissionRunner) -> float:
+    try:
+        return float(runner.robot.clock.now())
+    except Exception:  # a real robot's clock may fail at shutdown
+        return runner.elapsed()
 
 
 def _label(name: str, feedback: str) -> str:

@@ -18,8 +18,8 @@ world/imagination/drops/<i>           each drop's final agent links as boxes (gr
                                       correct sitting by the SAM, red: not)
 world/sitting_pose                    g = (p, γ) as an arrow from p along γ
 world/accessibility/se2_goal, path    the SE(2) goal and the planned path
-world/nao                             the humanoid's odometry pose (its body as a box)
-world/walk/odometry, tag_detections   the humanoid's path and the tag's detections
+world/nao                             the humanoid's tracked pose (its body as a box)
+world/walk/path, tag_detections       the humanoid's tracked path and the tag's detections
 world/bear                            the bear when judged
 assistance/asked, assistance/measured the rotations asked for and measured by ICP
 seat/plan/<joint>                     the planned joint trajectory (timeline seat_plan)
@@ -271,7 +271,7 @@ def log_rotation(stream: rr.RecordingStream, rotation: ChairRotation) -> None:
 
 
 def log_humanoid_pose(stream: rr.RecordingStream, pose: SE2Pose) -> None:
-    """Where the humanoid believes it is (odometry): moves its body box."""
+    """Where the mission tracks the humanoid (its tag, else odometry): moves its body."""
     stream.log(
         "world/nao",
         rr.Transform3D(
@@ -281,10 +281,10 @@ def log_humanoid_pose(stream: rr.RecordingStream, pose: SE2Pose) -> None:
     )
 
 
-def log_odometry_path(stream: rr.RecordingStream, poses: list[SE2Pose]) -> None:
-    """The humanoid's odometry so far as one line."""
+def log_walked_path(stream: rr.RecordingStream, poses: list[SE2Pose]) -> None:
+    """The humanoid's tracked poses so far as one line."""
     stream.log(
-        "world/walk/odometry",
+        "world/walk/path",
         rr.LineStrips3D([[(p.x, p.y, 0.005) for p in poses]], colors=[GREY], radii=0.003),
     )
 

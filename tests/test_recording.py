@@ -119,10 +119,7 @@ def test_the_recorded_mission_succeeded_with_one_rotation(recorded):
 
 
 def test_the_recording_has_every_domain_s_entities(recorded):
-    from rerun.chunk import RrdReader
-
-    out_dir = recorded[0]
-    paths = set(RrdReader(str(out_dir / RECORDING_FILE)).store().schema().entity_paths())
+    paths = _entity_paths(recorded[0] / RECORDING_FILE)
     expected = {
         "/tree",
         "/tree/log",
@@ -137,6 +134,7 @@ def test_the_recording_has_every_domain_s_entities(recorded):
         "/world/nao",
         "/world/nao/body",
         "/world/walk/tag_detections",
+        "/world/walk/path",
         "/walk/tag_seen",
         "/walk/log",
         "/world/bear",
@@ -306,6 +304,30 @@ def test_a_failing_logger_never_stops_the_mission(tmp_path, caplog):
     assert any(keys.ARENA in message for message in caplog.messages)
 
 
+def test_live_web_serves_the_viewer_while_recording_to_a_file(tmp_path):
+    import socket
+    import urllib.request
+
+    def free_port() -> int:
+        with socket.socket() as probe:
+            probe.bind(("127.0.0.1", 0))
+            return probe.getsockname()[1]
+
+    web_port, grpc_port = free_port(), free_port()
+    root = create_tree()
+    recording = MissionRecording(
+        root, path=tmp_path / RECORDING_FILE, live="web", web_port=web_port, grpc_port=grpc_port
+    )
+    try:
+        assert recording.viewer_url.startswith(f"http://127.0.0.1:{web_port}?url=")
+        assert f":{grpc_port}/proxy" in recording.viewer_url
+        with urllib.request.urlopen(f"http://127.0.0.1:{web_port}/", timeout=10) as page:
+            assert page.status == 200
+    finally:
+        recording.close()
+    assert {"/tree", "/world"} <= _entity_paths(tmp_path / RECORDING_FILE)
+
+
 def test_run_record_and_live_flags(tmp_path, monkeypatch, capsys):
     args = cli.build_parser().parse_args(["run", "--record", "--live", "web"])
     assert args.record is True and args.live == "web"
@@ -334,6 +356,12 @@ def test_view_explains_a_missing_recording_and_builds_the_viewer_command(tmp_pat
     assert command[1:3] == ["-m", "rerun"] and "--web-viewer" in command
     assert command[command.index("--web-viewer-port") + 1] == "9123"
     assert command[-1] == str(tmp_path / RECORDING_FILE)
+
+
+def _entity_paths(path) -> set[str]:
+    from rerun.chunk import RrdReader
+
+    return set(RrdReader(str(path)).store().schema().entity_paths())
 
 
 def _rgb(packed: int) -> tuple[int, int, int]:
