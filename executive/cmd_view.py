@@ -9,13 +9,14 @@ with rerun-sdk (the ``[viewer]`` extra), until it is closed or Ctrl-C.
 from __future__ import annotations
 
 import argparse
+import os
+import socket
 import subprocess
 import sys
 from pathlib import Path
 from typing import Any
 
 from executive.recording import (
-    DEFAULT_VIEWER_PORT,
     DEFAULT_WEB_PORT,
     INSTALL_HINT,
     RECORDING_FILE,
@@ -60,18 +61,35 @@ def recording_path(run_dir: Path) -> Path:
     return path
 
 
+def rerun_binary() -> str:
+    """The viewer program rerun-sdk ships (what ``python -m rerun`` starts)."""
+    if "RERUN_CLI_PATH" in os.environ:
+        return os.environ["RERUN_CLI_PATH"]
+    import rerun_cli
+
+    folder = Path(rerun_cli.__file__).parent
+    bundled = folder / "Rerun.app" / "Contents" / "MacOS" / "Rerun"
+    if sys.platform == "darwin" and bundled.exists():
+        return str(bundled)
+    return str(folder / ("rerun.exe" if sys.platform.startswith("win") else "rerun"))
+
+
 def viewer_command(path: Path, *, web: bool, port: int) -> list[str]:
-    """The command that opens ``path`` in Rerun's viewer (``python -m rerun``)."""
-    command = [sys.executable, "-m", "rerun"]
+    """The command that opens ``path`` in Rerun's viewer.
+
+    The web viewer's page is served on ``port``; the data behind it on a free port, so
+    that a viewer already running on Rerun's default port is left alone.
+    """
+    command = [rerun_binary()]
     if web:
-        command += [
-            "--web-viewer",
-            "--web-viewer-port",
-            str(port),
-            "--port",
-            str(DEFAULT_VIEWER_PORT),
-        ]
+        command += ["--web-viewer", "--web-viewer-port", str(port), "--port", str(_free_port())]
     return [*command, str(path)]
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
 
 
 def run(args: argparse.Namespace) -> int:
@@ -93,7 +111,17 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
             flush=True,
         )
+    command = viewer_command(path, web=args.web, port=args.port)
+    if not Path(command[0]).is_file():
+        raise CliError(
+            f"bearchair view: rerun-sdk's viewer is missing ({command[0]}): reinstall it"
+        )
+    if os.name == "posix":
+        # This process becomes the viewer: Ctrl-C and SIGTERM reach it, nothing is orphaned.
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.execv(command[0], command)
     try:
-        return subprocess.run(viewer_command(path, web=args.web, port=args.port)).returncode
+        return subprocess.run(command).returncode
     except KeyboardInterrupt:
         return 0

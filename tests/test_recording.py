@@ -353,9 +353,49 @@ def test_view_explains_a_missing_recording_and_builds_the_viewer_command(tmp_pat
     assert cli.main(["view", str(tmp_path / "nothing")]) == 2
     (tmp_path / RECORDING_FILE).write_bytes(b"")
     command = viewer_command(tmp_path / RECORDING_FILE, web=True, port=9123)
-    assert command[1:3] == ["-m", "rerun"] and "--web-viewer" in command
+    assert command[0].endswith("rerun") and "--web-viewer" in command
     assert command[command.index("--web-viewer-port") + 1] == "9123"
     assert command[-1] == str(tmp_path / RECORDING_FILE)
+
+
+def test_view_web_serves_a_recording(recorded):
+    import socket
+    import subprocess
+    import sys
+    import time
+    import urllib.request
+
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    viewer = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "executive.cli",
+            "view",
+            str(recorded[0]),
+            "--web",
+            "--port",
+            str(port),
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    try:
+        deadline = time.monotonic() + 30.0
+        while True:
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=2) as page:
+                    assert page.status == 200
+                    break
+            except OSError:
+                assert viewer.poll() is None, viewer.stderr.read().decode()
+                assert time.monotonic() < deadline, "the web viewer did not answer in 30 s"
+                time.sleep(0.3)
+    finally:
+        viewer.terminate()
+        viewer.wait(timeout=10)
 
 
 def _entity_paths(path) -> set[str]:
