@@ -45,6 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     walls: dict[bool, list[float]] = {False: [], True: []}
     cpus: dict[bool, list[float]] = {False: [], True: []}
     hooks: list[float] = []
+    hook_cpus: list[float] = []
     with tempfile.TemporaryDirectory(prefix="bench-recording-") as folder:
         for index in range(args.runs):
             for record in (False, True):
@@ -69,10 +70,12 @@ def main(argv: list[str] | None = None) -> int:
                 if record:
                     cost = summary["recording"]
                     hooks.append(float(cost["seconds"]))
+                    hook_cpus.append(float(cost["cpu_seconds"]))
                     size_mb = (out_dir / RECORDING_FILE).stat().st_size / 1e6
                     parts = ", ".join(f"{k} {v:.2f}" for k, v in cost["seconds_by_part"].items())
                     line += (
-                        f", hook {cost['seconds']:6.2f} s ({cost['seconds'] / wall:5.1%}), "
+                        f", hook {cost['seconds']:6.2f} s ({cost['seconds'] / wall:5.1%}; cpu "
+                        f"{cost['cpu_seconds']:.2f} s), "
                         f"{size_mb:.1f} MB; parts (s): {parts}"
                     )
                 print(line, flush=True)
@@ -86,6 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"wall difference / without:     {wall_ratio:+7.1%}")
     print(f"cpu difference / without:      {(cpu_with - cpu_without) / cpu_without:+7.1%}")
     print(f"hook time / wall with:         {hook_ratio:7.1%}  (target <= {TARGET_RATIO:.0%})")
+    print(f"hook cpu / wall with:          {statistics.median(hook_cpus) / with_:7.1%}")
     return 0 if hook_ratio <= TARGET_RATIO else 1
 
 

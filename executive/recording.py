@@ -63,9 +63,10 @@ PATH_STEP_M = 0.02
 POSE_STEP_M = 0.005
 POSE_STEP_RAD = math.radians(1.0)
 """The NAO's pose is re-logged when it moved 5 mm or turned 1 degree since the last one."""
-FEEDBACK_PERIOD_S = 0.5
+FEEDBACK_PERIOD_S = 1.0
 """Wall seconds between two logs of the tree when only feedback changed (a running
-leaf's message counts its seconds every tick); status changes are logged at their tick."""
+leaf's message counts its seconds every tick); status changes are logged at their tick.
+Each log takes about 2 ms of the tick thread, more when the skills' threads hold the GIL."""
 FEEDBACK_LABEL_CHARS = 48
 """Feedback shown in a node's label is cut here; the full text is in ``tree/log``."""
 
@@ -170,6 +171,9 @@ class MissionRecording:
         self.viewer_url: str | None = None
         self.seconds = 0.0
         """Wall time spent in the hook so far (what recording costs the run)."""
+        self.cpu_seconds = 0.0
+        """CPU time of the hook's thread in the hook (its wall time less the waits for
+        the GIL and the skills' threads; Rerun encodes and writes in threads of its own)."""
         self.seconds_by_part: dict[str, float] = collections.defaultdict(float)
         """The same, per thing logged (``tree``, ``skill calls``, a blackboard key, ...)."""
         self._stream = rr.RecordingStream("bearchair")
@@ -233,7 +237,7 @@ class MissionRecording:
     # -- the post-tick hook ------------------------------------------------------------
 
     def __call__(self, runner: MissionRunner) -> None:
-        started = time.perf_counter()
+        started, cpu_started = time.perf_counter(), time.thread_time()
         with self._lock:
             events = self._skill_calls.drain() if self._skill_calls is not None else []
             tree = self._tree_to_log()
@@ -250,14 +254,17 @@ class MissionRecording:
                 for key, value, previous in changed:
                     self._guarded(key, self._log_value, key, value, previous)
         self.seconds += time.perf_counter() - started
+        self.cpu_seconds += time.thread_time() - cpu_started
 
     def cost(self) -> dict[str, Any]:
         """What the recording cost the run so far: the hook's wall seconds, in all and
-        for the five most expensive things logged (``summary.json``'s ``recording``)."""
+        for the five most expensive things logged, and its CPU seconds
+        (``summary.json``'s ``recording``)."""
         parts = sorted(self.seconds_by_part.items(), key=lambda kv: -kv[1])[:5]
         return {
             "file": None if self.path is None else self.path.name,
             "seconds": round(self.seconds, 3),
+            "cpu_seconds": round(self.cpu_seconds, 3),
             "seconds_by_part": {name: round(seconds, 3) for name, seconds in parts},
         }
 
