@@ -1,4 +1,5 @@
-"""CheckAccessibility: an SE(2) goal, a seat pre-plan and a path to the goal."""
+"""CheckSeatReachable and CheckAccessibility: can the NAO seat the bear on this chair at
+all, and from here: an SE(2) goal, a seat pre-plan and a path to the goal."""
 
 from __future__ import annotations
 
@@ -11,7 +12,39 @@ from behaviours import keys
 from behaviours.skill_behaviour import SkillBehaviour
 from behaviours.tracking import tracked_humanoid_pose
 from skills.geometry import SE2Pose
-from skills.results import AccessibilityResult
+from skills.results import AccessibilityResult, SeatReachability
+
+
+class CheckSeatReachable(SkillBehaviour):
+    """FAILURE, refusing the mission with the reason, when no stance lets the NAO seat the
+    bear on this seat whatever the chair's orientation (too high, too deep for its
+    reach); SUCCESS otherwise. Runs before anyone is asked to turn the chair.
+
+    Blackboard:
+        reads ``/chair/mesh``, ``/sitting/pose``; writes ``/accessibility/reachable``.
+    """
+
+    activity = "checking the seat is within the NAO's reach"
+
+    def __init__(self, name: str = "CheckSeatReachable"):
+        super().__init__(
+            name, reads=(keys.CHAIR_MESH, keys.SITTING_POSE), writes=(keys.REACHABILITY,)
+        )
+
+    def prepare(self) -> Callable[[], SeatReachability]:
+        skills, _ = self.need()
+        chair_mesh = self.blackboard.get(keys.CHAIR_MESH)
+        sitting_pose = self.blackboard.get(keys.SITTING_POSE)
+        return lambda: skills.check_seat_reachable(chair_mesh, sitting_pose)
+
+    def conclude(self, verdict: SeatReachability) -> Status:
+        self.blackboard.set(keys.REACHABILITY, verdict, overwrite=True)
+        if not verdict.reachable:
+            return self.fail(f"refused: {verdict.reason}")
+        return self.succeed(
+            f"seat {verdict.seat_height_m:.2f} m high within reach "
+            f"(p moved {verdict.slide_m:.2f} m, stance {verdict.stance_m:.2f} m from it)"
+        )
 
 
 class CheckAccessibility(SkillBehaviour):

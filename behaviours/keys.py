@@ -15,6 +15,7 @@ key                        value                                                
 /sitting/imagination       skills.results.ImaginationResult                       ImagineSitting
 /sitting/pose              skills.geometry.SittingPose: g now, world frame        ImagineSitting, CheckAccessibility, MeasureChairRotation
 /humanoid/pose             skills.geometry.SE2Pose: last tracked humanoid pose    CheckAccessibility, WalkToChair
+/accessibility/reachable   skills.results.SeatReachability: the chair alone       CheckSeatReachable
 /accessibility/result      skills.results.AccessibilityResult (latest check)      CheckAccessibility
 /accessibility/se2_goal    skills.geometry.SE2Pose: where the humanoid stands     CheckAccessibility
 /assistance/instructions   list[str]: the sentences said, in order                InstructHelper
@@ -35,6 +36,7 @@ CHAIR_POINTS = "/chair/points"
 IMAGINATION = "/sitting/imagination"
 SITTING_POSE = "/sitting/pose"
 HUMANOID_POSE = "/humanoid/pose"
+REACHABILITY = "/accessibility/reachable"
 ACCESSIBILITY = "/accessibility/result"
 SE2_GOAL = "/accessibility/se2_goal"
 INSTRUCTIONS = "/assistance/instructions"

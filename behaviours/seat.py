@@ -16,9 +16,9 @@ from skills.results import SeatingPlan
 class SeatBear(SkillBehaviour):
     """Plans the seating motion from where the humanoid stands now, then plays it.
 
-    When the accessibility check says so (a seat higher than the carried bear), the
-    humanoid first raises the bear where the walk stopped and steps straight in to
-    s_goal.
+    When the accessibility check says so, the humanoid first steps straight in to s_goal
+    from where the walk stopped: s_goal nearer the chair than the walking ellipsoid
+    allows, or a seat higher than the carried bear (it then raises the bear first).
 
     Blackboard:
         reads ``/chair/mesh``, ``/sitting/pose``, ``/accessibility/result``; writes
@@ -40,13 +40,15 @@ class SeatBear(SkillBehaviour):
         sitting_pose = self.blackboard.get(keys.SITTING_POSE)
         accessibility = self.blackboard.get(keys.ACCESSIBILITY)
         raised = accessibility.raise_at is not None
+        steps_in = raised or accessibility.step_in_from is not None
 
         def job() -> SeatingPlan:
-            if raised:
+            if steps_in:
                 here = tracked_humanoid_pose(skills, robot)
-                skills.raise_bear(
-                    robot.humanoid, chair_mesh, sitting_pose, here, cancel=self.cancel_event
-                )
+                if raised:
+                    skills.raise_bear(
+                        robot.humanoid, chair_mesh, sitting_pose, here, cancel=self.cancel_event
+                    )
                 step_in = skills.walk_path(
                     robot.humanoid,
                     robot.clock,
@@ -55,7 +57,8 @@ class SeatBear(SkillBehaviour):
                     cancel=self.cancel_event,
                 )
                 if not step_in.reached:
-                    raise RuntimeError(f"stepping in with the bear raised: {step_in.reason}")
+                    held = "raised" if raised else "carried"
+                    raise RuntimeError(f"stepping in with the bear {held}: {step_in.reason}")
             humanoid_pose = tracked_humanoid_pose(skills, robot)
             plan = skills.plan_seating(chair_mesh, sitting_pose, humanoid_pose, raised=raised)
             skills.execute_seating(robot.humanoid, plan, cancel=self.cancel_event)

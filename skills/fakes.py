@@ -24,6 +24,7 @@ from skills.results import (
     ImaginationResult,
     Instruction,
     SeatingPlan,
+    SeatReachability,
     WalkResult,
 )
 
@@ -40,6 +41,7 @@ def default_results() -> dict[str, Any]:
         "scan_chair": ChairScan(chair_mesh, np.asarray(chair_mesh.vertices), 9, {"total": 0.1}),
         "imagine_sitting": ImaginationResult(True, SITTING_POSE, 3, 24, (), {"total": 0.1}),
         "locate_humanoid": SE2Pose(1.9, 0.0, np.pi),
+        "check_seat_reachable": SeatReachability(True, "", 0.24, 0.0, 0.3, 0.01),
         "check_accessibility": AccessibilityResult(
             True, SE2_GOAL, SITTING_POSE, (SE2Pose(1.9, 0.0, np.pi), SE2_GOAL), "", 0.01
         ),

@@ -72,6 +72,14 @@ class SE2Pose(NamedTuple):
         moved = T_world_new_old @ self.as_transform()
         return SE2Pose(float(moved[0, 3]), float(moved[1, 3]), wrap_angle(yaw_of(moved)))
 
+    def stepped_back(self, distance_m: float) -> SE2Pose:
+        """This pose moved ``distance_m`` metres backwards along its own heading."""
+        return SE2Pose(
+            self.x - distance_m * math.cos(self.theta),
+            self.y - distance_m * math.sin(self.theta),
+            self.theta,
+        )
+
     def distance_to(self, other: SE2Pose) -> float:
         """Euclidean distance in metres between the two positions."""
         return math.hypot(self.x - other.x, self.y - other.y)

@@ -51,3 +51,11 @@ BEAR_SEAT_CLEARANCE_M = 0.02
 """The bear's seat point is let go this high over the seat's top. The imagined sitting
 pose's height is the sitter's pelvis, 6 to 10 cm over the seat: a bear released there
 drops and tips over the seat's front edge."""
+
+BEAR_TORSO_DEPTH_M = 0.085
+"""Fore-aft depth of the bear's torso (metres), the part it sits on: its legs stick out
+forward from it."""
+
+BEAR_COM_AHEAD_M = 0.013
+"""How far the bear's centre of mass lies ahead of its seat point (metres), for a
+uniformly dense bear (its legs stick out forward)."""

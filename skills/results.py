@@ -110,6 +110,42 @@ class ImaginationResult(NamedTuple):
         }
 
 
+class SeatReachability(NamedTuple):
+    """Whether the NAO can seat the bear on this seat from some stance, with the chair
+    alone (no walls, no obstacles): when not, no rotation of the chair can help.
+
+    Attributes:
+        reachable: a stance and a supported sitting point pass the seating pre-plan.
+        reason: why not (empty when reachable), e.g. ``seat too high for the NAO: seat
+            0.47 m, the NAO places a bear at most 0.44 m high``.
+        seat_height_m: the seat's height under the imagined p, metres (NaN: no seat).
+        slide_m: how far p had to move toward the NAO, metres.
+        stance_m: the stance's distance from the imagined p along the ray, metres (NaN
+            when none).
+        seconds: wall time of the check.
+    """
+
+    reachable: bool
+    reason: str
+    seat_height_m: float
+    slide_m: float = 0.0
+    stance_m: float = math.nan
+    seconds: float = 0.0
+
+    def summary(self) -> dict[str, Any]:
+        def number(value: float) -> float | None:
+            return None if math.isnan(value) else round(value, 3)
+
+        return {
+            "reachable": self.reachable,
+            "reason": self.reason,
+            "seat_height_m": number(self.seat_height_m),
+            "slide_m": number(self.slide_m),
+            "stance_m": number(self.stance_m),
+            "seconds": round(self.seconds, 3),
+        }
+
+
 class AccessibilityResult(NamedTuple):
     """Whether the humanoid can reach a pose from which it can seat the bear.
 
@@ -124,6 +160,10 @@ class AccessibilityResult(NamedTuple):
         raise_at: where the humanoid raises the bear before stepping straight in to
             ``se2_goal`` (a seat higher than the carried bear); None: it walks in as it
             carries the bear.
+        step_in_from: where the path ends when ``se2_goal`` is nearer the chair than the
+            walking humanoid's ellipsoid allows (a footrest, a base under the seat): it
+            steps straight in from there, carrying the bear (None: the path ends at
+            ``se2_goal`` or at ``raise_at``).
     """
 
     accessible: bool
@@ -133,12 +173,14 @@ class AccessibilityResult(NamedTuple):
     reason: str = ""
     seconds: float = 0.0
     raise_at: SE2Pose | None = None
+    step_in_from: SE2Pose | None = None
 
     def summary(self) -> dict[str, Any]:
         return {
             "accessible": self.accessible,
             "se2_goal": _se2_json(self.se2_goal),
             "raise_at": _se2_json(self.raise_at),
+            "step_in_from": _se2_json(self.step_in_from),
             "waypoints": len(self.path),
             "reason": self.reason,
             "seconds": round(self.seconds, 3),

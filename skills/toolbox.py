@@ -27,6 +27,7 @@ from skills.results import (
     ImaginationResult,
     Instruction,
     SeatingPlan,
+    SeatReachability,
     WalkResult,
 )
 
@@ -54,6 +55,10 @@ class MissionSkills(Protocol):
     ) -> ImaginationResult: ...
 
     def locate_humanoid(self, arm: ScanningArm) -> SE2Pose | None: ...
+
+    def check_seat_reachable(
+        self, chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose
+    ) -> SeatReachability: ...
 
     def check_accessibility(
         self,
@@ -120,6 +125,7 @@ SKILL_SOURCES: dict[str, str] = {
     "scan_chair": "skills.perception:scan_chair",
     "imagine_sitting": "skills.imagination:imagine_sitting",
     "locate_humanoid": "skills.perception:locate_humanoid",
+    "check_seat_reachable": "skills.planning.stance:check_seat_reachable",
     "check_accessibility": "skills.planning.se2:check_accessibility",
     "compose_instruction": "skills.assistance:compose_instruction",
     "wait_until_chair_still": "skills.perception:wait_until_chair_still",

@@ -12,7 +12,7 @@ import pytest
 from py_trees.common import Status
 
 from behaviours import keys
-from behaviours.accessibility import CheckAccessibility
+from behaviours.accessibility import CheckAccessibility, CheckSeatReachable
 from behaviours.assistance import InstructHelper, MeasureChairRotation, WaitUntilChairStill
 from behaviours.imagine import ImagineSitting
 from behaviours.scan import ScanChair
@@ -23,7 +23,7 @@ from hardware.interfaces import SeatingJudgement
 from skills.arena import DEFAULT_ARENA
 from skills.fakes import ScriptedSkills, default_results
 from skills.geometry import SE2Pose
-from skills.results import AccessibilityResult, ImaginationResult, WalkResult
+from skills.results import AccessibilityResult, ImaginationResult, SeatReachability, WalkResult
 from skills.toolbox import SkillNotReady
 
 DEFAULTS = default_results()
@@ -35,6 +35,11 @@ LEAVES = [
         ImagineSitting,
         "imagine_sitting",
         ImaginationResult(False, None, 0, 56, (), {}, "no correct sitting"),
+    ),
+    (
+        CheckSeatReachable,
+        "check_seat_reachable",
+        SeatReachability(False, "seat too high for the NAO: seat 0.47 m", 0.47),
     ),
     (
         CheckAccessibility,

@@ -17,7 +17,7 @@ from executive.runner import MissionRunner, summarise
 from hardware.fakes import FakeJudge, fake_robot
 from skills.arena import DEFAULT_ARENA
 from skills.fakes import ScriptedSkills, default_results
-from skills.results import AccessibilityResult
+from skills.results import AccessibilityResult, SeatReachability
 from skills.toolbox import SkillNotReady
 from trees.mission import STAGES, create_tree
 
@@ -95,6 +95,22 @@ def test_assistance_loop_gives_up_after_the_third_rotation():
     assert not skills.calls["walk_path"]
     statuses = {s["name"]: s["status"] for s in summary["stages"]}
     assert statuses["WalkToChair"] == "INVALID"
+
+
+def test_a_seat_out_of_reach_is_refused_before_anyone_is_asked_to_turn_it():
+    refusal = SeatReachability(
+        False,
+        "seat too high for the NAO: seat 0.47 m, the NAO places a bear at most 0.40 m high",
+        0.47,
+    )
+    skills = ScriptedSkills({"check_seat_reachable": refusal})
+    summary, _ = run(skills)
+    assert summary["outcome"] == "failure"
+    assert summary["failed_stage"] == "CheckSeatReachable"
+    assert summary["reason"].startswith("CheckSeatReachable: refused: seat too high for the NAO")
+    assert summary["rotations"] == 0 and summary["instructions"] == []
+    assert not skills.calls["compose_instruction"] and not skills.calls["check_accessibility"]
+    assert not skills.calls["walk_path"]
 
 
 def test_missing_skill_fails_at_its_stage_and_names_it():

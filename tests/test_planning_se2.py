@@ -13,22 +13,22 @@ from skills.geometry import SE2Pose, SittingPose, yaw_transform
 from skills.meshes import box_chair_mesh
 from skills.planning import collision
 from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
-from skills.planning.reach import check_reach, max_forward_reach
 from skills.planning.se2 import (
-    L_INIT_M,
-    PUSH_STEP_M,
-    SEAT_EDGE_MARGIN_M,
-    STANCE_RETRY_STEP_M,
     AccessibilityError,
     SeatingCheck,
     check_accessibility,
     goal_on_ray,
-    place_se2_goal,
     reach_validator,
-    seat_support_heights,
-    slide_on_seat,
     stepped_back,
 )
+from skills.planning.seat import (
+    BEAR_EDGE_MARGIN_M,
+    STEP_M,
+    seat_support_heights,
+    slide_on_seat,
+)
+from skills.planning.stance import check_seat_reachable, choose_stance
+from skills.planning.wholebody.reach_model import reach_model
 
 PELVIS_ABOVE_SEAT_M = 0.05
 START = DEFAULT_ARENA.humanoid_start
@@ -69,7 +69,8 @@ def test_chair_facing_the_back_wall_next_to_it_is_not_accessible() -> None:
     result = _check(chair_mesh, sitting_pose)
     assert not result.accessible
     assert result.path == ()
-    assert "s_goal" in result.reason and ("wall" in result.reason or "outside" in result.reason)
+    assert "sitting ray" in result.reason
+    assert "wall" in result.reason or "arena" in result.reason
 
 
 def test_goal_blocked_everywhere_means_no_path_after_the_check_budget(
@@ -114,61 +115,63 @@ def test_same_seed_same_path() -> None:
     assert first.accessible and first.path == second.path
 
 
-def test_goal_is_pushed_out_along_the_ray_to_the_first_free_spot() -> None:
+def _anywhere(chair_mesh, pose, se2_goal) -> SeatingCheck:
+    return SeatingCheck()
+
+
+def test_goal_is_the_first_spot_on_the_ray_clear_of_the_chair() -> None:
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.1, 40.0)
     checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
-    placement = place_se2_goal(chair_mesh, sitting_pose, checker, l_init_m=0.05)
-    goal = placement.se2_goal
-    assert not checker.collides_with_chair(goal)
+    choice = choose_stance(chair_mesh, sitting_pose, checker, _anywhere, scene=False)
+    goal = choice.se2_goal
+    assert not checker.collides_with_chair(goal) and choice.approach is None
     direction = sitting_pose.direction()
     offset = np.array([goal.x, goal.y]) - sitting_pose.position[:2]
     along = float(offset @ direction)
     assert abs(offset @ [-direction[1], direction[0]]) < 1e-9  # on the ray from the first p
-    assert along == pytest.approx(placement.standoff_m + placement.slide_m)
-    # One step closer collides: the push stopped at the first free spot.
-    assert checker.collides_with_chair(goal_on_ray(sitting_pose, along - PUSH_STEP_M))
+    # One step closer collides: the walk ends at the first free spot.
+    assert checker.collides_with_chair(goal_on_ray(sitting_pose, along - STEP_M))
     # The seat's front edge is 0.14 m ahead of p; the ellipsoid reaches ~0.20 m forward.
     assert 0.32 <= along <= 0.36
-    # p slid toward the NAO along the same ray, within its arms' reach.
-    slid = placement.sitting_pose.position[:2] - sitting_pose.position[:2]
-    assert float(slid @ direction) == pytest.approx(placement.slide_m)
-    assert placement.standoff_m <= max_forward_reach(0.29)
+    # p slid just far enough for the reach model (the seat is 0.24 m high, the seat front
+    # 0.19 m ahead of the NAO: d_max about 0.32 m).
+    model = reach_model()
+    front = choice.se2_goal.distance_to(goal_on_ray(sitting_pose, 0.14))
+    assert along - choice.slide_m <= model.max_forward(0.24, front)
+    assert along - (choice.slide_m - STEP_M) > model.max_forward(0.24, front)
+    assert choice.preplans == 1
 
 
 def test_goal_in_the_wall_behind_a_chair_at_the_arena_edge_is_pushed_clear() -> None:
     # At the arm-side edge, turned 34 degrees: the first spot clear of the chair puts the
-    # NAO's front in the wall; the goal moves on along the ray and p slides to reach (the
-    # deep seat leaves room to slide; the default box chair's would end out of reach).
+    # NAO's front in the wall; the goal moves on along the ray and p slides to reach.
     chair_mesh, sitting_pose = _placed_chair(0.36, 0.16, -34.0, seat_depth_m=0.36)
     checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
-    first_clear = place_se2_goal(chair_mesh, sitting_pose, checker).se2_goal
-    chair_clear_along = L_INIT_M
+    chair_clear_along = 0.0
     while checker.collides_with_chair(goal_on_ray(sitting_pose, chair_clear_along)):
-        chair_clear_along += PUSH_STEP_M
+        chair_clear_along += STEP_M
     assert checker.collides_with_walls(goal_on_ray(sitting_pose, chair_clear_along))
-    assert checker.blocked_by(first_clear) == ""
     result = _check(chair_mesh, sitting_pose)
     assert result.accessible, result.reason
+    assert checker.blocked_by(result.se2_goal) == ""
     assert result.sitting_pose.position[0] > sitting_pose.position[0]  # slid toward the NAO
 
 
 def test_far_sitting_position_slides_toward_the_nao_on_the_seat() -> None:
     chair_mesh, _ = _placed_chair(0.6, 0.0, 0.0, seat_depth_m=0.5)
     p_back = SittingPose(np.array([0.45, 0.0, 0.29]), 0.0)  # 0.15 m behind the seat centre
-    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
-    placement = place_se2_goal(chair_mesh, p_back, checker)
-    moved = placement.sitting_pose.position
-    assert moved[0] > 0.45 + 0.05 and moved[1] == pytest.approx(0.0)
-    assert placement.standoff_m <= max_forward_reach(0.29) + 1e-9
-    assert seat_support_heights(chair_mesh, moved[None, :2], 0.31)[0] == pytest.approx(0.24)
     result = _check(chair_mesh, p_back)
     assert result.accessible, result.reason
-    assert result.sitting_pose.position[0] == pytest.approx(moved[0])
+    moved = result.sitting_pose.position
+    assert moved[0] > 0.45 + 0.05 and moved[1] == pytest.approx(0.0)
+    assert seat_support_heights(chair_mesh, moved[None, :2], 0.31)[0] == pytest.approx(0.24)
+    # The reach validator (the reach model) accepts it: the bear is within d_max.
+    assert not reach_validator(chair_mesh, result.sitting_pose, result.se2_goal).reason
 
 
-def test_slide_stops_at_the_seat_edge_and_unreachable_seat_is_rejected() -> None:
+def test_seat_behind_a_long_footrest_is_refused_as_out_of_reach() -> None:
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0)
-    # A footrest bar in front of the seat keeps the NAO 0.25 m farther away.
+    # A footrest block 0.25 m deep in front of the seat: the NAO's feet stop at its front.
     footrest = trimesh.creation.box(
         extents=(0.25, 0.3, 0.1),
         transform=trimesh.transformations.translation_matrix((0.6 + 0.14 + 0.125, 0.0, 0.15)),
@@ -176,20 +179,31 @@ def test_slide_stops_at_the_seat_edge_and_unreachable_seat_is_rejected() -> None
     chair_mesh = trimesh.util.concatenate([chair_mesh, footrest])
     result = _check(chair_mesh, sitting_pose)
     assert not result.accessible
-    assert "beyond the arms" in result.reason
-    # p slid toward the seat's front edge (0.14 m ahead of the seat centre) and stopped
-    # the bear's margin short of it.
-    edge_x = 0.6 + 0.14
-    assert edge_x - SEAT_EDGE_MARGIN_M - 0.02 <= result.sitting_pose.position[0]
-    assert result.sitting_pose.position[0] <= edge_x - SEAT_EDGE_MARGIN_M + 0.005
+    assert "out of the NAO's reach" in result.reason
+    verdict = check_seat_reachable(chair_mesh, sitting_pose, seating_validator=reach_validator)
+    assert not verdict.reachable and "out of the NAO's reach" in verdict.reason
+    assert verdict.seat_height_m == pytest.approx(0.24, abs=0.005)
 
 
-def test_reach_numbers_follow_the_nao_arm() -> None:
-    assert 0.27 < max_forward_reach(0.29) < 0.33
-    assert max_forward_reach(1.0) == 0.0
-    assert check_reach(0.2, 0.29).reachable
-    assert not check_reach(0.5, 0.29).reachable
-    assert not check_reach(0.05, 0.29).reachable
+def test_a_short_footrest_is_stepped_over_from_the_walking_stance() -> None:
+    chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0)
+    # A footrest bar 8 cm in front of the seat, 12 cm high: the walking ellipsoid stops
+    # too far back; the feet may come up to the bar.
+    footrest = trimesh.creation.box(
+        extents=(0.02, 0.3, 0.02),
+        transform=trimesh.transformations.translation_matrix((0.6 + 0.14 + 0.08, 0.0, 0.12)),
+    )
+    chair_mesh = trimesh.util.concatenate([chair_mesh, footrest])
+    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
+    result = _check(chair_mesh, sitting_pose)
+    assert result.accessible, result.reason
+    assert result.step_in_from is not None and result.raise_at is None
+    assert result.path[-1] == result.step_in_from
+    assert not checker.collides_with_chair(result.step_in_from)
+    assert checker.collides_with_chair(result.se2_goal)  # inside the walking clearance
+    # The feet (0.10 m ahead of the NAO frame) stay behind the bar's front.
+    bar_front_x = 0.6 + 0.14 + 0.09
+    assert result.se2_goal.x - 0.10 >= bar_front_x - 1e-6
 
 
 def test_moved_chair_reuses_its_decomposition(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -223,7 +237,8 @@ def test_humanoid_pose_is_unchanged_type() -> None:
 
 
 def test_out_of_reach_preplan_slides_p_closer_and_retries(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A whole-body pre-plan stand-in that reaches only 0.29 m: p slides until it fits."""
+    """A whole-body pre-plan stand-in that reaches only 0.29 m: the search tries the
+    next sitting point closer to the NAO until it fits."""
     import sys
     import types
 
@@ -278,24 +293,22 @@ def test_seat_of_slats_is_found_under_a_gap_and_ends_at_its_front_edge() -> None
     assert np.isnan(seat_support_heights(seat, np.array([[0.25, 0.0]]), 0.3)[0])
     p = SittingPose(np.array([-0.105, 0.0, 0.29]), 0.0)
     moved, slide_m = slide_on_seat(seat, p, 1.0)
-    # Slides to SEAT_EDGE_MARGIN_M behind the front edge (within a step), not past it.
-    assert 0.12 - SEAT_EDGE_MARGIN_M - 0.02 <= moved.position[0] <= 0.12 - SEAT_EDGE_MARGIN_M
+    # Slides to BEAR_EDGE_MARGIN_M behind the front edge (within a step), not past it.
+    assert 0.12 - BEAR_EDGE_MARGIN_M - 0.02 <= moved.position[0] <= 0.12 - BEAR_EDGE_MARGIN_M
     assert moved.position[2] == pytest.approx(0.29)
     assert slide_m == pytest.approx(moved.position[0] - p.position[0])
 
 
 def test_nao_too_close_for_the_carried_bear_steps_back_along_the_ray() -> None:
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0)
-
-    def anywhere(chair_mesh, pose, se2_goal) -> SeatingCheck:
-        return SeatingCheck()
-
     nominal = check_accessibility(
-        chair_mesh, sitting_pose, START, DEFAULT_ARENA, seed=0, seating_validator=anywhere
+        chair_mesh, sitting_pose, START, DEFAULT_ARENA, seed=0, seating_validator=_anywhere
     )
     needed_x = nominal.se2_goal.x + 0.03
+    asked: list[float] = []
 
     def bear_in_the_chair_when_close(chair_mesh, pose, se2_goal) -> SeatingCheck:
+        asked.append(se2_goal.x)
         if se2_goal.x < needed_x - 1e-9:
             return SeatingCheck("stance: the bear is in the chair", too_close=True)
         return SeatingCheck()
@@ -309,10 +322,12 @@ def test_nao_too_close_for_the_carried_bear_steps_back_along_the_ray() -> None:
         seating_validator=bear_in_the_chair_when_close,
     )
     assert result.accessible, result.reason
-    assert needed_x <= result.se2_goal.x < needed_x + STANCE_RETRY_STEP_M
+    assert needed_x <= result.se2_goal.x < needed_x + STEP_M + 1e-9
     assert result.se2_goal.y == pytest.approx(nominal.se2_goal.y)
     assert result.se2_goal.theta == pytest.approx(nominal.se2_goal.theta)
     assert result.path[-1] == result.se2_goal
+    # Each refused stance was asked about once: nearer ones are not asked again.
+    assert len(asked) == len(set(np.round(asked, 6)))
 
 
 def test_accessible_sitting_yaws_leave_room_to_stand_inside_the_arena() -> None:

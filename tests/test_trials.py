@@ -644,3 +644,22 @@ def test_an_interrupted_run_worker_kills_its_trial_process(tmp_path, fake_worker
     assert time.monotonic() - start < 10  # stopped, not waited for
     pids = worker_pids(tmp_path)
     assert len(pids) == 1 and not process_alive(pids[0])
+
+
+def test_refused_chairs_are_a_cause_of_their_own():
+    reason = "seat too high for the NAO: seat 0.43 m, the NAO places a bear at most 0.40 m high"
+    refused = make_record(
+        "accessible",
+        "failure",
+        chair="tall.obj",
+        failed_stage="CheckSeatReachable",
+        reason=f"CheckSeatReachable: refused: {reason}",
+    )
+    records = [refused] * 3 + [make_record("accessible", "failure")]
+    table = compute_table(records)
+    assert table.refusals == (("tall.obj", reason, 3),)
+    assert ("CheckSeatReachable", 3) in table.failure_stages
+    text = format_table(table)
+    assert "Refused (no stance reaches the seat): 3 trial(s) on 1 chair(s)" in text
+    assert f"tall.obj (3): {reason}" in text
+    assert "## Refused chairs" in markdown_report(table, records)

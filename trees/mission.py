@@ -5,6 +5,7 @@
     [-] Put the bear on the chair                      Sequence (memory)
         --> ScanChair
         --> ImagineSitting
+        --> CheckSeatReachable                         refuses a seat no stance reaches
         [o] MakeChairAccessible                        Selector (memory)
             --> CheckAccessibility
             (-) Up to 3 rotations                      Retry (3 failures)
@@ -28,7 +29,7 @@ from __future__ import annotations
 import py_trees
 
 from behaviours import keys
-from behaviours.accessibility import CheckAccessibility
+from behaviours.accessibility import CheckAccessibility, CheckSeatReachable
 from behaviours.assistance import GiveUp, InstructHelper, MeasureChairRotation, WaitUntilChairStill
 from behaviours.imagine import ImagineSitting
 from behaviours.scan import ScanChair
@@ -38,6 +39,7 @@ from behaviours.walk import WalkToChair
 STAGES = (
     "ScanChair",
     "ImagineSitting",
+    "CheckSeatReachable",
     "MakeChairAccessible",
     "WalkToChair",
     "SeatBear",
@@ -79,6 +81,7 @@ def create_tree() -> py_trees.behaviour.Behaviour:
         children=[
             ScanChair(),
             ImagineSitting(),
+            CheckSeatReachable(),
             create_assistance_loop(),
             WalkToChair(),
             SeatBear(),

@@ -1,16 +1,18 @@
 """Where the NAO should stand to seat the bear, and an SE(2) path to get there.
 
 The paper, section "System Pipeline": the SE(2) goal s_goal faces opposite the sitting
-direction γ and lies on the horizontal ray from p along γ, first at ``l_init`` from p,
-pushed along the ray until the NAO's ellipsoid is clear of the chair (and further, where
-that spot is in a wall or obstacle, until it clears those too); if the NAO is then
-beyond its arms' reach of p, p slides along the ray toward the NAO while staying on the
-seat. The seat motion is pre-planned at s_goal to check it is valid (p slides closer
-while the bear is out of reach; s_goal steps back while the carried bear would be in the
-chair); then OMPL's
-RRTConnect plans an SE(2) path from the humanoid to s_goal within the arena, checked with
-FCL (:mod:`skills.planning.collision`). With u = (cos γ, sin γ) and distance l along
-the ray:
+direction γ on the horizontal ray from p along γ, clear of the chair; p moves along the
+ray toward the NAO as far as its workspace needs; the seat motion is pre-planned at
+s_goal to check it is valid; then OMPL's RRTConnect plans an SE(2) path from the
+humanoid to s_goal within the arena, checked with FCL (:mod:`skills.planning.collision`).
+
+Stance and sitting point are chosen together by :mod:`skills.planning.stance` (reach
+model, then the pre-plan). The walking NAO is an ellipsoid that covers the carried
+bear; a stance nearer the chair than the ellipsoid allows (a footrest or a base that
+sticks out under the seat) is reached by walking to the first pose on the ray where the
+ellipsoid is clear and stepping straight in, as the whole-body pre-plan checked (feet,
+shins, body and carried bear against the chair). With u = (cos γ, sin γ) and distance
+l along the ray:
 
 .. math::
 
@@ -23,7 +25,6 @@ import importlib
 import logging
 import math
 import time
-from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -34,31 +35,33 @@ from ompl import util as ou
 
 from skills.arena import Arena
 from skills.geometry import SE2Pose, SittingPose, wrap_angle
-from skills.nao_carrying import BEAR_SEAT_CLEARANCE_M
 from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
-from skills.planning.reach import check_reach, max_forward_reach
+from skills.planning.seat import seat_support_heights
+from skills.planning.stance import (
+    SeatingCheck,
+    SeatingValidator,
+    choose_stance,
+    goal_on_ray,
+)
+from skills.planning.wholebody.chair_profile import ChairProfileError, fit_chair_profile
+from skills.planning.wholebody.reach_model import reach_model
 from skills.results import AccessibilityResult
 
 logger = logging.getLogger(__name__)
 
-L_INIT_M = 0.25
-"""Initial distance of the NAO from p along the sitting direction, metres."""
-PUSH_STEP_M = 0.01
-MAX_PUSH_M = 1.0
-SEAT_STEP_M = 0.01
-REACH_SLACK_M = 0.005
-"""p slides to this much inside the arms' reach, so the reach check is not a rounding call."""
-SEAT_HEIGHT_TOLERANCE_M = 0.03
-"""How much the seat's height may change under p as it slides and still count as the seat."""
-SEAT_EDGE_MARGIN_M = 0.07
-"""p slides no closer than this to the seat's front edge: the bear's legs stick out
-forward (its centre of mass is 2 cm ahead of p), and a bear set down at the edge tips
-off it. Trials on chair-chairgen-01 put bears at the rounded front edge and lost them."""
-MAX_SLIDE_RETRIES = 6
-STANCE_RETRY_STEP_M = 0.02
-"""After a pre-plan finds the NAO too close to the chair, s_goal steps back this much."""
-SLIDE_RETRY_STEP_M = 0.03
-"""After a pre-plan finds the bear out of reach, p slides this much closer and it retries."""
+__all__ = [
+    "AccessibilityError",
+    "SeatingCheck",
+    "SeatingValidator",
+    "check_accessibility",
+    "default_seating_validator",
+    "goal_on_ray",
+    "plan_se2_path",
+    "reach_validator",
+    "seat_support_heights",
+    "stepped_back",
+]
+
 PLANNING_CHECKS = 60_000
 """RRTConnect's budget in state validity checks: about 1 s on the 2-core machine
 (68 000 checks/s measured). A count, not a time, so that whether a hard placement gets a
@@ -70,235 +73,40 @@ CHECK_RESOLUTION_M = 0.01
 WAYPOINT_SPACING_M = 0.1
 
 
-class SeatingCheck(NamedTuple):
-    """A seating validator's verdict.
-
-    Attributes:
-        reason: why seating from s_goal is infeasible ("" when feasible).
-        bear_placement: the failure is about where the bear goes (reach), so sliding p
-            closer to the NAO may fix it.
-        too_close: the NAO stands too close to the chair (its feet, or the bear it
-            carries, in the chair), so standing farther back may fix it.
-        raise_at: feasible only with the bear raised, which the NAO does here (back
-            along the ray from s_goal) before it steps in; None: walk in as it carries.
-    """
-
-    reason: str = ""
-    bear_placement: bool = False
-    too_close: bool = False
-    raise_at: SE2Pose | None = None
-
-
-SeatingValidator = Callable[[trimesh.Trimesh, SittingPose, SE2Pose], SeatingCheck]
-"""Checks seating the bear at g from s_goal (the whole-body pre-plan, or arm reach)."""
-
-
 class AccessibilityError(ValueError):
     """Bad input to the accessibility check (not an inaccessible chair)."""
-
-
-class GoalPlacement(NamedTuple):
-    """The SE(2) goal on the sitting ray.
-
-    Attributes:
-        se2_goal: where the NAO stands (None when no collision-free spot on the ray).
-        sitting_pose: g, possibly slid toward the NAO to be within its arms' reach.
-        standoff_m: distance from the (slid) p to the NAO along the ray.
-        reason: why there is no goal (empty when there is).
-        slide_m: how far p was moved toward the NAO.
-    """
-
-    se2_goal: SE2Pose | None
-    sitting_pose: SittingPose
-    standoff_m: float
-    reason: str = ""
-    slide_m: float = 0.0
-
-
-def goal_on_ray(sitting_pose: SittingPose, distance_m: float) -> SE2Pose:
-    """The NAO pose ``distance_m`` from p along the sitting direction, facing back at p."""
-    direction = sitting_pose.direction()
-    x, y = np.asarray(sitting_pose.position[:2], dtype=float) + distance_m * direction
-    return SE2Pose(float(x), float(y), wrap_angle(sitting_pose.yaw + math.pi))
-
-
-SUPPORT_RADIUS_M = 0.04
-"""The surface under a point is taken over a disc of this radius (metres), not from one
-vertical ray: slatted seats (chairgen-10) have gaps 3 cm wide, and scans have holes."""
-_DISC_OFFSETS_M = np.array(
-    [
-        (dx, dy)
-        for dx in np.arange(-SUPPORT_RADIUS_M, SUPPORT_RADIUS_M + 1e-9, 0.01)
-        for dy in np.arange(-SUPPORT_RADIUS_M, SUPPORT_RADIUS_M + 1e-9, 0.01)
-        if math.hypot(dx, dy) <= SUPPORT_RADIUS_M + 1e-9
-    ]
-)
-
-
-def seat_support_heights(chair_mesh: trimesh.Trimesh, xy: np.ndarray, z_from: float) -> np.ndarray:
-    """Height of the chair surface below each point, NaN where there is none.
-
-    Vertical rays start at ``z_from`` on a 1 cm grid over a disc of ``SUPPORT_RADIUS_M``
-    around each point; each ray finds the first surface below it, and the height is the
-    median of the hits. A gap between slats or a hole in a scan does not hide the seat;
-    the seat seems to reach ``SUPPORT_RADIUS_M`` past its edge.
-
-    Args:
-        chair_mesh: the chair, world frame.
-        xy: (N, 2) query points, metres.
-        z_from: height the vertical rays start from, metres.
-    """
-    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
-    offsets = _DISC_OFFSETS_M
-    hits = _first_surface_below(
-        chair_mesh, (xy[:, None, :] + offsets[None, :, :]).reshape(-1, 2), z_from
-    ).reshape(len(xy), len(offsets))
-    found = ~np.isnan(hits)
-    heights = np.full(len(xy), np.nan)
-    for i in np.flatnonzero(found.any(axis=1)):
-        heights[i] = float(np.median(hits[i, found[i]]))
-    return heights
-
-
-def _first_surface_below(chair_mesh: trimesh.Trimesh, xy: np.ndarray, z_from: float) -> np.ndarray:
-    """Height of the first triangle straight below each (x, y) from ``z_from`` (NaN: none)."""
-    # A vertical ray hits a triangle where the point lies inside its xy projection; the hit
-    # height is the barycentric blend of the corner heights.
-    triangles = np.asarray(chair_mesh.triangles, dtype=float)
-    # Only triangles under the queried region can be hit.
-    low, high = xy.min(axis=0), xy.max(axis=0)
-    near = np.all(triangles[:, :, :2].max(axis=1) >= low, axis=1) & np.all(
-        triangles[:, :, :2].min(axis=1) <= high, axis=1
-    )
-    triangles = triangles[near & (triangles[:, :, 2].min(axis=1) <= z_from)]
-    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
-    ab, ac = (b - a)[:, :2], (c - a)[:, :2]
-    det = ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0]
-    usable = np.abs(det) > 1e-12
-    a, b, c, ab, ac, det = a[usable], b[usable], c[usable], ab[usable], ac[usable], det[usable]
-    heights = np.full(len(xy), np.nan)
-    for i, point in enumerate(xy):
-        ap = point - a[:, :2]
-        v = (ap[:, 0] * ac[:, 1] - ap[:, 1] * ac[:, 0]) / det
-        w = (ab[:, 0] * ap[:, 1] - ab[:, 1] * ap[:, 0]) / det
-        inside = (v >= 0.0) & (w >= 0.0) & (v + w <= 1.0)
-        z = (1.0 - v - w) * a[:, 2] + v * b[:, 2] + w * c[:, 2]
-        below = z[inside & (z <= z_from)]
-        if len(below):
-            heights[i] = below.max()
-    return heights
-
-
-def place_se2_goal(
-    chair_mesh: trimesh.Trimesh,
-    sitting_pose: SittingPose,
-    checker: NaoCollisionChecker,
-    *,
-    l_init_m: float = L_INIT_M,
-) -> GoalPlacement:
-    """Finds s_goal on the sitting ray and slides p within the NAO's reach (see module doc).
-
-    Args:
-        chair_mesh: the chair, world frame (for the seat under p).
-        sitting_pose: g = (p, γ), world frame.
-        checker: the NAO-versus-scene collision checker (its chair is used here).
-        l_init_m: first distance tried from p, metres.
-    """
-    distance = l_init_m
-    while checker.collides_with_chair(goal_on_ray(sitting_pose, distance)):
-        distance += PUSH_STEP_M
-        if distance > l_init_m + MAX_PUSH_M:
-            return GoalPlacement(
-                None, sitting_pose, distance, "no spot on the sitting ray clear of the chair"
-            )
-    distance = _clear_of_walls_and_obstacles(checker, sitting_pose, distance, l_init_m + MAX_PUSH_M)
-    se2_goal = goal_on_ray(sitting_pose, distance)
-
-    reach_m = max_forward_reach(bear_release_height(chair_mesh, sitting_pose))
-    if distance <= reach_m or reach_m == 0.0:
-        return GoalPlacement(se2_goal, sitting_pose, distance)
-    moved, slide = slide_on_seat(chair_mesh, sitting_pose, distance - (reach_m - REACH_SLACK_M))
-    return GoalPlacement(se2_goal, moved, distance - slide, slide_m=slide)
-
-
-def _clear_of_walls_and_obstacles(
-    checker: NaoCollisionChecker, sitting_pose: SittingPose, distance_m: float, max_m: float
-) -> float:
-    """The first distance from ``distance_m`` on (metres) where the NAO, inside the arena,
-    also clears the walls and obstacles; ``distance_m`` itself when there is none.
-
-    A chair near the arena's edge leaves its first chair-free spot with the NAO's front in
-    the wall behind the chair; a step further back along the ray (p then slides toward the
-    NAO) is a valid goal. When no spot clears everything, the first chair-free one stays so
-    that the goal check names what blocks it.
-    """
-    distance = distance_m
-    while distance <= max_m:
-        goal = goal_on_ray(sitting_pose, distance)
-        if not checker.arena.contains(goal.x, goal.y):
-            break
-        if not checker.collides_with_walls(goal) and not checker.collides_with_obstacles(goal):
-            return distance
-        distance += PUSH_STEP_M
-    return distance_m
-
-
-def slide_on_seat(
-    chair_mesh: trimesh.Trimesh,
-    sitting_pose: SittingPose,
-    slide_m: float,
-    edge_margin_m: float = SEAT_EDGE_MARGIN_M,
-) -> tuple[SittingPose, float]:
-    """Moves p along the sitting direction by up to ``slide_m``, only as far as the seat
-    continues under it (its height within ``SEAT_HEIGHT_TOLERANCE_M`` of the seat under p)
-    for another ``edge_margin_m`` ahead.
-
-    Returns:
-        The moved sitting pose (its height follows the seat) and the distance moved, metres.
-    """
-    direction = sitting_pose.direction()
-    slides = np.minimum(np.arange(0.0, slide_m + SEAT_STEP_M, SEAT_STEP_M), slide_m)
-    ahead = np.arange(0.0, slide_m + edge_margin_m + SEAT_STEP_M, SEAT_STEP_M)
-    p = np.asarray(sitting_pose.position, dtype=float)
-    heights = seat_support_heights(
-        chair_mesh, p[:2] + ahead[:, None] * direction, float(p[2]) + 0.02
-    )
-    if np.isnan(heights[0]):
-        logger.warning("no seat found under the sitting position; p is not moved")
-        return sitting_pose, 0.0
-    on_seat = np.abs(heights - heights[0]) <= SEAT_HEIGHT_TOLERANCE_M
-    # The support disc sees the seat up to its radius past the edge.
-    seat_ends_m = (
-        ahead[int(np.argmin(on_seat))] - SEAT_STEP_M - SUPPORT_RADIUS_M
-        if not on_seat.all()
-        else math.inf
-    )
-    # Never slide backwards: when p is already within the margin it stays where it is.
-    allowed = slides <= max(seat_ends_m - edge_margin_m, 0.0) + 1e-9
-    last = int(np.flatnonzero(allowed)[-1])
-    slide = float(slides[last])
-    moved = p.copy()
-    moved[:2] += slide * direction
-    moved[2] += float(np.interp(slide, ahead, heights)) - heights[0]
-    return SittingPose(moved, sitting_pose.yaw), slide
-
-
-def bear_release_height(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> float:
-    """Where the bear's seat point is let go: ``BEAR_SEAT_CLEARANCE_M`` over the seat under
-    p (metres); p's own height (the imagined pelvis) when no seat is found under it."""
-    p = np.asarray(sitting_pose.position, dtype=float)
-    seat_z = seat_support_heights(chair_mesh, p[None, :2], float(p[2]) + 0.02)[0]
-    return float(p[2]) if np.isnan(seat_z) else float(seat_z) + BEAR_SEAT_CLEARANCE_M
 
 
 def reach_validator(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
 ) -> SeatingCheck:
-    """Fallback validity check: the NAO's arms reach p from s_goal (:mod:`reach`)."""
-    offset = np.asarray(sitting_pose.position[:2], dtype=float) - (se2_goal.x, se2_goal.y)
-    forward = float(offset @ (math.cos(se2_goal.theta), math.sin(se2_goal.theta)))
-    check = check_reach(forward, bear_release_height(chair_mesh, sitting_pose))
-    return SeatingCheck(check.reason, forward > check.max_forward_m)
+    """A fast validity check without the pre-plan: the reach model
+    (:mod:`skills.planning.wholebody.reach_model`) places the bear at g from s_goal, the
+    chair's profile seen from there (seat front, seat top) as the whole-body planner
+    sees it, and the front of the feet clear of the chair."""
+    T_nao_world = np.linalg.inv(se2_goal.as_transform())
+    p = np.asarray(sitting_pose.position, dtype=float)
+    p_nao = T_nao_world[:3, :3] @ p + T_nao_world[:3, 3]
+    try:
+        profile = fit_chair_profile(chair_mesh, T_nao_world, p_nao)
+    except ChairProfileError as error:
+        return SeatingCheck(str(error), bear_placement=True)
+    forward = float(p_nao[0])
+    d_max = reach_model().max_forward(profile.seat_top_z, profile.seat_front_x)
+    if math.isnan(d_max):
+        return SeatingCheck(
+            f"no posture places the bear on a {profile.seat_top_z:.2f} m seat whose front is "
+            f"{profile.seat_front_x:.2f} m ahead",
+            too_close=profile.seat_front_x < reach_model().seat_fronts_m[0],
+            bear_placement=True,
+        )
+    if forward > d_max:
+        return SeatingCheck(
+            f"out of reach: {forward:.2f} m forward, the NAO reaches {d_max:.2f} m on a "
+            f"{profile.seat_top_z:.2f} m seat",
+            bear_placement=True,
+        )
+    return SeatingCheck()
 
 
 def default_seating_validator() -> SeatingValidator:
@@ -334,11 +142,7 @@ def default_seating_validator() -> SeatingValidator:
 
 def stepped_back(se2_goal: SE2Pose, distance_m: float) -> SE2Pose:
     """s_goal moved ``distance_m`` back along the sitting ray (the NAO faces the chair)."""
-    return SE2Pose(
-        se2_goal.x - distance_m * math.cos(se2_goal.theta),
-        se2_goal.y - distance_m * math.sin(se2_goal.theta),
-        se2_goal.theta,
-    )
+    return se2_goal.stepped_back(distance_m)
 
 
 class PlannedPath(NamedTuple):
@@ -489,7 +293,7 @@ def check_accessibility(
         arena: walls and fixed obstacles.
         seed: OMPL's random seed.
         seating_validator: checks seating from s_goal; default: the whole-body pre-plan
-            when available, else the arm-reach check.
+            when available, else the reach model.
         check_budget: RRTConnect gives up after this many state validity checks.
 
     Returns:
@@ -505,46 +309,29 @@ def check_accessibility(
     if not all(math.isfinite(v) for v in humanoid_pose):
         raise AccessibilityError("the humanoid's pose is not finite")
 
-    original_pose = sitting_pose
     checker = NaoCollisionChecker(arena, chair_convex_pieces(chair_mesh))
-    placement = place_se2_goal(chair_mesh, sitting_pose, checker)
-    if placement.se2_goal is None:
-        return AccessibilityResult(False, None, placement.sitting_pose, (), placement.reason)
-    se2_goal, sitting_pose = placement.se2_goal, placement.sitting_pose
-
-    reason = goal_blocked_reason(checker, se2_goal)
-    if reason:
-        return AccessibilityResult(False, se2_goal, sitting_pose, (), reason)
     validator = seating_validator or default_seating_validator()
-    check = validator(chair_mesh, sitting_pose, se2_goal)
-    # The pre-plan knows the NAO better than the ellipsoid and the reach model that placed
-    # s_goal: while the bear is out of reach, slide p closer along the seat; while the NAO
-    # stands too close (the carried bear in the chair), step s_goal back along the ray.
-    slide = placement.slide_m
-    for _ in range(MAX_SLIDE_RETRIES):
-        if check.reason and check.too_close:
-            backed = stepped_back(se2_goal, STANCE_RETRY_STEP_M)
-            if goal_blocked_reason(checker, backed):
-                break
-            se2_goal = backed
-        elif check.reason and check.bear_placement:
-            moved, moved_m = slide_on_seat(chair_mesh, original_pose, slide + SLIDE_RETRY_STEP_M)
-            if moved_m <= slide + 1e-6:
-                break  # the seat ends here
-            slide, sitting_pose = moved_m, moved
-        else:
-            break
-        check = validator(chair_mesh, sitting_pose, se2_goal)
-    if check.reason:
-        return AccessibilityResult(False, se2_goal, sitting_pose, (), check.reason)
-    if check.raise_at is not None:
-        # The path ends where the bear is raised; the NAO then steps straight in.
-        blocked = _step_in_blocked_by(checker, check.raise_at, se2_goal)
+    choice = choose_stance(chair_mesh, sitting_pose, checker, validator, scene=True)
+    if choice.se2_goal is None:
+        reason = choice.reason
+        if choice.check.reason and not reason.startswith("seating pre-plan"):
+            reason = f"seating pre-plan infeasible: {reason}"
+        return AccessibilityResult(False, None, choice.sitting_pose, (), reason)
+    se2_goal, sitting_pose = choice.se2_goal, choice.sitting_pose
+
+    # The walk ends where the walking NAO's ellipsoid is clear; from there it steps
+    # straight in (raising the bear first when the pre-plan says so).
+    approach = choice.approach
+    raise_at = choice.check.raise_at
+    if raise_at is not None and approach is not None:
+        raise_at = _farther(se2_goal, raise_at, approach)
+    path_goal = raise_at or approach or se2_goal
+    if path_goal != se2_goal:
+        blocked = _step_in_blocked_by(checker, path_goal, se2_goal, chair=approach is None)
         if blocked:
-            reason = f"the step in from raising the bear to s_goal touches the {blocked}"
+            reason = f"the step in to s_goal touches the {blocked}"
             return AccessibilityResult(False, se2_goal, sitting_pose, (), reason)
 
-    path_goal = check.raise_at or se2_goal
     planned = plan_se2_path(checker, humanoid_pose, path_goal, seed=seed, check_budget=check_budget)
     return AccessibilityResult(
         not planned.reason,
@@ -553,18 +340,31 @@ def check_accessibility(
         planned.waypoints,
         planned.reason,
         planned.seconds,
-        raise_at=check.raise_at,
+        raise_at=raise_at,
+        step_in_from=approach if raise_at is None else None,
     )
 
 
-def _step_in_blocked_by(checker: NaoCollisionChecker, start: SE2Pose, goal: SE2Pose) -> str:
-    """What the NAO touches on the straight step from ``start`` to ``goal`` ("" if none)."""
+def _farther(se2_goal: SE2Pose, a: SE2Pose, b: SE2Pose) -> SE2Pose:
+    """Of two poses back along the ray from s_goal, the one farther from it."""
+    return a if se2_goal.distance_to(a) >= se2_goal.distance_to(b) else b
+
+
+def _step_in_blocked_by(
+    checker: NaoCollisionChecker, start: SE2Pose, goal: SE2Pose, *, chair: bool
+) -> str:
+    """What the walking NAO touches on the straight step from ``start`` to ``goal`` ("" if
+    nothing); with ``chair`` False only walls and obstacles count (the step ends inside
+    the ellipsoid's clearance of the chair, which the whole-body pre-plan checked)."""
     steps = max(2, math.ceil(start.distance_to(goal) / CHECK_RESOLUTION_M) + 1)
     for t in np.linspace(0.0, 1.0, steps):
         pose = SE2Pose(
             start.x + t * (goal.x - start.x), start.y + t * (goal.y - start.y), goal.theta
         )
-        blocker = checker.blocked_by(pose)
-        if blocker:
-            return blocker
+        if checker.collides_with_walls(pose):
+            return "wall"
+        if checker.collides_with_obstacles(pose):
+            return "obstacle"
+        if chair and checker.collides_with_chair(pose):
+            return "chair"
     return ""

@@ -1,0 +1,185 @@
+"""Benchmark: does the mission's planning generalise to chairs it has never seen?
+
+Generates chairs (``skills.chairgen``: every family, seeded) and, for each, runs the
+stages that decide whether the bear can be seated, without a whole mission:
+
+1. imagination (``--imagine``): the sitting pose from drops of the virtual child; its
+   direction must be within 30 deg of the chair's true front (chairs without a front
+   pass on any direction). Without ``--imagine`` the sitting pose is the ground truth's:
+   p over the seat's middle, 5 cm above it, facing the front;
+2. the reach check right after imagination: a refused chair is counted as refused,
+   with its reason, and compared with the reach model (a refusal is right when the
+   model has no stance for the seat);
+3. accessibility in an accessible placement of the arena (chair centre and sitting
+   direction drawn as the simulated world draws them), which includes the whole-body
+   seating pre-plan at s_goal.
+
+Prints the success rate per stage and per family, the refusals with their reasons, and
+the worst families. Usage::
+
+    .venv/bin/python bench/generalization.py [--chairs 200] [--seed 0] [--imagine]
+        [--family sled] [--verbose]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import sys
+import time
+from collections import Counter, defaultdict
+from typing import NamedTuple
+
+import numpy as np
+
+from skills.arena import DEFAULT_ARENA, accessible_sitting_yaws
+from skills.chairgen import FAMILIES, GeneratedChair, generate_chair
+from skills.geometry import SittingPose, wrap_angle, yaw_transform
+from skills.planning.se2 import check_accessibility
+from skills.planning.stance import check_seat_reachable
+
+PELVIS_ABOVE_SEAT_M = 0.05
+DIRECTION_TOLERANCE_DEG = 30.0
+
+
+class Outcome(NamedTuple):
+    chair: GeneratedChair
+    imagined: bool  # direction within tolerance (True without --imagine)
+    refused: str  # the reach check's reason ("" when not refused)
+    accessible: bool
+    reason: str
+    seconds: float  # the accessibility check's wall time
+
+
+def ground_truth_pose(chair: GeneratedChair) -> SittingPose:
+    """p over the middle of the seat, 5 cm above it, facing the front (+x)."""
+    x = chair.seat_front_x_m - chair.seat_depth_m / 2.0
+    return SittingPose(np.array([x, 0.0, chair.seat_height_m + PELVIS_ABOVE_SEAT_M]), 0.0)
+
+
+def imagined_pose(chair: GeneratedChair, seed: int) -> tuple[SittingPose | None, bool]:
+    from skills.imagination import imagine_sitting
+
+    result = imagine_sitting(chair.mesh, seed=seed)
+    pose = result.sitting_pose
+    if pose is None:
+        return None, False
+    if chair.front_yaw_rad is None:
+        return pose, True
+    error = abs(math.degrees(wrap_angle(pose.yaw - chair.front_yaw_rad)))
+    return pose, error <= DIRECTION_TOLERANCE_DEG
+
+
+def run_chair(chair: GeneratedChair, seed: int, imagine: bool) -> Outcome:
+    rng = np.random.default_rng(seed)
+    if imagine:
+        sitting, direction_ok = imagined_pose(chair, seed)
+        if sitting is None:
+            return Outcome(chair, False, "", False, "imagination found no sitting pose", 0.0)
+    else:
+        sitting, direction_ok = ground_truth_pose(chair), True
+    verdict = check_seat_reachable(chair.mesh, sitting)
+    if not verdict.reachable:
+        return Outcome(chair, direction_ok, verdict.reason, False, verdict.reason, 0.0)
+    arena = DEFAULT_ARENA
+    area = arena.chair_area
+    centre = (rng.uniform(area.x_min, area.x_max), rng.uniform(area.y_min, area.y_max))
+    yaw = float(rng.choice(accessible_sitting_yaws(arena, centre)))
+    T_world_chair = yaw_transform(yaw - sitting.yaw, np.array([*centre, 0.0]))
+    mesh = chair.mesh.copy().apply_transform(T_world_chair)
+    placed = sitting.transformed(T_world_chair)
+    began = time.perf_counter()
+    result = check_accessibility(mesh, placed, arena.humanoid_start, arena, seed=seed)
+    seconds = time.perf_counter() - began
+    return Outcome(chair, direction_ok, "", result.accessible, result.reason, seconds)
+
+
+def _percent(part: int, whole: int) -> str:
+    return f"{part}/{whole} ({100.0 * part / whole:.0f}%)" if whole else "0/0"
+
+
+def report(outcomes: list[Outcome]) -> None:
+    by_family: dict[str, list[Outcome]] = defaultdict(list)
+    for outcome in outcomes:
+        by_family[outcome.chair.family].append(outcome)
+    print(
+        f"{'family':<11} {'chairs':>6} {'direction':>10} {'refused':>8} {'accessible':>11} {'pass (not refused)':>19}"
+    )
+    worst: list[tuple[float, str]] = []
+    for family in FAMILIES:
+        group = by_family.get(family, [])
+        if not group:
+            continue
+        kept = [o for o in group if not o.refused]
+        passed = [o for o in kept if o.imagined and o.accessible]
+        rate = len(passed) / len(kept) if kept else 1.0
+        worst.append((rate, family))
+        print(
+            f"{family:<11} {len(group):>6} {sum(o.imagined for o in group):>10} "
+            f"{sum(bool(o.refused) for o in group):>8} {sum(o.accessible for o in group):>11} "
+            f"{_percent(len(passed), len(kept)):>19}"
+        )
+    kept = [o for o in outcomes if not o.refused]
+    passed = [o for o in kept if o.imagined and o.accessible]
+    print(
+        f"all: {len(outcomes)} chairs, refused {sum(bool(o.refused) for o in outcomes)}, "
+        f"pass among the rest {_percent(len(passed), len(kept))}"
+    )
+    print("worst families: " + ", ".join(f"{f} {100 * r:.0f}%" for r, f in sorted(worst)[:3]))
+    timed = [o.seconds for o in outcomes if o.seconds > 0]
+    if timed:
+        print(
+            f"accessibility check: median {statistics.median(timed):.2f} s, max {max(timed):.2f} s"
+        )
+    refusals = Counter(o.refused.split(":")[0] for o in outcomes if o.refused)
+    print(f"refusals: {dict(refusals)}")
+    for o in outcomes:
+        if o.refused:
+            print(
+                f"  refused {o.chair.name}: seat {o.chair.seat_height_m:.2f} m high, "
+                f"{o.chair.seat_depth_m:.2f} m deep: {o.refused}"
+            )
+    failures = Counter(
+        f"{o.chair.family}: {o.reason.split(' (')[0][:100]}" for o in kept if not o.accessible
+    )
+    for reason, count in failures.most_common(12):
+        print(f"  not accessible x{count}: {reason}")
+    wrong = [o.chair.name for o in outcomes if not o.imagined]
+    if wrong:
+        print(f"  direction wrong: {', '.join(wrong)}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--chairs", type=int, default=200)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--imagine", action="store_true", help="imagine the sitting pose")
+    parser.add_argument("--family", choices=FAMILIES, help="only this family")
+    parser.add_argument("--verbose", action="store_true", help="a line per chair")
+    args = parser.parse_args(argv)
+    families = (args.family,) if args.family else FAMILIES
+    outcomes = []
+    began = time.perf_counter()
+    for i in range(args.chairs):
+        chair = generate_chair(args.seed + i, families[i % len(families)])
+        outcome = run_chair(chair, args.seed + i, args.imagine)
+        outcomes.append(outcome)
+        if args.verbose:
+            status = "refused" if outcome.refused else ("ok" if outcome.accessible else "FAIL")
+            print(
+                f"{chair.name}: seat {chair.seat_height_m:.2f} h {chair.seat_depth_m:.2f} d "
+                f"{status} {outcome.reason[:140]}",
+                flush=True,
+            )
+        elif (i + 1) % 20 == 0:
+            print(
+                f"  {i + 1}/{args.chairs} chairs, {time.perf_counter() - began:.0f} s",
+                file=sys.stderr,
+            )
+    report(outcomes)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

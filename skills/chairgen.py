@@ -1,0 +1,248 @@
+"""Procedural children's chairs: seeded, no data files, with their ground truth.
+
+Chairs the project has never seen judge the mission; this module makes as many as a
+test or a benchmark needs, over the ranges children's chairs come in (seats 0.18-0.45 m
+high, 0.22-0.38 m deep, stools and benches without a back). Each chair is a union of
+boxes and cylinders (separate shells, not boolean-merged, like many real meshes) in the
+calibration meshes' frame: z up, metres, centred in x and y, lowest point at z = 0,
+sitting direction +x (the backrest, if any, at -x).
+
+Families (:data:`FAMILIES`):
+
+* ``four_legs``: square seat on four legs, straight or reclined backrest;
+* ``armchair``: four legs, backrest and armrests;
+* ``round``: round seat on four legs with a backrest (near-symmetric from above);
+* ``sled``: seat on two floor runners joined by uprights (a cantilever school chair);
+* ``pedestal``: seat on a central column and a round foot;
+* ``box_base``: seat on a closed box down to the floor (a plastic toddler chair);
+* ``footrest``: four legs and a footrest bar sticking out in front (a high chair);
+* ``stool``: round or square seat, no back;
+* ``bench``: a wide seat, no back.
+
+Usage::
+
+    chair = generate_chair(seed=3)               # a random family
+    chair = generate_chair(seed=3, family="sled")
+    chair.mesh, chair.seat_height_m, chair.front_yaw_rad
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+import trimesh
+
+FAMILIES: tuple[str, ...] = (
+    "four_legs",
+    "armchair",
+    "round",
+    "sled",
+    "pedestal",
+    "box_base",
+    "footrest",
+    "stool",
+    "bench",
+)
+"""Every family :func:`generate_chair` makes."""
+
+SEAT_HEIGHT_RANGE_M = (0.18, 0.45)
+"""Seat heights drawn (metres): children's chairs, and a few beyond the NAO's reach."""
+
+
+class GeneratedChair(NamedTuple):
+    """A generated chair and what is true about it.
+
+    Attributes:
+        mesh: the chair, z up, metres, centred in x and y, lowest point at z = 0.
+        family: one of :data:`FAMILIES`.
+        seed: the seed that made it (same seed and family, same chair).
+        front_yaw_rad: the direction a sitter faces, from +x about +z (0 here); None
+            where the shape has no front (stools, benches).
+        seat_height_m: height of the seat's top.
+        seat_depth_m: depth of the seat along the sitting direction (the diameter for a
+            round seat).
+        seat_width_m: width of the seat across it.
+        seat_front_x_m: x of the seat's front edge (the sitter's knees go over it).
+        front_protrusion_m: how far anything at or below the seat (feet, runners, a
+            footrest) reaches in front of the seat's front edge (0 when nothing does).
+    """
+
+    mesh: trimesh.Trimesh
+    family: str
+    seed: int
+    front_yaw_rad: float | None
+    seat_height_m: float
+    seat_depth_m: float
+    seat_width_m: float
+    seat_front_x_m: float
+    front_protrusion_m: float
+
+    @property
+    def name(self) -> str:
+        """A file-friendly name: ``gen-<family>-<seed>``."""
+        return f"gen-{self.family}-{self.seed:04d}"
+
+
+def _box(
+    extents: tuple[float, float, float], centre: tuple[float, float, float]
+) -> trimesh.Trimesh:
+    return trimesh.creation.box(
+        extents=extents, transform=trimesh.transformations.translation_matrix(centre)
+    )
+
+
+def _cylinder(radius: float, z_low: float, z_high: float, xy=(0.0, 0.0)) -> trimesh.Trimesh:
+    return trimesh.creation.cylinder(
+        radius=radius,
+        height=z_high - z_low,
+        sections=32,
+        transform=trimesh.transformations.translation_matrix(
+            (xy[0], xy[1], 0.5 * (z_low + z_high))
+        ),
+    )
+
+
+def _backrest(
+    rng: np.random.Generator, seat_top: float, back_x: float, width: float
+) -> list[trimesh.Trimesh]:
+    """A backrest panel standing on the seat's back edge, reclined 0-20 deg backwards."""
+    height = float(rng.uniform(0.15, 0.32))
+    thickness = float(rng.uniform(0.02, 0.04))
+    recline = math.radians(float(rng.choice([0.0, rng.uniform(5.0, 20.0)])))
+    panel = _box((thickness, width, height), (0.0, 0.0, height / 2.0))
+    # Tilt about the panel's bottom front edge so that it leans away from the sitter.
+    panel.apply_transform(trimesh.transformations.rotation_matrix(-recline, (0, 1, 0)))
+    panel.apply_translation((back_x + thickness / 2.0, 0.0, seat_top))
+    return [panel]
+
+
+def _four_legs(
+    rng: np.random.Generator, seat_bottom: float, depth: float, width: float, inset: float
+) -> list[trimesh.Trimesh]:
+    side = float(rng.uniform(0.02, 0.04))
+    return [
+        _box(
+            (side, side, seat_bottom),
+            (
+                sx * (depth / 2.0 - inset - side / 2.0),
+                sy * (width / 2.0 - inset - side / 2.0),
+                seat_bottom / 2.0,
+            ),
+        )
+        for sx in (-1.0, 1.0)
+        for sy in (-1.0, 1.0)
+    ]
+
+
+def generate_chair(seed: int, family: str | None = None) -> GeneratedChair:
+    """A random chair of ``family`` (drawn from :data:`FAMILIES` when None).
+
+    Args:
+        seed: the random seed; the same seed and family give the same chair.
+        family: one of :data:`FAMILIES`, or None for a seeded choice.
+
+    Raises:
+        ValueError: an unknown family.
+    """
+    rng = np.random.default_rng(seed)
+    if family is None:
+        family = str(rng.choice(FAMILIES))
+    if family not in FAMILIES:
+        raise ValueError(f"unknown chair family {family!r} (known: {', '.join(FAMILIES)})")
+
+    seat_top = float(rng.uniform(*SEAT_HEIGHT_RANGE_M))
+    thickness = float(rng.uniform(0.02, 0.05))
+    seat_bottom = seat_top - thickness
+    depth = float(rng.uniform(0.22, 0.38))
+    width = float(rng.uniform(0.26, 0.42))
+    round_seat = family == "round" or (family in ("stool", "pedestal") and rng.random() < 0.5)
+    if family == "bench":
+        width = float(rng.uniform(0.5, 0.8))
+    if round_seat:
+        width = depth
+    front_x = depth / 2.0
+    back_x = -depth / 2.0
+    protrusion = 0.0
+    front_yaw: float | None = 0.0
+
+    if round_seat:
+        parts = [_cylinder(depth / 2.0, seat_bottom, seat_top)]
+    else:
+        parts = [_box((depth, width, thickness), (0.0, 0.0, seat_bottom + thickness / 2.0))]
+
+    if family in ("four_legs", "armchair", "round", "footrest", "bench"):
+        inset = 0.0 if round_seat else float(rng.uniform(0.0, 0.03))
+        # Legs of a round seat stand inside its circle.
+        leg_depth, leg_width = (depth / math.sqrt(2.0),) * 2 if round_seat else (depth, width)
+        parts += _four_legs(rng, seat_bottom, leg_depth, leg_width, inset)
+    elif family == "sled":
+        runner_length = depth + float(rng.uniform(0.0, 0.08))
+        runner_x = float(rng.uniform(-0.02, 0.04))
+        for sy in (-1.0, 1.0):
+            y = sy * (width / 2.0 - 0.02)
+            parts.append(_box((runner_length, 0.025, 0.02), (runner_x, y, 0.01)))
+            for x in (back_x + 0.03, front_x - 0.03):
+                parts.append(_box((0.025, 0.025, seat_bottom), (x, y, seat_bottom / 2.0)))
+        protrusion = max(0.0, runner_x + runner_length / 2.0 - front_x)
+    elif family in ("pedestal", "stool"):
+        column = float(rng.uniform(0.025, 0.05))
+        foot = float(rng.uniform(0.12, min(0.2, depth / 2.0 + 0.02)))
+        if family == "stool" and rng.random() < 0.5:
+            parts += _four_legs(rng, seat_bottom, depth * 0.8, width * 0.8, 0.0)
+        else:
+            parts.append(_cylinder(column, 0.02, seat_bottom))
+            parts.append(_cylinder(foot, 0.0, 0.02))
+            protrusion = max(0.0, foot - front_x)
+    elif family == "box_base":
+        parts.append(_box((depth * 0.9, width * 0.9, seat_bottom), (0.0, 0.0, seat_bottom / 2.0)))
+
+    if family == "footrest":
+        reach = float(rng.uniform(0.04, 0.12))
+        bar_z = float(rng.uniform(0.06, max(0.07, seat_top - 0.12)))
+        parts.append(_box((0.02, width, 0.02), (front_x + reach, 0.0, bar_z)))
+        for sy in (-1.0, 1.0):
+            parts.append(
+                _box(
+                    (reach, 0.02, 0.02),
+                    (front_x + reach / 2.0, sy * (width / 2.0 - 0.01), bar_z),
+                )
+            )
+        protrusion = reach + 0.01
+
+    if family in ("stool", "bench"):
+        front_yaw = None
+    else:
+        parts += _backrest(rng, seat_top, back_x, width)
+    if family == "armchair":
+        arm_height = float(rng.uniform(0.10, 0.18))
+        for sy in (-1.0, 1.0):
+            parts.append(
+                _box(
+                    (depth, 0.03, arm_height),
+                    (0.0, sy * (width / 2.0 - 0.015), seat_top + arm_height / 2.0),
+                )
+            )
+
+    mesh = trimesh.util.concatenate(parts)
+    # The calibration meshes' frame: centred in x and y, lowest point at z = 0.
+    centre = mesh.bounds.mean(axis=0)
+    shift = np.array([-centre[0], -centre[1], -mesh.bounds[0, 2]])
+    mesh.apply_translation(shift)
+    return GeneratedChair(
+        mesh=mesh,
+        family=family,
+        seed=seed,
+        front_yaw_rad=front_yaw,
+        seat_height_m=seat_top + float(shift[2]),
+        seat_depth_m=depth,
+        seat_width_m=width,
+        seat_front_x_m=front_x + float(shift[0]),
+        front_protrusion_m=protrusion,
+    )
+
+
+def generate_chairs(count: int, seed: int = 0) -> list[GeneratedChair]:
+    """``count`` chairs cycling through :data:`FAMILIES`, chair i seeded ``seed + i``."""
+    return [generate_chair(seed + i, FAMILIES[i % len(FAMILIES)]) for i in range(count)]

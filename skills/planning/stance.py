@@ -1,0 +1,390 @@
+"""Where the NAO stands and where the bear goes, chosen together.
+
+The paper (section "System Pipeline") puts s_goal on the ray from p along the sitting
+direction γ, pushes it out of collision, and moves p along the ray toward the robot "due
+to the robot workspace constraint". Here the two are searched together: candidate
+sitting points p(s) slide from the imagined p toward the NAO over the seat's supported
+region, candidate stances stand at t from the imagined p along the same ray, and a pair
+is taken when the reach model (:mod:`skills.planning.wholebody.reach_model`) places the
+bear there, preferring p closest to the imagined one and then the nearest stance. The
+whole-body pre-plan (the seating validator) confirms the pair; when it refuses, the next
+pair is tried. With u = (cos γ, sin γ) and p₀ the imagined sitting point:
+
+.. math::
+
+    p(s) = p_0 + s\\,u, \\qquad s_{goal}(t) = (p_{0,xy} + t\\,u,\\; γ + π),
+
+    \\text{accept } (s, t) \\iff t - s \\le d_{max}(h(s),\\; t - f_0),
+
+where h(s) is the seat's height under p(s), f₀ how far the chair's front (anything at or
+below the seat in the band the NAO's body sweeps) lies ahead of p₀ along u.
+
+Only sitting points where the seat holds the bear are candidates
+(:mod:`skills.planning.seat`). Stances where the walking NAO's ellipsoid clears the chair
+come first; then nearer ones, down to the front of its feet at the chair's front, which
+it reaches by stepping straight in from the first clear one (the pre-plan checks its
+feet, shins, body and the carried bear against the chair).
+
+:func:`check_seat_reachable` runs the search with the chair alone (no walls, no
+obstacles): when it finds nothing, no orientation of the chair can help, and the mission
+refuses before anyone is asked to turn the chair.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+import trimesh
+
+from skills.arena import Arena, Box2D
+from skills.geometry import SE2Pose, SittingPose, wrap_angle
+from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
+from skills.planning.seat import STEP_M, SeatRay, seat_ray
+from skills.planning.wholebody.chair_profile import BAND_HALF_WIDTH_M
+from skills.planning.wholebody.optimisation import BEAR_CHAIR_MARGIN_M, BEAR_DEPTH_M
+from skills.planning.wholebody.reach_model import ReachModel, reach_model
+from skills.results import SeatReachability
+
+STANCE_SEARCH_M = 0.08
+"""Stances are tried up to this far (metres) beyond the first collision-free one: a
+stance a little farther back gives the knees room in front of the seat."""
+MAX_STANCE_M = 1.2
+"""No stance farther than this (metres) from p₀ is considered."""
+MAX_PREPLANS = 6
+"""The whole-body pre-plan confirms at most this many candidate pairs."""
+
+
+class SeatingCheck(NamedTuple):
+    """A seating validator's verdict.
+
+    Attributes:
+        reason: why seating from s_goal is infeasible ("" when feasible).
+        bear_placement: the failure is about where the bear goes (reach).
+        too_close: the NAO stands too close to the chair (its feet, or the bear it
+            carries, in it).
+        raise_at: feasible only with the bear raised, which the NAO does here (back
+            along the ray from s_goal) before it steps in; None: walk in as it carries.
+    """
+
+    reason: str = ""
+    bear_placement: bool = False
+    too_close: bool = False
+    raise_at: SE2Pose | None = None
+
+
+SeatingValidator = Callable[[trimesh.Trimesh, SittingPose, SE2Pose], SeatingCheck]
+"""Checks seating the bear at g from s_goal (the whole-body pre-plan, or the reach model)."""
+
+
+class StanceChoice(NamedTuple):
+    """The chosen stance and sitting point, or why there is none.
+
+    Attributes:
+        se2_goal: where the NAO stands, facing opposite γ (None when nothing works).
+        sitting_pose: g with p moved along the ray (the imagined one when nothing works).
+        reason: why there is none ("" when there is).
+        check: the pre-plan's verdict for the chosen pair (``raise_at`` inside).
+        slide_m: how far p moved toward the NAO, metres.
+        preplans: how many pairs the pre-plan was asked about.
+        depends_on_scene: the failure comes from walls, obstacles or the arena's bounds
+            (turning the chair may help), not from the chair and the NAO alone.
+        approach: where the walk ends when s_goal is nearer the chair than the walking
+            NAO's ellipsoid allows: the NAO steps straight in from there (None: it
+            walks to s_goal).
+        seat_height_m: the seat's height under the imagined p, metres (NaN: no seat).
+    """
+
+    se2_goal: SE2Pose | None
+    sitting_pose: SittingPose
+    reason: str = ""
+    check: SeatingCheck = SeatingCheck()
+    slide_m: float = 0.0
+    preplans: int = 0
+    depends_on_scene: bool = False
+    approach: SE2Pose | None = None
+    seat_height_m: float = math.nan
+
+
+def goal_on_ray(sitting_pose: SittingPose, distance_m: float) -> SE2Pose:
+    """The NAO pose ``distance_m`` from p along the sitting direction, facing back at p."""
+    direction = sitting_pose.direction()
+    x, y = np.asarray(sitting_pose.position[:2], dtype=float) + distance_m * direction
+    return SE2Pose(float(x), float(y), wrap_angle(sitting_pose.yaw + math.pi))
+
+
+class ChairAlongRay(NamedTuple):
+    """The chair in the band the NAO's body sweeps, along the sitting ray (metres, from p₀
+    along u, positive toward the NAO).
+
+    Attributes:
+        front_m: f₀, the farthest the chair reaches at or below the seat top (plus 1 cm):
+            the seat block's front as the whole-body planner sees it.
+        above_seat_m: the farthest anything above the seat (a backrest, armrests)
+            reaches; -inf when nothing stands on the seat in the band.
+    """
+
+    front_m: float
+    above_seat_m: float
+
+
+def chair_along_ray(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, seat_top_m: float
+) -> ChairAlongRay:
+    """Where the chair lies along the sitting ray within ``BAND_HALF_WIDTH_M`` of it,
+    below and above the seat top (:mod:`.wholebody.chair_profile`'s two blocks)."""
+    p = np.asarray(sitting_pose.position, dtype=float)
+    u = sitting_pose.direction()
+    points, _ = trimesh.sample.sample_surface(chair_mesh, 20000, seed=0)
+    points = np.vstack([points, chair_mesh.vertices])
+    rel = points[:, :2] - p[:2]
+    along = rel @ u
+    in_band = np.abs(rel @ np.array([-u[1], u[0]])) <= BAND_HALF_WIDTH_M
+    below = in_band & (points[:, 2] <= seat_top_m + 0.01)
+    above = in_band & (points[:, 2] > seat_top_m + 0.015)
+    return ChairAlongRay(
+        float(along[below].max()) if below.any() else 0.0,
+        float(along[above].max()) if above.any() else -math.inf,
+    )
+
+
+def _first_clear(
+    checker: NaoCollisionChecker, sitting_pose: SittingPose, start_m: float, *, scene: bool
+) -> tuple[float, str]:
+    """The first distance (metres) from ``start_m`` on where the NAO clears the chair
+    (and, with ``scene``, the walls and obstacles inside the arena), with "" , or NaN
+    and what blocks every distance."""
+    distance = start_m
+    chair_clear = False
+    blocker = "the chair"
+    while distance <= MAX_STANCE_M:
+        goal = goal_on_ray(sitting_pose, distance)
+        if not checker.collides_with_chair(goal):
+            chair_clear = True
+            if not scene:
+                return distance, ""
+            if not checker.arena.contains(goal.x, goal.y):
+                blocker = "the arena's edge"
+                break
+            if checker.collides_with_walls(goal):
+                blocker = "the wall"
+            elif checker.collides_with_obstacles(goal):
+                blocker = "the obstacle"
+            else:
+                return distance, ""
+        distance += STEP_M
+    return math.nan, blocker if chair_clear else "the chair"
+
+
+def choose_stance(
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    checker: NaoCollisionChecker,
+    validator: SeatingValidator,
+    *,
+    scene: bool = True,
+    model: ReachModel | None = None,
+) -> StanceChoice:
+    """Searches stance and sitting point together (see the module doc).
+
+    Stances where the walking NAO's ellipsoid is clear come first (it walks there);
+    then stances nearer the chair, down to the front of the feet at the chair's front,
+    which it reaches by stepping straight in from the first clear one.
+
+    Args:
+        chair_mesh: the chair, world frame, z up.
+        sitting_pose: the imagined g = (p₀, γ), world frame.
+        checker: the NAO-versus-scene collision checker.
+        validator: the seating pre-plan, asked about the model's best pairs in turn.
+        scene: also keep the stance clear of walls and obstacles inside the arena.
+        model: the reach model (default: the shipped one).
+    """
+    model = model or reach_model()
+    ray = seat_ray(chair_mesh, sitting_pose)
+    if len(ray.slides_m) == 0:
+        return StanceChoice(None, sitting_pose, "no seat under the sitting position")
+    chair = chair_along_ray(chair_mesh, sitting_pose, float(np.max(ray.seat_heights_m)))
+    # The bear's back must clear whatever stands on the seat in the band (backrest,
+    # armrests): the planar planner holds everything below that block's top as solid.
+    clear_of_above = ray.slides_m >= chair.above_seat_m + BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M
+    if not clear_of_above.any():
+        return StanceChoice(
+            None,
+            sitting_pose,
+            _blocked_above_reason(chair, ray),
+            seat_height_m=float(ray.seat_heights_m[0]),
+        )
+    ray = SeatRay(ray.slides_m[clear_of_above], ray.seat_heights_m[clear_of_above])
+    front = chair.front_m
+    none = StanceChoice(None, sitting_pose, "", seat_height_m=float(ray.seat_heights_m[0]))
+    chair_clear, _ = _first_clear(checker, sitting_pose, 0.0, scene=False)
+    if math.isnan(chair_clear):
+        return none._replace(reason="no spot on the sitting ray clear of the chair")
+    walk_in, blocker = _first_clear(checker, sitting_pose, chair_clear, scene=scene)
+    if math.isnan(walk_in):
+        return none._replace(
+            reason=f"no spot on the sitting ray clear of the chair and {blocker}",
+            depends_on_scene=True,
+        )
+    walk_stances = np.arange(walk_in, walk_in + STANCE_SEARCH_M + 1e-9, STEP_M)
+    nearest = max(front + float(model.seat_fronts_m[0]), 0.0)
+    step_stances = np.arange(walk_in - STEP_M, nearest - 1e-9, -STEP_M)
+    pairs = _model_pairs(ray, front, walk_stances, model)
+    pairs += _model_pairs(ray, front, step_stances, model)
+    if not pairs:
+        return none._replace(
+            reason=_out_of_reach_reason(
+                ray, front, np.concatenate([walk_stances, step_stances]), model
+            ),
+            depends_on_scene=scene and walk_in > chair_clear + 1e-9,
+        )
+    p0 = np.asarray(sitting_pose.position, dtype=float)
+    u = sitting_pose.direction()
+    approach_from = goal_on_ray(sitting_pose, walk_in)
+    last = none
+    preplans = 0
+    too_close_within = -math.inf  # stances at or nearer than this put the NAO in the chair
+    out_of_reach: dict[float, float] = {}  # slide -> its stances from here on fall short
+    for slide, height, stance in pairs:
+        if preplans == MAX_PREPLANS:
+            break
+        if stance <= too_close_within + 1e-9 or stance >= out_of_reach.get(slide, math.inf) - 1e-9:
+            continue
+        moved = p0.copy()
+        moved[:2] += slide * u
+        moved[2] += height - ray.seat_heights_m[0]
+        pose = SittingPose(moved, sitting_pose.yaw)
+        goal = goal_on_ray(sitting_pose, stance)
+        if scene and (checker.collides_with_walls(goal) or checker.collides_with_obstacles(goal)):
+            continue
+        check = validator(chair_mesh, pose, goal)
+        preplans += 1
+        if not check.reason:
+            approach = approach_from if stance < walk_in - 1e-9 else None
+            return none._replace(
+                se2_goal=goal,
+                sitting_pose=pose,
+                check=check,
+                slide_m=slide,
+                preplans=preplans,
+                approach=approach,
+            )
+        # The pre-plan knows the NAO better than the model: a stance it finds too close
+        # rules out every nearer one, a bear it cannot reach every farther stance for
+        # that p; anything else (a collision on the way) rules out that p.
+        if check.too_close:
+            too_close_within = max(too_close_within, stance)
+        elif check.bear_placement:
+            out_of_reach[slide] = min(out_of_reach.get(slide, math.inf), stance)
+        else:
+            out_of_reach[slide] = -math.inf
+        last = none._replace(sitting_pose=pose, reason=check.reason, check=check, slide_m=slide)
+    return last._replace(preplans=preplans)
+
+
+def _model_pairs(
+    ray: SeatRay, front_m: float, stances_m: np.ndarray, model: ReachModel
+) -> list[tuple[float, float, float]]:
+    """(slide, seat height, stance) triples the reach model accepts, ordered by slide
+    (the smallest first: p stays nearest the imagined one), then as ``stances_m`` is."""
+    pairs = []
+    for slide, height in zip(ray.slides_m, ray.seat_heights_m, strict=True):
+        for stance in stances_m:
+            d_max = model.max_forward(float(height), float(stance - front_m))
+            if not math.isnan(d_max) and stance - slide <= d_max:
+                pairs.append((float(slide), float(height), float(stance)))
+    return pairs
+
+
+def _blocked_above_reason(chair: ChairAlongRay, ray: SeatRay) -> str:
+    overhang = chair.above_seat_m + BEAR_DEPTH_M / 2.0 - float(ray.slides_m[-1])
+    return (
+        f"the seat is closed in the NAO's way: something on it within "
+        f"{BAND_HALF_WIDTH_M:.2f} m of the sitting ray (armrests, a backrest) leaves no room "
+        f"for the bear ({BEAR_DEPTH_M:.2f} m deep) on the seat's front "
+        f"({overhang:.2f} m short); the NAO's hands hold the bear "
+        f"{BAND_HALF_WIDTH_M:.2f} m either side of it"
+    )
+
+
+def _out_of_reach_reason(
+    ray: SeatRay, front_m: float, stances_m: np.ndarray, model: ReachModel
+) -> str:
+    """Why the reach model places the bear nowhere on this seat from any stance."""
+    height = float(ray.seat_heights_m[0])
+    highest, lowest = model.max_seat_height_m(), model.min_seat_height_m()
+    if height > highest:
+        return (
+            f"seat too high for the NAO: seat {height:.2f} m, the NAO places a bear at most "
+            f"{highest:.2f} m high"
+        )
+    if height < lowest:
+        return (
+            f"seat too low for the NAO: seat {height:.2f} m, the NAO places a bear on seats "
+            f"at least {lowest:.2f} m high"
+        )
+    # The stance that comes closest: the nearest sitting point against the reach there.
+    best = (math.inf, math.nan, math.nan)
+    for stance in stances_m:
+        d_max = model.max_forward(height, float(stance - front_m))
+        needed = float(stance - ray.slides_m[-1])
+        if not math.isnan(d_max) and needed - d_max < best[0]:
+            best = (needed - d_max, needed, d_max)
+    if math.isnan(best[1]):
+        return f"seat out of the NAO's reach: no posture places a bear on a {height:.2f} m seat"
+    return (
+        f"seat out of the NAO's reach: the nearest supported sitting point is {best[1]:.2f} m "
+        f"ahead of the NAO at best, which reaches {best[2]:.2f} m there on a {height:.2f} m "
+        f"seat"
+    )
+
+
+def open_floor_arena(chair_mesh: trimesh.Trimesh) -> Arena:
+    """An arena with no walls near and no obstacles around the chair (the chair alone)."""
+    centre = chair_mesh.bounds.mean(axis=0)
+    half = 3.0
+    return Arena(
+        x_min=float(centre[0]) - half,
+        x_max=float(centre[0]) + half,
+        y_min=float(centre[1]) - half,
+        y_max=float(centre[1]) + half,
+        chair_area=Box2D(float(centre[0]), float(centre[0]), float(centre[1]), float(centre[1])),
+        arm_base_xy=(float(centre[0]) - half, float(centre[1])),
+        obstacles=(),
+        humanoid_start=SE2Pose(float(centre[0]) + half - 0.5, float(centre[1]), math.pi),
+    )
+
+
+def check_seat_reachable(
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    *,
+    seating_validator: SeatingValidator | None = None,
+) -> SeatReachability:
+    """Whether the NAO can seat the bear on this chair from any collision-free stance,
+    whatever the walls and obstacles around it (so turning the chair cannot help).
+
+    Args:
+        chair_mesh: the chair, world frame, z up.
+        sitting_pose: the imagined g, world frame.
+        seating_validator: the pre-plan (default: the whole-body one).
+    """
+    from skills.planning.se2 import default_seating_validator
+
+    began = time.perf_counter()
+    checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_convex_pieces(chair_mesh))
+    validator = seating_validator or default_seating_validator()
+    choice = choose_stance(chair_mesh, sitting_pose, checker, validator, scene=False)
+    p0 = np.asarray(sitting_pose.position, dtype=float)
+    height = choice.seat_height_m
+    seconds = time.perf_counter() - began
+    if choice.se2_goal is None:
+        reason = choice.reason
+        if choice.check.reason:
+            reason = f"no stance passes the seating pre-plan: {reason}"
+        return SeatReachability(False, reason, height, seconds=seconds)
+    stance = float(np.hypot(choice.se2_goal.x - p0[0], choice.se2_goal.y - p0[1]))
+    return SeatReachability(True, "", height, choice.slide_m, stance, seconds)
