@@ -377,6 +377,8 @@ class MissionRecording:
             scene.log_imagination(stream, value)
         elif key == keys.SITTING_POSE:
             scene.log_sitting_pose(stream, value)
+        elif key == keys.REACHABILITY:
+            scene.log_reachability(stream, value)
         elif key == keys.ACCESSIBILITY:
             scene.log_accessibility(stream, value)
         elif key == keys.HUMANOID_POSE:

@@ -46,6 +46,7 @@ from skills.results import (
     ImaginationResult,
     Instruction,
     SeatingPlan,
+    SeatReachability,
     WalkResult,
 )
 
@@ -248,6 +249,18 @@ def log_accessibility(stream: rr.RecordingStream, result: AccessibilityResult) -
         "accessibility/log",
         rr.TextLog(f"{verdict} ({len(result.path)} waypoints, {result.seconds:.2f} s)"),
     )
+
+
+def log_reachability(stream: rr.RecordingStream, result: SeatReachability) -> None:
+    """Whether some stance reaches the seat with the chair alone (before any rotation)."""
+    if result.reachable:
+        text = (
+            f"seat reachable: seat {result.seat_height_m:.3f} m high, stance "
+            f"{result.stance_m:.3f} m from p, p slid {result.slide_m * 100:.1f} cm"
+        )
+    else:
+        text = f"seat not reachable: {result.reason}"
+    stream.log("accessibility/log", rr.TextLog(text))
 
 
 def log_instruction(stream: rr.RecordingStream, instruction: Instruction) -> None:

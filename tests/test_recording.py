@@ -147,6 +147,8 @@ def test_the_recording_has_every_domain_s_entities(recorded):
         "/blackboard/chair/scan",
         "/blackboard/sitting/pose",
         "/blackboard/seat/judgement",
+        "/blackboard/accessibility/reachable",
+        "/accessibility/log",
     }
     assert expected <= paths, sorted(expected - paths)
     for view in range(9):
