@@ -33,6 +33,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+from urllib.parse import quote
 
 import py_trees
 from py_trees.common import Status
@@ -191,7 +192,7 @@ class MissionRecording:
         self._last_tree_s = -math.inf
         self._last_values: dict[str, Any] = {}
         self._skill_calls: SkillCalls | None = None
-        self._path: list[SE2Pose] = []
+        self._walked: list[SE2Pose] = []
         self._last_pose: SE2Pose | None = None
         self._warned: set[str] = set()
         self._lock = threading.Lock()
@@ -212,7 +213,7 @@ class MissionRecording:
         if live == "web":
             server = rr.GrpcServerSink(port=grpc_port)
             rr.serve_web_viewer(web_port=web_port, open_browser=False, connect_to=server.uri)
-            self.viewer_url = f"http://127.0.0.1:{web_port}?url={server.uri}"
+            self.viewer_url = f"http://127.0.0.1:{web_port}?url={quote(server.uri, safe='')}"
             return server
         self.viewer_url = live
         return rr.GrpcSink(live)
@@ -413,10 +414,10 @@ class MissionRecording:
         ):
             self._last_pose = pose
             self._scene.log_humanoid_pose(self._stream, pose)
-        if not self._path or self._path[-1].distance_to(pose) >= PATH_STEP_M:
-            self._path.append(pose)
-            if len(self._path) >= 2:
-                self._scene.log_walked_path(self._stream, self._path)
+        if not self._walked or self._walked[-1].distance_to(pose) >= PATH_STEP_M:
+            self._walked.append(pose)
+            if len(self._walked) >= 2:
+                self._scene.log_walked_path(self._stream, self._walked)
 
 
 def open_recording(
