@@ -347,6 +347,35 @@ def test_run_record_and_live_flags(tmp_path, monkeypatch, capsys):
     assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()
 
 
+def test_trials_pass_record_to_each_worker(tmp_path, monkeypatch, capsys):
+    import executive.mission
+    from executive import trial_worker
+    from executive.trials.campaign import run_campaign
+    from executive.trials.protocol import ChairEntry, expand_protocol
+    from executive.trials.store import TrialStore
+
+    class Backend:
+        def run(self, jobs, record):
+            self.payloads = [payload for _, payload in jobs]
+
+    specs = expand_protocol([ChairEntry(tmp_path / "c.obj", "chair", 90.0)], "paper", 1)
+    for record in (True, False):
+        backend = Backend()
+        with TrialStore(tmp_path / f"{record}.sqlite") as store:
+            run_campaign(specs, store, backend, tmp_path / "runs", 60, record=record)
+        assert [payload["record"] for payload in backend.payloads] == [record] * len(specs)
+    # The worker turns it into the run's configuration.
+    configs = []
+    monkeypatch.setattr(
+        executive.mission, "run_in_simulation", lambda config, **_: configs.append(config) or {}
+    )
+    for record in (True, False):
+        payload = {**backend.payloads[0], "record": record, "out_dir": str(tmp_path / "w")}
+        assert trial_worker.main([json.dumps(payload)]) == 0
+    assert [config.record for config in configs] == [True, False]
+    capsys.readouterr()
+
+
 def test_view_explains_a_missing_recording_and_builds_the_viewer_command(tmp_path, capsys):
     from executive.cmd_view import viewer_command
 
