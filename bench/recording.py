@@ -78,6 +78,8 @@ def main(argv: list[str] | None = None) -> int:
                         f"{cost['cpu_seconds']:.2f} s), "
                         f"{size_mb:.1f} MB; parts (s): {parts}"
                     )
+                if summary["outcome"] != "success":
+                    line += f"\n    failed at {summary['failed_stage']}: {summary['reason']}"
                 print(line, flush=True)
     without, with_ = statistics.median(walls[False]), statistics.median(walls[True])
     cpu_without, cpu_with = statistics.median(cpus[False]), statistics.median(cpus[True])
