@@ -12,13 +12,16 @@ stages that decide whether the bear can be seated, without a whole mission:
    model has no stance for the seat);
 3. accessibility in an accessible placement of the arena (chair centre and sitting
    direction drawn as the simulated world draws them), which includes the whole-body
-   seating pre-plan at s_goal.
+   seating pre-plan at s_goal;
+4. with ``--seat``, seating in the simulated world (``bench/wholebody.py``'s run: the
+   NAO placed where the stance search puts it with the chair alone, the motion planned
+   and played, the bear released and judged).
 
 Prints the success rate per stage and per family, the refusals with their reasons, and
 the worst families. Usage::
 
     .venv/bin/python bench/generalization.py [--chairs 200] [--seed 0] [--imagine]
-        [--family sled] [--verbose]
+        [--seat] [--family sled] [--verbose]
 """
 
 from __future__ import annotations
@@ -50,6 +53,7 @@ class Outcome(NamedTuple):
     accessible: bool
     reason: str
     seconds: float  # the accessibility check's wall time
+    seated: bool | None = None  # with --seat: the judge's verdict in the simulated world
 
 
 def ground_truth_pose(chair: GeneratedChair) -> SittingPose:
@@ -71,7 +75,21 @@ def imagined_pose(chair: GeneratedChair, seed: int) -> tuple[SittingPose | None,
     return pose, error <= DIRECTION_TOLERANCE_DEG
 
 
-def run_chair(chair: GeneratedChair, seed: int, imagine: bool) -> Outcome:
+def seat_in_simulation(chair: GeneratedChair, seed: int) -> tuple[bool, str]:
+    """bench/wholebody.py's simulated seating on the chair (exported to a scratch OBJ)."""
+    import tempfile
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from wholebody import sim_run
+
+    with tempfile.TemporaryDirectory() as scratch:
+        path = Path(scratch) / f"{chair.name}.obj"
+        chair.mesh.export(path)
+        return sim_run(path, 0.0, seed)
+
+
+def run_chair(chair: GeneratedChair, seed: int, imagine: bool, seat: bool = False) -> Outcome:
     rng = np.random.default_rng(seed)
     if imagine:
         sitting, direction_ok = imagined_pose(chair, seed)
@@ -92,7 +110,11 @@ def run_chair(chair: GeneratedChair, seed: int, imagine: bool) -> Outcome:
     began = time.perf_counter()
     result = check_accessibility(mesh, placed, arena.humanoid_start, arena, seed=seed)
     seconds = time.perf_counter() - began
-    return Outcome(chair, direction_ok, "", result.accessible, result.reason, seconds)
+    outcome = Outcome(chair, direction_ok, "", result.accessible, result.reason, seconds)
+    if seat and result.accessible:
+        seated, description = seat_in_simulation(chair, seed)
+        outcome = outcome._replace(seated=seated, reason="" if seated else description)
+    return outcome
 
 
 def _percent(part: int, whole: int) -> str:
@@ -134,6 +156,19 @@ def report(outcomes: list[Outcome]) -> None:
         )
     refusals = Counter(o.refused.split(":")[0] for o in outcomes if o.refused)
     print(f"refusals: {dict(refusals)}")
+    judged = [o for o in outcomes if o.seated is not None]
+    if judged:
+        seated = Counter(o.chair.family for o in judged if o.seated)
+        print(
+            f"seated in simulation: {_percent(sum(o.seated for o in judged), len(judged))} of "
+            "the accessible chairs; by family: "
+            + ", ".join(
+                f"{f} {seated[f]}/{sum(o.chair.family == f for o in judged)}" for f in FAMILIES
+            )
+        )
+        for o in judged:
+            if not o.seated:
+                print(f"  not seated {o.chair.name}: {o.reason[:160]}")
     for o in outcomes:
         if o.refused:
             print(
@@ -155,6 +190,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--chairs", type=int, default=200)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--imagine", action="store_true", help="imagine the sitting pose")
+    parser.add_argument("--seat", action="store_true", help="seat the bear in simulation")
     parser.add_argument("--family", choices=FAMILIES, help="only this family")
     parser.add_argument("--verbose", action="store_true", help="a line per chair")
     args = parser.parse_args(argv)
@@ -163,10 +199,12 @@ def main(argv: list[str] | None = None) -> int:
     began = time.perf_counter()
     for i in range(args.chairs):
         chair = generate_chair(args.seed + i, families[i % len(families)])
-        outcome = run_chair(chair, args.seed + i, args.imagine)
+        outcome = run_chair(chair, args.seed + i, args.imagine, args.seat)
         outcomes.append(outcome)
         if args.verbose:
             status = "refused" if outcome.refused else ("ok" if outcome.accessible else "FAIL")
+            if outcome.seated is not None:
+                status += ", seated" if outcome.seated else ", NOT SEATED"
             print(
                 f"{chair.name}: seat {chair.seat_height_m:.2f} h {chair.seat_depth_m:.2f} d "
                 f"{status} {outcome.reason[:140]}",

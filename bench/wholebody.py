@@ -124,26 +124,30 @@ def solve_times(chairs: list[tuple[str, trimesh.Trimesh, float]]) -> None:
 
 def feasible_stance(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose
-) -> tuple[SE2Pose, SittingPose] | None:
-    """The stance and sitting point the mission's search chooses with the chair alone
-    (:func:`skills.planning.stance.choose_stance`: reach model, then the pre-plan)."""
+) -> tuple[SE2Pose, SittingPose, SE2Pose | None] | None:
+    """The stance, sitting point and raising pose (None: no raise) the mission's search
+    chooses with the chair alone (:func:`skills.planning.stance.choose_stance`: reach
+    model, then the pre-plan)."""
     checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_convex_pieces(chair_mesh))
     choice = choose_stance(
         chair_mesh, sitting_pose, checker, default_seating_validator(), scene=False
     )
-    return None if choice.se2_goal is None else (choice.se2_goal, choice.sitting_pose)
+    if choice.se2_goal is None:
+        return None
+    return choice.se2_goal, choice.sitting_pose, choice.check.raise_at
 
 
 def sim_run(chair_path: Path | None, front_yaw_deg: float, seed: int) -> tuple[bool, str]:
     """One simulated seating: returns (seated, description).
 
     The chair stands 0.5 m in front of the NAO's start, its sitting direction toward the
-    NAO, and settles; the NAO is then placed at the nearest feasible stance on the
-    sitting ray (with a lateral error of up to 2 cm), plans from its own pose, plays the
-    motion, releases the bear, stands up and the judge decides.
+    NAO, and settles; the NAO is then placed at the stance the mission's search chooses
+    (with a lateral error of up to 2 cm; first where it raises the bear, when the search
+    says so), plans from its own pose, plays the motion, releases the bear, stands up and
+    the judge decides.
     """
     from hardware.sim.world import SimConfig, SimWorld
-    from skills.planning.wholebody import execute_seating, release_and_stand
+    from skills.planning.wholebody import execute_seating, raise_bear, release_and_stand
 
     config = SimConfig(
         chair_path=chair_path,
@@ -165,12 +169,19 @@ def sim_run(chair_path: Path | None, front_yaw_deg: float, seed: int) -> tuple[b
         found = feasible_stance(chair_mesh, SittingPose(true_seat_point(chair_mesh), sitting_yaw))
         if found is None:
             return False, "no feasible stance"
-        stance, sitting_pose = found
+        stance, sitting_pose, raise_at = found
         distance = stance.distance_to(stance_pose(sitting_pose, 0.0))
         side = np.array([-math.sin(stance.theta), math.cos(stance.theta)])
-        world.place_nao(SE2Pose(*(np.array([stance.x, stance.y]) + lateral * side), stance.theta))
-        world.clock.sleep(0.2)
-        plan = plan_seating(chair_mesh, sitting_pose, world.nao.pose())
+
+        def place(pose: SE2Pose) -> None:
+            world.place_nao(SE2Pose(*(np.array([pose.x, pose.y]) + lateral * side), pose.theta))
+            world.clock.sleep(0.2)
+
+        if raise_at is not None:
+            place(raise_at)
+            raise_bear(world.nao, chair_mesh, sitting_pose, world.nao.pose())
+        place(stance)
+        plan = plan_seating(chair_mesh, sitting_pose, world.nao.pose(), raised=raise_at is not None)
         execute_seating(world.nao, plan)
         release_and_stand(world.nao, plan)
         verdict = world.judge.judge(sitting_yaw)
