@@ -175,6 +175,8 @@ def test_tree_statuses_at_given_ticks_match_the_run_record(recorded):
         assert row["GraphNodes:node_ids"] == [node["path"] for node in tick["nodes"]]
         checked += 1
     assert checked >= 10
+    robot_s = [row["robot"] for row in rows]  # the robot's clock, in seconds
+    assert all(isinstance(t, float) for t in robot_s) and robot_s == sorted(robot_s)
     first, last = rows[0], rows[-1]
     assert first["status"][names.index("ScanChair")] == "RUNNING"
     assert first["status"][names.index("WalkToChair")] == "INVALID"
