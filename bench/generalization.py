@@ -22,6 +22,7 @@ the worst families. Usage::
 
     .venv/bin/python bench/generalization.py [--chairs 200] [--seed 0] [--imagine]
         [--seat] [--family sled] [--verbose]
+    .venv/bin/python bench/generalization.py --calibration 24
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import statistics
 import sys
 import time
 from collections import Counter, defaultdict
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -78,7 +80,6 @@ def imagined_pose(chair: GeneratedChair, seed: int) -> tuple[SittingPose | None,
 def seat_in_simulation(chair: GeneratedChair, seed: int) -> tuple[bool, str]:
     """bench/wholebody.py's simulated seating on the chair (exported to a scratch OBJ)."""
     import tempfile
-    from pathlib import Path
 
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from wholebody import sim_run
@@ -185,6 +186,32 @@ def report(outcomes: list[Outcome]) -> None:
         print(f"  direction wrong: {', '.join(wrong)}")
 
 
+def calibration_reach(limit: int | None) -> None:
+    """The reach check on the calibration chairs with a front (``../shared/chairs``), with
+    bench/planning.py's stand-in sitting pose: which would be refused, and why."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from planning import load_chairs
+
+    from skills.planning.seat import seat_ray
+
+    chairs = load_chairs()[:limit]
+    if not chairs:
+        print("calibration chairs not found (../shared/chairs): skipped")
+        return
+    refused = 0
+    for chair in chairs:
+        verdict = check_seat_reachable(chair.mesh, chair.sitting_pose)
+        ray = seat_ray(chair.mesh, chair.sitting_pose)
+        room = float(ray.slides_m[-1]) if len(ray.slides_m) else float("nan")
+        refused += not verdict.reachable
+        print(
+            f"  {chair.name:<24} seat {verdict.seat_height_m:.2f} m, p may slide {room:.2f} m: "
+            + ("reachable" if verdict.reachable else f"REFUSED: {verdict.reason}"),
+            flush=True,
+        )
+    print(f"calibration chairs refused: {refused}/{len(chairs)}")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--chairs", type=int, default=200)
@@ -193,7 +220,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seat", action="store_true", help="seat the bear in simulation")
     parser.add_argument("--family", choices=FAMILIES, help="only this family")
     parser.add_argument("--verbose", action="store_true", help="a line per chair")
+    parser.add_argument(
+        "--calibration",
+        type=int,
+        metavar="N",
+        help="instead: the reach check on the first N calibration chairs with a front",
+    )
     args = parser.parse_args(argv)
+    if args.calibration:
+        calibration_reach(args.calibration)
+        return 0
     families = (args.family,) if args.family else FAMILIES
     outcomes = []
     began = time.perf_counter()

@@ -80,6 +80,10 @@ class SimNao:
         body: pybullet body id.
         joint_indices: revolute joint name (qibullet's names) -> pybullet index.
         joint_limits: name -> (lower, upper) radians.
+        motion_count: goes up whenever the body's links may have moved (for caches of
+            link poses).
+        posture_count: goes up whenever the joint angles may have changed (links fixed
+            in the feet frame stay so until then).
     """
 
     def __init__(
@@ -132,6 +136,8 @@ class SimNao:
         self._stop_trajectory = threading.Event()
         self._T_feet_base: np.ndarray | None = None
         self.on_hands: Callable[[bool], None] | None = None
+        self.motion_count = 0
+        self.posture_count = 0
         with bullet.lock:
             for index in self.joint_indices.values():
                 bullet.changeDynamics(self.body, index, linearDamping=0.0, angularDamping=0.0)
@@ -222,6 +228,8 @@ class SimNao:
                 self._apply_joints()
                 self._T_feet_base = None
                 self._place_body()
+                self.motion_count += 1
+                self.posture_count += 1
 
     def set_hands(self, open_hands: bool) -> None:
         """Opens or closes both hands; opening releases the bear if it is held."""
@@ -229,6 +237,8 @@ class SimNao:
             self._positions["LHand"] = self._positions["RHand"] = 1.0 if open_hands else 0.0
             self._apply_joints()
             self._T_feet_base = None
+            self.motion_count += 1
+            self.posture_count += 1
         if self.on_hands is not None:
             self.on_hands(open_hands)
         self._clock.sleep(0.25)
@@ -258,6 +268,7 @@ class SimNao:
             self._true = values.copy()
             self._odometry = values.copy()
             self._place_body()
+            self.motion_count += 1
 
     def true_pose(self) -> SE2Pose:
         """Ground-truth planar pose of the feet frame (tests and benchmarks only)."""
@@ -294,10 +305,12 @@ class SimNao:
             for name, value in zip(trajectory.joints, trajectory.at(now_s), strict=True):
                 self._positions[name] = float(value)
             self._T_feet_base = None
+            self.posture_count += 1
         # The joints are kinematic: re-imposed every step, or gravity would fold the body.
         self._apply_joints()
         if moved or trajectory is not None:
             self._place_body()
+            self.motion_count += 1
 
     def _apply_joints(self) -> None:
         self._bullet.resetJointStatesMultiDof(

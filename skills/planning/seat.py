@@ -121,22 +121,33 @@ SLAT_GAP_M = 0.06
 torso (0.085 m deep, 0.10 m wide) bridges them."""
 
 
-def seat_map(
-    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose
-) -> tuple[np.ndarray, np.ndarray, float]:
+class SeatMap(NamedTuple):
+    """The seat around the sitting ray (see :func:`seat_map`).
+
+    Attributes:
+        along_m: (R,) the rows' distances along u from p, metres.
+        seat: (R, C) seat cells, gaps closed and enclosed holes filled.
+        heights_m: (R, C) the first surface below p in each cell, metres (NaN: none).
+        seat_height_m: h₀, the seat's height under p (NaN: no seat there).
+    """
+
+    along_m: np.ndarray
+    seat: np.ndarray
+    heights_m: np.ndarray
+    seat_height_m: float
+
+
+def seat_map(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatMap:
     """The seat around the sitting ray as a height map (metres).
 
     A grid of ``STEP_M`` cells in the ray's frame (rows along u from
     ``-SEAT_MAP_BEHIND_M``, columns across from ``-SEAT_MAP_HALF_WIDTH_M``) holds the first
-    surface below p (plus 2 cm) in each cell. The seat's height h₀ is the highest surface
-    within the bear's reach of p (lower ones are the floor or a base under a hole); a cell
-    is seat when its surface lies within ``SEAT_HEIGHT_TOLERANCE_M`` of h₀. Gaps up to
+    surface below p (plus 2 cm) in each cell. The seat's height h₀ is the surface under p
+    (:func:`_seat_height_under`); a cell is seat when its surface lies within
+    ``SEAT_HEIGHT_TOLERANCE_M`` of h₀. Gaps up to
     ``SLAT_GAP_M`` are closed and holes enclosed by seat are filled: a scan's holes are
     not holes in the chair.
 
-    Returns:
-        (along (R,) metres, the seat mask (R, C) after closing and filling, h₀); h₀ is
-        NaN when there is no surface within ``SEAT_MAP_BEHIND_M`` of p at all.
     """
     p = np.asarray(sitting_pose.position, dtype=float)
     u = sitting_pose.direction()
@@ -146,10 +157,9 @@ def seat_map(
     a, c = np.meshgrid(along, across, indexing="ij")
     xy = p[:2] + a.reshape(-1, 1) * u + c.reshape(-1, 1) * v
     heights = _first_surface_below(chair_mesh, xy, float(p[2]) + 0.02).reshape(a.shape)
-    near = (np.hypot(a, c) <= SEAT_MAP_BEHIND_M) & ~np.isnan(heights)
-    if not near.any():
-        return along, np.zeros(a.shape, dtype=bool), math.nan
-    h0 = float(np.max(heights[near]))
+    h0 = _seat_height_under(heights, np.hypot(a, c), float(p[2]))
+    if math.isnan(h0):
+        return SeatMap(along, np.zeros(a.shape, dtype=bool), heights, math.nan)
     seat = np.abs(np.nan_to_num(heights, nan=-1.0) - h0) <= SEAT_HEIGHT_TOLERANCE_M
     radius = round(SLAT_GAP_M / 2.0 / STEP_M)
     disc = np.hypot(*np.mgrid[-radius : radius + 1, -radius : radius + 1]) <= radius + 1e-9
@@ -157,7 +167,18 @@ def seat_map(
     closed = ndimage.binary_closing(padded, structure=disc)[
         radius + 1 : -radius - 1, radius + 1 : -radius - 1
     ]
-    return along, ndimage.binary_fill_holes(closed | seat), h0
+    return SeatMap(along, ndimage.binary_fill_holes(closed | seat), heights, h0)
+
+
+def _seat_height_under(heights: np.ndarray, distance_m: np.ndarray, p_z: float) -> float:
+    """h₀ (metres): the median surface height within ``SUPPORT_RADIUS_M`` of p; where the
+    scan lost the seat there, the median of the surfaces within ``SEAT_MAP_BEHIND_M`` that
+    lie where a seat under a sitting child's pelvis can (1 to 12 cm below p). NaN: none."""
+    disc = (distance_m <= SUPPORT_RADIUS_M) & ~np.isnan(heights)
+    if disc.sum() >= 0.2 * (distance_m <= SUPPORT_RADIUS_M).sum():
+        return float(np.median(heights[disc]))
+    near = (distance_m <= SEAT_MAP_BEHIND_M) & (heights <= p_z - 0.01) & (heights >= p_z - 0.12)
+    return float(np.median(heights[near])) if near.any() else math.nan
 
 
 def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
@@ -167,14 +188,20 @@ def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
     ``SUPPORT_RADIUS_M`` across the ray at s are seat; the seat ends at the first s that
     is not, and p(s) is supported up to ``BEAR_EDGE_MARGIN_M`` before that.
     """
-    along, seat, h0 = seat_map(chair_mesh, sitting_pose)
+    along, seat, heights, h0 = seat_map(chair_mesh, sitting_pose)
     if math.isnan(h0):
         return SeatRay(np.zeros(0), np.zeros(0))
     columns = round(SUPPORT_RADIUS_M / STEP_M)
     middle = seat.shape[1] // 2
-    on_seat = seat[:, middle - columns : middle + columns + 1].mean(axis=1) >= 0.5
+    band = slice(middle - columns, middle + columns + 1)
+    on_seat = seat[:, band].mean(axis=1) >= 0.5
+    # The seat's height along the ray: its measured cells' median (h₀ across a filled hole).
+    measured = np.where(seat[:, band] & ~np.isnan(heights[:, band]), heights[:, band], np.nan)
+    row_heights = np.full(len(along), h0)
+    has = ~np.isnan(measured).all(axis=1)
+    row_heights[has] = np.nanmedian(measured[has], axis=1)
     ahead = along >= -1e-9
-    along, on_seat = along[ahead], on_seat[ahead]
+    along, on_seat, row_heights = along[ahead], on_seat[ahead], row_heights[ahead]
     if not on_seat[0]:
         # The scan lost the seat's top here, yet the imagined child sat on it: p stays.
         return SeatRay(np.zeros(1), np.full(1, h0))
@@ -184,7 +211,7 @@ def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
     # imagination's p is where the child sat, so the seat holds the bear there.
     supported = (along <= max(limit, 0.0) + 1e-9) & on_seat
     supported &= np.cumprod(supported).astype(bool)
-    return SeatRay(along[supported], np.full(int(supported.sum()), h0))
+    return SeatRay(along[supported], row_heights[supported])
 
 
 def slide_on_seat(
