@@ -34,6 +34,7 @@ SKILL_COMMANDS = (
     "executive.cmd_scan",
     "executive.cmd_trials",
     "executive.cmd_check_hardware",
+    "executive.cmd_view",
 )
 
 
@@ -80,6 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="in simulation, also save a picture whenever a stage ends (OUT/snapshots)",
     )
+    add_recording_arguments(run, record_default=False)
     run.add_argument(
         "--robots",
         type=Path,
@@ -136,7 +138,10 @@ def _run(args: argparse.Namespace) -> int:
         mute=args.mute,
         timeout_s=args.timeout,
         snapshots=args.snapshots,
+        record=args.record,
+        live=args.live,
     )
+    check_recording_arguments("bearchair run", args)
     # Every input and the output place are checked before anything runs.
     if args.robots is not None:
         if args.chair is not None:
@@ -190,6 +195,45 @@ def _ask(question: str) -> bool:
         return input(question).strip().lower() in ("y", "yes")
     except EOFError:
         return False
+
+
+def add_recording_arguments(parser: argparse.ArgumentParser, *, record_default: bool) -> None:
+    """``--record/--no-record`` and ``--live`` (Rerun recordings, ``executive.recording``)."""
+    parser.add_argument(
+        "--record",
+        action=argparse.BooleanOptionalAction,
+        default=record_default,
+        help="write a Rerun recording of the run, OUT/mission.rrd (open it with "
+        f"'bearchair view OUT'; default: {'on' if record_default else 'off'})",
+    )
+    parser.add_argument(
+        "--live",
+        nargs="?",
+        const="spawn",
+        metavar="WHERE",
+        help="stream the run to a Rerun viewer as it happens: no value starts the native "
+        "viewer, 'web' serves the web viewer, or a viewer's URL (rerun+http://HOST:9876/proxy)",
+    )
+
+
+def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
+    """One line before any work when a recording was asked for and cannot be made."""
+    from executive.recording import INSTALL_HINT, has_display, rerun_available
+
+    live = getattr(args, "live", None)
+    if (args.record or live) and not rerun_available():
+        flag = "--record" if args.record else "--live"
+        raise CliError(f"{command}: {flag} needs rerun-sdk: {INSTALL_HINT}")
+    if live == "spawn" and not has_display():
+        raise CliError(
+            f"{command}: --live: no display for the native viewer; use --live web "
+            "(a web viewer on a port) or --live rerun+http://HOST:9876/proxy"
+        )
+    if live not in (None, "spawn", "web") and not live.startswith(("rerun://", "rerun+http")):
+        raise CliError(
+            f"{command}: --live takes no value, 'web', or a viewer URL "
+            f"(rerun+http://HOST:9876/proxy), not {live!r}"
+        )
 
 
 def _tree(args: argparse.Namespace) -> int:

@@ -17,6 +17,7 @@ from executive.config import RunConfig, front_yaw_from_manifest
 from executive.interrupts import raise_if_received, signal_name
 from executive.outputs import atomic_path
 from executive.record import RecordWriteError, RunRecorder
+from executive.recording import open_recording
 from executive.runner import MissionRunner, summarise
 from skills.errors import one_line
 from skills.geometry import wrap_angle
@@ -233,16 +234,24 @@ def _run_tree(
     ground_truth: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """Ticks the tree on ``robot`` and writes the summary; the record survives any error."""
+    recording = None
     try:
+        skills = skills or DefaultSkills()
+        recording = open_recording(root, config.out_dir, record=config.record, live=config.live)
+        if recording is not None:
+            skills = recording.watch_skills(skills, robot.clock)
+            if recording.viewer_url:
+                print(f"live viewer: {recording.viewer_url}", file=sys.stderr, flush=True)
         runner = MissionRunner(
             root,
-            skills or DefaultSkills(),
+            skills,
             robot,
             seed=config.seed,
             arena=config.arena,
             recorder=recorder,
             timeout_s=config.timeout_s,
             on_tick=on_tick,
+            post_tick=() if recording is None else (recording,),
         )
         summary = summarise(runner.run(), run_info)
         # The summary first: a SIGKILL while the picture renders must not lose it.
@@ -259,12 +268,17 @@ def _run_tree(
                 summary["ground_truth"] = ground_truth(summary)
             except Exception as error:  # nor must a missing comparison
                 logger.warning("could not compare with the ground truth: %s", error)
+        if recording is not None:
+            summary["recording"] = recording.cost()
+            recording.log_summary(summary)
         recorder.write_summary(summary)
         if summary.get("record_error"):
             raise RecordWriteError(f"{summary['record_error']} (robots stopped)")
         return summary
     finally:
         recorder.close()
+        if recording is not None:
+            recording.close()
 
 
 def summary_before_start(

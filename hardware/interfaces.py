@@ -159,6 +159,7 @@ class SeatingJudgement(NamedTuple):
         torso_tilt_deg: angle between the bear's torso axis and vertical.
         facing_error_deg: angle between the bear's facing and the sitting direction.
         reason: empty on success, else which criterion failed.
+        T_world_bear: 4x4 pose of the bear when judged (None when not known).
     """
 
     seated: bool
@@ -166,6 +167,7 @@ class SeatingJudgement(NamedTuple):
     torso_tilt_deg: float
     facing_error_deg: float
     reason: str = ""
+    T_world_bear: np.ndarray | None = None
 
 
 @runtime_checkable

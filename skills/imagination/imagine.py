@@ -177,6 +177,7 @@ def imagine_sitting_details(
         result = ImaginationResult(False, None, 0, len(drops), drops, seconds, "cancelled")
     else:
         result = choose_sitting_pose(prepared, drops, seconds, raw)
+    result = result._replace(T_mesh_chair=np.linalg.inv(prepared.T_obb_mesh))
     return ImaginationDetails(result, tuple(raw), steps, physics_seconds, prepared)
 
 

@@ -34,8 +34,8 @@ def scan_chair(
         config: reconstruction parameters (default: :class:`ReconstructionConfig`).
 
     Returns:
-        The chair scan; ``seconds`` has ``motion`` and ``capture`` besides the
-        reconstruction's steps.
+        The chair scan with the frames captured; ``seconds`` has ``motion`` and
+        ``capture`` besides the reconstruction's steps.
 
     Raises:
         ScanCancelled: ``cancel`` was set.
@@ -65,4 +65,4 @@ def scan_chair(
         raise ScanCancelled("chair scan cancelled")
     scan = reconstruct_chair(frames, config)
     seconds = {"motion": motion_s, "capture": capture_s, **scan.seconds}
-    return scan._replace(seconds=seconds)
+    return scan._replace(seconds=seconds, frames=tuple(frames))
