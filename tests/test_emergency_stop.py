@@ -91,8 +91,15 @@ def _hands(robot: Robot) -> None:
         robot.humanoid.set_hands(False)
 
 
+def _scan_views(robot: Robot) -> None:
+    # Every view in turn, as ScanChair does: seconds of robot time, so the stop always
+    # lands mid-motion however fast the simulated world steps.
+    for configuration in SCAN_CONFIGURATIONS:
+        robot.arm.move_to(configuration)
+
+
 STAGE_MOTIONS = {
-    "ScanChair": lambda world, robot, stop: robot.arm.move_to(SCAN_CONFIGURATIONS[2]),
+    "ScanChair": lambda world, robot, stop: _scan_views(robot),
     "ImagineSitting": lambda world, robot, stop: robot.clock.sleep(3.0),
     "MakeChairAccessible": lambda world, robot, stop: robot.arm.move_to(SCAN_CONFIGURATIONS[3]),
     "WalkToChair": _walk,
