@@ -44,7 +44,12 @@ from skills.arena import Arena, Box2D
 from skills.geometry import SE2Pose, SittingPose, wrap_angle
 from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
 from skills.planning.seat import STEP_M, SeatRay, seat_ray
-from skills.planning.wholebody.chair_profile import BAND_HALF_WIDTH_M, stands_above_seat
+from skills.planning.wholebody.chair_profile import (
+    BAND_HALF_WIDTH_M,
+    ChairProfileError,
+    fit_chair_profile,
+    stands_above_seat,
+)
 from skills.planning.wholebody.optimisation import BEAR_CHAIR_MARGIN_M, BEAR_DEPTH_M
 from skills.planning.wholebody.reach_model import ReachModel, reach_model
 from skills.results import SeatReachability
@@ -131,6 +136,20 @@ class ChairAlongRay(NamedTuple):
     above_seat_m: float
 
 
+def planner_seat_top(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, ray: SeatRay) -> float:
+    """The seat top (metres) as the whole-body planner's chair profile takes it (the highest
+    horizontal surface near p in the NAO's band, side rails included), so that the search
+    and the pre-plan see the same two blocks; the seat under p when no profile fits."""
+    stance = goal_on_ray(sitting_pose, 0.3)
+    T_nao_world = np.linalg.inv(stance.as_transform())
+    p = np.asarray(sitting_pose.position, dtype=float)
+    p_nao = T_nao_world[:3, :3] @ p + T_nao_world[:3, 3]
+    try:
+        return fit_chair_profile(chair_mesh, T_nao_world, p_nao).seat_top_z
+    except ChairProfileError:
+        return float(np.max(ray.seat_heights_m))
+
+
 def chair_along_ray(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, seat_top_m: float
 ) -> ChairAlongRay:
@@ -207,7 +226,9 @@ def choose_stance(
     ray = seat_ray(chair_mesh, sitting_pose)
     if len(ray.slides_m) == 0:
         return StanceChoice(None, sitting_pose, "no seat under the sitting position")
-    chair = chair_along_ray(chair_mesh, sitting_pose, float(np.max(ray.seat_heights_m)))
+    chair = chair_along_ray(
+        chair_mesh, sitting_pose, planner_seat_top(chair_mesh, sitting_pose, ray)
+    )
     # The bear's back must clear whatever stands on the seat in the band (backrest,
     # armrests): the planar planner holds everything below that block's top as solid.
     clear_of_above = ray.slides_m >= chair.above_seat_m + BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M
