@@ -24,16 +24,19 @@ class ChairScan(NamedTuple):
         chair_points: (N, 3) point cloud of the chair in the world frame.
         views: number of RGB-D views fused.
         seconds: wall time per step (for example ``capture``, ``tsdf``, ``floor``).
+        notes: scan views skipped or replaced to keep the arm clear of the chair.
     """
 
     chair_mesh: trimesh.Trimesh
     chair_points: np.ndarray
     views: int
     seconds: dict[str, float]
+    notes: tuple[str, ...] = ()
 
     def summary(self) -> dict[str, Any]:
         return {
             "views": self.views,
+            "notes": list(self.notes),
             "points": len(self.chair_points),
             "faces": len(self.chair_mesh.faces),
             "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
@@ -200,6 +203,8 @@ class ChairRotation(NamedTuple):
         fitness: ICP inlier ratio (0..1).
         inlier_rmse_m: ICP inlier RMSE in metres.
         chair_points: (N, 3) the chair as now seen, world frame: the next reference.
+        visible_fitness: share of the reference the new views saw where they could see
+            it (NaN when the fitness alone accepted the fit).
     """
 
     T_world_new_old: np.ndarray
@@ -207,6 +212,7 @@ class ChairRotation(NamedTuple):
     fitness: float
     inlier_rmse_m: float
     chair_points: np.ndarray
+    visible_fitness: float = math.nan
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -214,6 +220,9 @@ class ChairRotation(NamedTuple):
             "translation_m": [round(float(v), 4) for v in self.T_world_new_old[:3, 3]],
             "fitness": round(self.fitness, 3),
             "inlier_rmse_m": round(self.inlier_rmse_m, 4),
+            "visible_fitness": None
+            if math.isnan(self.visible_fitness)
+            else round(self.visible_fitness, 3),
         }
 
 
