@@ -120,6 +120,7 @@ def main(argv: list[str] | None = None) -> int:
                 "steps": steps,
                 "physics_s": physics,
                 "reason": result.reason,
+                "split": bool(getattr(result, "vote", None) and result.vote.split),
             }
         )
         print(
@@ -127,6 +128,7 @@ def main(argv: list[str] | None = None) -> int:
             f"{'' if error is None else f'{error:6.1f}':>6s} {result.n_correct:4d} "
             f"{result.n_drops:5d} {result.seconds['prepare']:5.2f} "
             f"{result.seconds['simulate']:5.2f} {result.seconds['total']:5.2f}  {result.reason}"
+            + (f"{result.vote.describe()}" if getattr(result, "vote", None) else "")
         )
         sys.stdout.flush()
 
@@ -229,6 +231,7 @@ def _summary(rows: list[dict]) -> dict:
         "fronted meshes within 30 deg": f"{len(within)}/{len(fronted)} "
         f"({100.0 * len(within) / max(len(fronted), 1):.1f}%)",
         "fronted meshes found": f"{len(errors)}/{len(fronted)}",
+        "split votes (fronted)": sum(r.get("split", False) for r in fronted),
         "tables found as chairs": f"{sum(r['found'] for r in tables)}/{len(tables)}",
         "median error (deg, found fronted)": round(statistics.median(errors), 1)
         if errors

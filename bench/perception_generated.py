@@ -1,6 +1,7 @@
 """Scan and tracking of generated chairs in the simulated world (camera noise on).
 
-Run: ``.venv/bin/python bench/perception_generated.py [--per-family 2] [--families bench,armchair]``.
+Run: ``.venv/bin/python bench/perception_generated.py [--per-family 2] [--families bench,armchair]
+[--place 0.35,-0.25,45]``.
 
 For each family of ``skills.chairgen``, the largest of ``--pool`` seeded chairs (by
 footprint diagonal times height) are placed in the simulated world as the mission places
@@ -8,8 +9,9 @@ them (seeded), scanned, then turned by the helper's rotations (±90 and 180 degr
 their centre, a few millimetres of slip) and tracked with ``measure_chair_rotation``.
 Prints per chair: scan completed or its error, views captured / skipped / replaced,
 the reconstruction's Chamfer distance to the true mesh; per rotation: the yaw error,
-centre error, fitness and the visible-overlap fitness, or the rejection. Ends with the
-counts. Runs with whatever ``skills`` is first on the path, so the same script measures
+centre error (yaw modulo a half turn for chairs without a front, which look the same
+turned 180 degrees), fitness and the visible-overlap fitness, or the rejection. Ends
+with the counts. Runs with whatever ``skills`` is first on the path, so the same script measures
 a branch and main (``PYTHONPATH=/path/to/main``).
 """
 
@@ -56,6 +58,12 @@ def main() -> int:
     parser.add_argument("--families", default="bench,armchair,four_legs,round,box_base,sled")
     parser.add_argument("--rotations", default=",".join(str(r) for r in ROTATIONS_DEG))
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--place",
+        default="",
+        help="x,y,yaw_deg: stand every chair there before the scan (e.g. at the chair "
+        "area's edge nearest the arm, where a large chair meets the scan views)",
+    )
     args = parser.parse_args()
     families = [f for f in args.families.split(",") if f in FAMILIES]
     rotations = [int(r) for r in args.rotations.split(",") if r]
@@ -73,6 +81,12 @@ def main() -> int:
             scans += 1
             with SimWorld(config) as world:
                 arm = world.robot.arm
+                if args.place:
+                    x, y, yaw_deg = (float(v) for v in args.place.split(","))
+                    world.chair.set_T_world_chair(
+                        yaw_transform(math.radians(yaw_deg), np.array([x, y, 0.0]))
+                    )
+                    world.clock.sleep(0.3)
                 tick = time.perf_counter()
                 try:
                     scan = scan_chair(arm, seed=args.seed)
@@ -118,6 +132,9 @@ def main() -> int:
                             np.linalg.norm(moved - (truth[:3, :3] @ centre + truth[:3, 3]))
                         )
                         yaw_error = abs(math.degrees(wrap_angle(rotation.yaw_rad - yaw_of(truth))))
+                        if chair.front_yaw_rad is None:
+                            # No front (a bench, a stool): a half turn looks the same.
+                            yaw_error = min(yaw_error, 180.0 - yaw_error)
                         fits.append(
                             (chair.name, rotation_deg, yaw_error, centre_error, rotation.fitness)
                         )

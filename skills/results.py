@@ -71,6 +71,51 @@ class DropOutcome(NamedTuple):
     correct: bool
 
 
+class RotationVote(NamedTuple):
+    """How the correct sittings were spread over the chair rotations α_i = iπ/4.
+
+    Attributes:
+        counts: correct sittings per rotation (8 values).
+        chosen: the rotation whose sittings give the pose.
+        runner_up: the strongest other rotation (None when no other has a sitting).
+        share: the chosen rotation's share of all correct sittings (1: unanimous).
+        split: the vote was split (see ``skills.imagination.imagine``).
+        resolved_by: what decided a split vote (empty when it was not split).
+        extra_drops: drops added to settle a split vote.
+    """
+
+    counts: tuple[int, ...]
+    chosen: int
+    runner_up: int | None
+    share: float
+    split: bool
+    resolved_by: str = ""
+    extra_drops: int = 0
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "counts": list(self.counts),
+            "chosen_deg": 45 * self.chosen,
+            "runner_up_deg": None if self.runner_up is None else 45 * self.runner_up,
+            "share": round(self.share, 3),
+            "split": self.split,
+            "resolved_by": self.resolved_by,
+            "extra_drops": self.extra_drops,
+        }
+
+    def describe(self) -> str:
+        """One line, e.g. ``votes 0/3/3/2/0/0/0/0, chose 45 deg (share 0.38), split``."""
+        text = (
+            f"votes {'/'.join(str(c) for c in self.counts)}, chose {45 * self.chosen} deg "
+            f"(share {self.share:.2f})"
+        )
+        if self.split:
+            text += f", split: resolved by {self.resolved_by}"
+            if self.extra_drops:
+                text += f", after {self.extra_drops} more drops"
+        return text
+
+
 class ImaginationResult(NamedTuple):
     """The sitting pose found by physical simulation, or why none was found.
 
@@ -82,6 +127,7 @@ class ImaginationResult(NamedTuple):
         drops: every drop's outcome.
         seconds: wall time per step (``prepare``, ``simulate``, ``total``).
         reason: why no sitting pose was found (empty when found).
+        vote: how the correct sittings were spread over the rotations (None when none).
     """
 
     found: bool
@@ -91,6 +137,7 @@ class ImaginationResult(NamedTuple):
     drops: tuple[DropOutcome, ...]
     seconds: dict[str, float]
     reason: str = ""
+    vote: RotationVote | None = None
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -100,6 +147,7 @@ class ImaginationResult(NamedTuple):
             "n_drops": self.n_drops,
             "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
             "reason": self.reason,
+            "vote": None if self.vote is None else self.vote.to_json(),
         }
 
 
