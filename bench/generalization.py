@@ -12,13 +12,17 @@ stages that decide whether the bear can be seated, without a whole mission:
    model has no stance for the seat);
 3. accessibility in an accessible placement of the arena (chair centre and sitting
    direction drawn as the simulated world draws them), which includes the whole-body
-   seating pre-plan at s_goal.
+   seating pre-plan at s_goal;
+4. with ``--seat``, seating in the simulated world (``bench/wholebody.py``'s run: the
+   NAO placed where the stance search puts it with the chair alone, the motion planned
+   and played, the bear released and judged).
 
 Prints the success rate per stage and per family, the refusals with their reasons, and
 the worst families. Usage::
 
     .venv/bin/python bench/generalization.py [--chairs 200] [--seed 0] [--imagine]
-        [--family sled] [--verbose]
+        [--seat] [--family sled] [--verbose]
+    .venv/bin/python bench/generalization.py --calibration 24
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ import statistics
 import sys
 import time
 from collections import Counter, defaultdict
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -50,6 +55,7 @@ class Outcome(NamedTuple):
     accessible: bool
     reason: str
     seconds: float  # the accessibility check's wall time
+    seated: bool | None = None  # with --seat: the judge's verdict in the simulated world
 
 
 def ground_truth_pose(chair: GeneratedChair) -> SittingPose:
@@ -71,7 +77,20 @@ def imagined_pose(chair: GeneratedChair, seed: int) -> tuple[SittingPose | None,
     return pose, error <= DIRECTION_TOLERANCE_DEG
 
 
-def run_chair(chair: GeneratedChair, seed: int, imagine: bool) -> Outcome:
+def seat_in_simulation(chair: GeneratedChair, seed: int) -> tuple[bool, str]:
+    """bench/wholebody.py's simulated seating on the chair (exported to a scratch OBJ)."""
+    import tempfile
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from wholebody import sim_run
+
+    with tempfile.TemporaryDirectory() as scratch:
+        path = Path(scratch) / f"{chair.name}.obj"
+        chair.mesh.export(path)
+        return sim_run(path, 0.0, seed)
+
+
+def run_chair(chair: GeneratedChair, seed: int, imagine: bool, seat: bool = False) -> Outcome:
     rng = np.random.default_rng(seed)
     if imagine:
         sitting, direction_ok = imagined_pose(chair, seed)
@@ -92,7 +111,11 @@ def run_chair(chair: GeneratedChair, seed: int, imagine: bool) -> Outcome:
     began = time.perf_counter()
     result = check_accessibility(mesh, placed, arena.humanoid_start, arena, seed=seed)
     seconds = time.perf_counter() - began
-    return Outcome(chair, direction_ok, "", result.accessible, result.reason, seconds)
+    outcome = Outcome(chair, direction_ok, "", result.accessible, result.reason, seconds)
+    if seat and result.accessible:
+        seated, description = seat_in_simulation(chair, seed)
+        outcome = outcome._replace(seated=seated, reason="" if seated else description)
+    return outcome
 
 
 def _percent(part: int, whole: int) -> str:
@@ -134,6 +157,19 @@ def report(outcomes: list[Outcome]) -> None:
         )
     refusals = Counter(o.refused.split(":")[0] for o in outcomes if o.refused)
     print(f"refusals: {dict(refusals)}")
+    judged = [o for o in outcomes if o.seated is not None]
+    if judged:
+        seated = Counter(o.chair.family for o in judged if o.seated)
+        print(
+            f"seated in simulation: {_percent(sum(o.seated for o in judged), len(judged))} of "
+            "the accessible chairs; by family: "
+            + ", ".join(
+                f"{f} {seated[f]}/{sum(o.chair.family == f for o in judged)}" for f in FAMILIES
+            )
+        )
+        for o in judged:
+            if not o.seated:
+                print(f"  not seated {o.chair.name}: {o.reason[:160]}")
     for o in outcomes:
         if o.refused:
             print(
@@ -150,23 +186,61 @@ def report(outcomes: list[Outcome]) -> None:
         print(f"  direction wrong: {', '.join(wrong)}")
 
 
+def calibration_reach(limit: int | None) -> None:
+    """The reach check on the calibration chairs with a front (``../shared/chairs``), with
+    bench/planning.py's stand-in sitting pose: which would be refused, and why."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from planning import load_chairs
+
+    from skills.planning.seat import seat_ray
+
+    chairs = load_chairs()[:limit]
+    if not chairs:
+        print("calibration chairs not found (../shared/chairs): skipped")
+        return
+    refused = 0
+    for chair in chairs:
+        verdict = check_seat_reachable(chair.mesh, chair.sitting_pose)
+        ray = seat_ray(chair.mesh, chair.sitting_pose)
+        room = float(ray.slides_m[-1]) if len(ray.slides_m) else float("nan")
+        refused += not verdict.reachable
+        print(
+            f"  {chair.name:<24} seat {verdict.seat_height_m:.2f} m, p may slide {room:.2f} m: "
+            + ("reachable" if verdict.reachable else f"REFUSED: {verdict.reason}"),
+            flush=True,
+        )
+    print(f"calibration chairs refused: {refused}/{len(chairs)}")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--chairs", type=int, default=200)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--imagine", action="store_true", help="imagine the sitting pose")
+    parser.add_argument("--seat", action="store_true", help="seat the bear in simulation")
     parser.add_argument("--family", choices=FAMILIES, help="only this family")
     parser.add_argument("--verbose", action="store_true", help="a line per chair")
+    parser.add_argument(
+        "--calibration",
+        type=int,
+        metavar="N",
+        help="instead: the reach check on the first N calibration chairs with a front",
+    )
     args = parser.parse_args(argv)
+    if args.calibration:
+        calibration_reach(args.calibration)
+        return 0
     families = (args.family,) if args.family else FAMILIES
     outcomes = []
     began = time.perf_counter()
     for i in range(args.chairs):
         chair = generate_chair(args.seed + i, families[i % len(families)])
-        outcome = run_chair(chair, args.seed + i, args.imagine)
+        outcome = run_chair(chair, args.seed + i, args.imagine, args.seat)
         outcomes.append(outcome)
         if args.verbose:
             status = "refused" if outcome.refused else ("ok" if outcome.accessible else "FAIL")
+            if outcome.seated is not None:
+                status += ", seated" if outcome.seated else ", NOT SEATED"
             print(
                 f"{chair.name}: seat {chair.seat_height_m:.2f} h {chair.seat_depth_m:.2f} d "
                 f"{status} {outcome.reason[:140]}",

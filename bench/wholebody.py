@@ -12,8 +12,8 @@ the goal posture, trajectory and retract solve times and the feasible stances.
 
 Simulation: the chair is placed 0.5 m in front of the NAO's start pose (sitting
 direction toward the NAO) and settles; the NAO is placed (``SimWorld.place_nao``) at the
-nearest stance with a feasible pre-plan, p sliding along the seat on "bear placement"
-failures as the accessibility check does; the plan is played through
+stance the mission's stance search chooses (reach model, then the pre-plan, p sliding
+along the seat); the plan is played through
 ``SimNao.play_joint_trajectory``, the bear released and the judge asked (the simulator
 hands the bear over facing the NAO, as in the paper).
 """
@@ -32,12 +32,10 @@ import trimesh
 
 from skills.geometry import SE2Pose, SittingPose, make_transform, rot_z, wrap_angle
 from skills.meshes import box_chair_mesh, load_mesh
-from skills.planning.se2 import (
-    MAX_SLIDE_RETRIES,
-    SLIDE_RETRY_STEP_M,
-    seat_support_heights,
-    slide_on_seat,
-)
+from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
+from skills.planning.se2 import default_seating_validator
+from skills.planning.seat import seat_support_heights
+from skills.planning.stance import choose_stance, open_floor_arena
 from skills.planning.wholebody import InfeasibleSeating, plan_seating, preplan_seating
 from skills.planning.wholebody.chair_profile import (
     HORIZONTAL_NORMAL_Z,
@@ -126,40 +124,30 @@ def solve_times(chairs: list[tuple[str, trimesh.Trimesh, float]]) -> None:
 
 def feasible_stance(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose
-) -> tuple[float, SittingPose] | None:
-    """The nearest stance with a feasible pre-plan, sliding p as the mission does.
-
-    As :func:`skills.planning.se2.check_accessibility` does, a pre-plan that finds the
-    bear out of place ("bear placement") slides p toward the NAO along the seat, in
-    steps of ``SLIDE_RETRY_STEP_M``, up to ``MAX_SLIDE_RETRIES`` times.
-    """
-    for distance in STANCES_M:
-        slide, pose = 0.0, sitting_pose
-        for _ in range(MAX_SLIDE_RETRIES + 1):
-            try:
-                preplan_seating(chair_mesh, pose, stance_pose(pose, distance))
-            except InfeasibleSeating as error:
-                if error.constraint != "bear placement":
-                    break
-                moved, moved_m = slide_on_seat(chair_mesh, sitting_pose, slide + SLIDE_RETRY_STEP_M)
-                if moved_m <= slide + 1e-6:
-                    break
-                slide, pose = moved_m, moved
-                continue
-            return distance, pose
-    return None
+) -> tuple[SE2Pose, SittingPose, SE2Pose | None] | None:
+    """The stance, sitting point and raising pose (None: no raise) the mission's search
+    chooses with the chair alone (:func:`skills.planning.stance.choose_stance`: reach
+    model, then the pre-plan)."""
+    checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_convex_pieces(chair_mesh))
+    choice = choose_stance(
+        chair_mesh, sitting_pose, checker, default_seating_validator(), scene=False
+    )
+    if choice.se2_goal is None:
+        return None
+    return choice.se2_goal, choice.sitting_pose, choice.check.raise_at
 
 
 def sim_run(chair_path: Path | None, front_yaw_deg: float, seed: int) -> tuple[bool, str]:
     """One simulated seating: returns (seated, description).
 
     The chair stands 0.5 m in front of the NAO's start, its sitting direction toward the
-    NAO, and settles; the NAO is then placed at the nearest feasible stance on the
-    sitting ray (with a lateral error of up to 2 cm), plans from its own pose, plays the
-    motion, releases the bear, stands up and the judge decides.
+    NAO, and settles; the NAO is then placed at the stance the mission's search chooses
+    (with a lateral error of up to 2 cm; first where it raises the bear, when the search
+    says so), plans from its own pose, plays the motion, releases the bear, stands up and
+    the judge decides.
     """
     from hardware.sim.world import SimConfig, SimWorld
-    from skills.planning.wholebody import execute_seating, release_and_stand
+    from skills.planning.wholebody import execute_seating, raise_bear, release_and_stand
 
     config = SimConfig(
         chair_path=chair_path,
@@ -181,12 +169,19 @@ def sim_run(chair_path: Path | None, front_yaw_deg: float, seed: int) -> tuple[b
         found = feasible_stance(chair_mesh, SittingPose(true_seat_point(chair_mesh), sitting_yaw))
         if found is None:
             return False, "no feasible stance"
-        distance, sitting_pose = found
-        stance = stance_pose(sitting_pose, distance)
+        stance, sitting_pose, raise_at = found
+        distance = stance.distance_to(stance_pose(sitting_pose, 0.0))
         side = np.array([-math.sin(stance.theta), math.cos(stance.theta)])
-        world.place_nao(SE2Pose(*(np.array([stance.x, stance.y]) + lateral * side), stance.theta))
-        world.clock.sleep(0.2)
-        plan = plan_seating(chair_mesh, sitting_pose, world.nao.pose())
+
+        def place(pose: SE2Pose) -> None:
+            world.place_nao(SE2Pose(*(np.array([pose.x, pose.y]) + lateral * side), pose.theta))
+            world.clock.sleep(0.2)
+
+        if raise_at is not None:
+            place(raise_at)
+            raise_bear(world.nao, chair_mesh, sitting_pose, world.nao.pose())
+        place(stance)
+        plan = plan_seating(chair_mesh, sitting_pose, world.nao.pose(), raised=raise_at is not None)
         execute_seating(world.nao, plan)
         release_and_stand(world.nao, plan)
         verdict = world.judge.judge(sitting_yaw)

@@ -10,18 +10,37 @@ Subcommands:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import json
 import logging
+import os
+import sqlite3
 import sys
+import tempfile
+import time
+import traceback
 from pathlib import Path
+from typing import Any, TextIO
 
+from executive.cli_types import positive_seconds, seed_value
 from executive.config import RunConfig
+from executive.interrupts import exit_status, handling_signals, received, signal_name
+from skills.errors import BearchairError, InputError, one_line
 
 # Skill commands live beside their skills' owners: each module has register(subparsers).
 SKILL_COMMANDS = ("executive.cmd_imagine", "executive.cmd_scan", "executive.cmd_trials")
 
 
-class CliError(Exception):
+EXIT_SUCCESS = 0
+EXIT_MISSION_FAILED = 1
+EXIT_BAD_INPUT = 2
+EXIT_INTERNAL_ERROR = 3
+LOG_FILE = "bearchair.log"
+"""The run folder's log: warnings of the run, and the traceback of an internal error."""
+
+
+class CliError(InputError):
     """A user error: printed as one line, exit status 2."""
 
 
@@ -41,11 +60,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--placement", choices=("accessible", "inaccessible"), default="accessible")
     run.add_argument("--helper", choices=("obeys", "disobeys", "ignores"), default="obeys")
-    run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--seed", type=seed_value, default=0)
     run.add_argument("--gui", action="store_true", help="watch in the pybullet GUI")
     run.add_argument("--out", type=Path, help="run record directory (default: runs/<time>-seed<N>)")
     run.add_argument("--mute", action="store_true", help="print instructions instead of speaking")
-    run.add_argument("--timeout", type=float, default=900.0, help="stop after this many seconds")
+    run.add_argument(
+        "--timeout", type=positive_seconds, default=900.0, help="stop after this many seconds"
+    )
+    run.add_argument(
+        "--overwrite", action="store_true", help="replace the run record already in --out"
+    )
     run.add_argument(
         "--snapshots",
         action="store_true",
@@ -90,11 +114,12 @@ def build_parser() -> argparse.ArgumentParser:
 def _run(args: argparse.Namespace) -> int:
     from executive.mission import (
         StageProgress,
-        default_out_dir,
         format_summary,
         run_in_simulation,
         run_on_robots,
     )
+    from executive.outputs import default_run_dir, prepare_run_dir
+    from skills.meshes import load_chair_mesh
 
     config = RunConfig(
         chair_path=args.chair,
@@ -106,29 +131,65 @@ def _run(args: argparse.Namespace) -> int:
         timeout_s=args.timeout,
         snapshots=args.snapshots,
     )
-    if args.timeout <= 0:
-        raise CliError("bearchair run: --timeout must be positive")
-    out_dir = args.out or default_out_dir(config)
-    config = RunConfig(**{**config.__dict__, "out_dir": out_dir})
+    # Every input and the output place are checked before anything runs.
     if args.robots is not None:
-        summary = run_on_robots(config, args.robots, on_tick=StageProgress())
+        if args.chair is not None:
+            raise CliError("bearchair run: --chair is for the simulation; not with --robots")
+        if not args.robots.is_file():
+            raise CliError(f"bearchair run: --robots {args.robots}: no such file")
+    elif args.chair is not None:
+        load_chair_mesh(args.chair)
+    if args.out is not None:
+        out_dir = prepare_run_dir(args.out, overwrite=args.overwrite)
     else:
-        summary = run_in_simulation(config, on_tick=StageProgress())
+        out_dir = default_run_dir(args.seed)
+    args.run_dir = out_dir  # where an internal error's traceback goes
+    config = RunConfig(**{**config.__dict__, "out_dir": out_dir})
+    with _log_to(out_dir / LOG_FILE):
+        if args.robots is not None:
+            summary = run_on_robots(config, args.robots, on_tick=StageProgress())
+        else:
+            summary = run_in_simulation(config, on_tick=StageProgress())
     print(format_summary(summary))
     print(f"run record: {out_dir}")
-    return 0 if summary["outcome"] == "success" else 1
+    if summary.get("interrupted"):
+        return exit_status()
+    return EXIT_SUCCESS if summary["outcome"] == "success" else EXIT_MISSION_FAILED
+
+
+@contextlib.contextmanager
+def _log_to(path: Path):
+    """Also sends this process's warnings (and an internal error) to ``path``."""
+    try:
+        handler: logging.Handler | None = logging.FileHandler(path, encoding="utf-8")
+    except OSError:
+        handler = None  # the record itself will say what is wrong with the folder
+    if handler is not None:
+        handler.setLevel(logging.INFO)
+        handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
+        logging.getLogger().addHandler(handler)
+    try:
+        yield
+    finally:
+        if handler is not None:
+            logging.getLogger().removeHandler(handler)
+            handler.close()
 
 
 def _tree(args: argparse.Namespace) -> int:
+    from executive.outputs import check_output_file
     from executive.render import TEXT_FORMATS, render_graph, render_text
     from trees.mission import create_tree
 
-    root = create_tree()
     if args.format in TEXT_FORMATS:
-        print(render_text(root, args.format, args.blackboard))
+        if args.out is not None:
+            raise CliError(f"bearchair tree: --out is for dot/svg/png, not --format {args.format}")
+        print(render_text(create_tree(), args.format, args.blackboard))
         return 0
-    out = args.out or Path(f"mission.{args.format}")
-    print(render_graph(root, args.format, out, args.blackboard))
+    out = check_output_file(
+        args.out or Path(f"mission.{args.format}"), "--out", (f".{args.format}",)
+    )
+    print(render_graph(create_tree(), args.format, out, args.blackboard))
     return 0
 
 
@@ -138,6 +199,8 @@ def _inspect(args: argparse.Namespace) -> int:
     run = RecordedRun(args.run_dir)
     state = run.at(args.tick)
     print(f"{args.run_dir}: tick {state['tick']} of {run.last_tick}, t = {state['t']:.2f} s")
+    for note in run.notes:
+        print(f"note: {note}")
     print(run.tree_text(args.tick))
     if args.blackboard:
         print("\nblackboard:")
@@ -145,26 +208,175 @@ def _inspect(args: argparse.Namespace) -> int:
     if args.timeline:
         print("\ntimeline:")
         print(run.timeline_text())
-    if run.summary and args.tick is None:
-        summary = run.summary
-        print(
-            f"\noutcome: {summary['outcome']}"
-            + (
-                f" at {summary['failed_stage']}: {summary['reason']}"
-                if summary["failed_stage"]
-                else ""
-            )
-        )
+    if args.tick is None:
+        outcome = run.outcome_text()
+        if outcome:
+            print(f"\n{outcome}")
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    """The console script. Exit status: 0 success, 1 mission failure, 2 user error."""
-    from executive.inspect_run import RunRecordError
-    from executive.render import RenderError
-    from hardware.real import BackendUnavailable
-    from skills.meshes import MeshLoadError
+class _TolerantStream:
+    """A text stream that survives its reader going away (``| head``, a closed terminal).
 
+    After the first failed write it drops everything: a campaign or a mission must not
+    die because nobody reads its progress; its results are in files.
+    """
+
+    def __init__(self, stream: TextIO) -> None:
+        self._stream = stream
+        self.broken = False
+
+    def write(self, text: str) -> int:
+        if not self.broken:
+            try:
+                return self._stream.write(text)
+            except (OSError, ValueError):
+                self._break()
+        return len(text)
+
+    def flush(self) -> None:
+        if not self.broken:
+            try:
+                self._stream.flush()
+            except (OSError, ValueError):
+                self._break()
+
+    def _break(self) -> None:
+        self.broken = True
+        # Python flushes the real stream at exit; point it at /dev/null first.
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, self._stream.fileno())
+            os.close(devnull)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
+def _error_line(error: BaseException) -> str:
+    """One line for a user-facing error, prefixed ``bearchair:`` unless it names itself."""
+    from executive.outputs import describe_os_error
+
+    if isinstance(error, OSError):
+        text = describe_os_error(error)
+    elif isinstance(error, json.JSONDecodeError):
+        text = f"not valid JSON ({error.msg} at line {error.lineno} column {error.colno})"
+    elif isinstance(error, UnicodeError):
+        text = f"not text (UTF-8): {one_line(error)}"
+    elif isinstance(error, sqlite3.Error):
+        text = f"database error: {one_line(error)}"
+    else:
+        text = one_line(error)
+    return text if text.startswith("bearchair") else f"bearchair: {text}"
+
+
+def _user_errors() -> tuple[type[BaseException], ...]:
+    """Exceptions that mean bad input or an unusable place: exit 2, one line."""
+    found: list[type[BaseException]] = [
+        BearchairError,
+        OSError,
+        json.JSONDecodeError,
+        UnicodeError,
+        sqlite3.Error,
+    ]
+    # Other packages' one-line errors that do not derive from BearchairError (yet). Only
+    # from modules already loaded: one that was not cannot have raised (and importing
+    # open3d just to classify an error costs seconds).
+    for module_name, class_name in (
+        ("hardware.real", "BackendUnavailable"),
+        ("skills.perception", "PerceptionError"),
+    ):
+        module = sys.modules.get(module_name)
+        if module is not None and isinstance(getattr(module, class_name, None), type):
+            found.append(getattr(module, class_name))
+    return tuple(found)
+
+
+def _crash_log(args: argparse.Namespace | None) -> Path:
+    """Where an internal error's traceback goes: the run folder's log, else a new file."""
+    run_dir = getattr(args, "run_dir", None) if args is not None else None
+    if run_dir is not None and Path(run_dir).is_dir():
+        return Path(run_dir) / LOG_FILE
+    from skills.meshes import cache_dir
+
+    stamp = f"crash-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}.log"
+    try:
+        folder = cache_dir() / "logs"
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        folder = Path(tempfile.gettempdir())
+    return folder / stamp
+
+
+def _report_internal_error(error: BaseException, args: argparse.Namespace | None) -> None:
+    path = _crash_log(args)
+    try:
+        with open(path, "a", encoding="utf-8") as log:
+            log.write(f"{time.strftime('%Y-%m-%dT%H:%M:%S%z')} internal error\n")
+            traceback.print_exception(error, file=log)
+        where = f"the traceback is in {path}"
+    except OSError:
+        where = "the traceback could not be written"
+    print(
+        f"bearchair: internal error ({type(error).__name__}: {one_line(error, 200)}); "
+        f"this is a bug, please report it; {where}",
+        file=sys.stderr,
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    """The console script.
+
+    Exit status: 0 success, 1 mission failure, 2 bad input or an unusable place (one
+    line on stderr), 3 internal error (one line; the traceback in the run folder's
+    ``bearchair.log``), 130 / 143 stopped by SIGINT / SIGTERM (the record is kept).
+    """
+    console = argv is None  # the console script (tests pass their argv)
+    saved = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = _TolerantStream(sys.stdout), _TolerantStream(sys.stderr)
+    try:
+        with handling_signals():
+            status = _main(argv)
+            if console and received() is not None:
+                _exit_now(status)
+            return status
+    finally:
+        with contextlib.suppress(Exception):
+            sys.stdout.flush()
+            sys.stderr.flush()
+        sys.stdout, sys.stderr = saved
+
+
+def _exit_now(status: int) -> None:
+    """Leaves the process at once after a stop signal, its records already written.
+
+    The imagination's worker processes ignore SIGINT and would finish their batch of
+    drops before the interpreter's exit could join them (12 s measured on
+    ``imagine``); terminating them under a live ``ProcessPoolExecutor`` makes its
+    management thread print a traceback. So: flush, silence stderr, SIGKILL the
+    children, and ``os._exit``.
+    """
+    import multiprocessing
+    import multiprocessing.util
+
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    with contextlib.suppress(OSError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, 2)
+    for child in multiprocessing.active_children():
+        with contextlib.suppress(Exception):
+            child.kill()
+    # Release the pool's semaphores (multiprocessing's own exit finalizers), so its
+    # resource tracker has nothing to warn about.
+    with contextlib.suppress(Exception):
+        multiprocessing.util._run_finalizers(0)
+    os._exit(status)
+
+
+def _main(argv: list[str] | None) -> int:
+    args: argparse.Namespace | None = None
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
@@ -173,21 +385,20 @@ def main(argv: list[str] | None = None) -> int:
             format="%(levelname)s %(name)s: %(message)s",
         )
         return args.func(args)
-    except CliError as error:
-        print(error, file=sys.stderr)
-        return 2
-    except (
-        MeshLoadError,
-        RunRecordError,
-        RenderError,
-        BackendUnavailable,
-        FileNotFoundError,
-    ) as error:
-        print(f"bearchair: {error}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("bearchair: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as error:
+        print(
+            f"bearchair: interrupted by {signal_name(getattr(error, 'signum', None))}",
+            file=sys.stderr,
+        )
+        return exit_status(error)
+    except SystemExit as error:  # argparse's --help, or a library that exits
+        return error.code if isinstance(error.code, int) else EXIT_BAD_INPUT
+    except Exception as error:
+        if isinstance(error, _user_errors()):
+            print(_error_line(error), file=sys.stderr)
+            return EXIT_BAD_INPUT
+        _report_internal_error(error, args)
+        return EXIT_INTERNAL_ERROR
 
 
 if __name__ == "__main__":

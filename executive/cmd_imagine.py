@@ -5,8 +5,9 @@ the sitter faces) in the mesh's frame, the number of correct sittings and the ti
 ``--json`` one JSON object with the keys found, position, yaw_deg, n_correct, n_drops,
 seconds, vote (how the correct sittings spread over the 8 rotations: counts, chosen_deg,
 runner_up_deg, share, split, resolved_by, extra_drops; null when none) and, when not
-found, reason. A mesh that is not a chair gives ``found: false``
-and exit status 0; an unreadable or empty file gives one line on stderr and status 2.
+found, reason. A mesh that is not a chair gives ``found: false`` and exit status 0; an
+unreadable or empty file, or an ``--image`` that cannot be written (checked before the
+simulation), gives one line on stderr and status 2.
 """
 
 from __future__ import annotations
@@ -14,8 +15,10 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from pathlib import Path
+
+from executive import interrupts
+from executive.cli_types import positive_int, seed_value
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -24,8 +27,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "imagine", help="find how to sit on a chair mesh by physical simulation"
     )
     parser.add_argument("mesh", type=Path, help="chair mesh (OBJ/PLY/STL/OFF/GLB), z up, metres")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the drops (default 0)")
-    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument("--seed", type=seed_value, default=0, help="seed of the drops (default 0)")
+    parser.add_argument(
+        "--workers", type=positive_int, default=2, help="worker processes (default 2)"
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--image", type=Path, metavar="PNG", help="also draw the result here")
     parser.set_defaults(func=run)
@@ -33,18 +38,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Runs the imagination on ``args.mesh``; returns the exit status."""
+    from executive.outputs import check_output_file
     from skills.imagination import imagine_sitting
-    from skills.meshes import MeshLoadError, load_mesh
+    from skills.meshes import load_chair_mesh
 
-    try:
-        mesh = load_mesh(args.mesh)
-    except MeshLoadError as error:
-        print(f"bearchair imagine: {error}", file=sys.stderr)
-        return 2
-    if args.workers < 1:
-        print("bearchair imagine: --workers must be at least 1", file=sys.stderr)
-        return 2
-    result = imagine_sitting(mesh, seed=args.seed, workers=args.workers)
+    mesh = load_chair_mesh(args.mesh)
+    if args.image is not None:  # before the minutes of simulation, not after
+        check_output_file(args.image, "--image", (".png",))
+    # Ctrl-C cancels the drops (within their polling period) even if a library swallowed
+    # the KeyboardInterrupt; the interrupt is then raised here.
+    result = imagine_sitting(
+        mesh, seed=args.seed, workers=args.workers, cancel=interrupts.stop_requested
+    )
+    interrupts.raise_if_received()
     seconds = result.seconds.get("total", 0.0)
     if args.image is not None:
         from skills.imagination.render import render_sitting

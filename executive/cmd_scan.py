@@ -14,6 +14,8 @@ import json
 import sys
 from pathlib import Path
 
+from executive.cli_types import seed_value
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Adds the ``scan`` subcommand."""
@@ -21,7 +23,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--chair", type=Path, required=True, metavar="MESH", help="chair mesh, z up, metres"
     )
-    parser.add_argument("--seed", type=int, default=0, help="seeds placement and noise")
+    parser.add_argument("--seed", type=seed_value, default=0, help="seeds placement and noise")
     parser.add_argument(
         "--out", type=Path, default=Path("scan-out"), help="output folder (default scan-out)"
     )
@@ -36,15 +38,13 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import trimesh
 
+    from executive.outputs import atomic_path, ensure_writable_dir
     from hardware.sim.world import SimConfig, SimWorld
-    from skills.meshes import MeshLoadError, load_mesh
+    from skills.meshes import load_chair_mesh
     from skills.perception import PerceptionError, scan_chair
 
-    try:
-        load_mesh(args.chair)
-    except MeshLoadError as error:
-        print(f"bearchair scan: {error}", file=sys.stderr)
-        return 2
+    load_chair_mesh(args.chair)
+    ensure_writable_dir(args.out, "--out")  # before the scan, not after
     started = time.perf_counter()
     try:
         # pybullet's C code prints to stdout when it connects: keep stdout for our output.
@@ -56,11 +56,12 @@ def run(args: argparse.Namespace) -> int:
     except PerceptionError as error:
         print(f"bearchair scan: {error}", file=sys.stderr)
         return 2
-    args.out.mkdir(parents=True, exist_ok=True)
     mesh_path = args.out / "chair.ply"
     points_path = args.out / "chair_points.ply"
-    scan.chair_mesh.export(mesh_path)
-    trimesh.PointCloud(np.asarray(scan.chair_points)).export(points_path)
+    with atomic_path(mesh_path) as scratch:
+        scan.chair_mesh.export(scratch)
+    with atomic_path(points_path) as scratch:
+        trimesh.PointCloud(np.asarray(scan.chair_points)).export(scratch)
     seconds = {"world": world_s, **scan.seconds}
     if args.json:
         print(

@@ -10,17 +10,17 @@ written to ``OUT/report.md`` with ``OUT/chairs/*.png`` (imagined pose per chair)
 from __future__ import annotations
 
 import argparse
-import contextlib
 import shlex
-import signal
 import sys
-import threading
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from executive.cli_types import positive_int, positive_seconds, seed_value
+
 DEFAULT_OUT = Path("trials")
 DEFAULT_TIMEOUT_S = 300.0
+MIN_TIMEOUT_S = 30.0
+"""Below this a trial cannot even build its simulated world and write its record."""
 
 
 def register(subparsers: Any) -> None:
@@ -30,7 +30,9 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--chairs", type=Path, required=True, help="folder of chair meshes")
     parser.add_argument("--protocol", choices=("paper",), default="paper")
-    parser.add_argument("--workers", type=int, default=1, help="trials at once (default 1)")
+    parser.add_argument(
+        "--workers", type=positive_int, default=1, help="trials at once (default 1)"
+    )
     parser.add_argument("--backend", choices=("local", "ray"), default="local")
     parser.add_argument("--address", help="Ray cluster address (--backend ray); default: local Ray")
     parser.add_argument("--db", type=Path, help="SQLite records (default: OUT/trials.sqlite)")
@@ -38,15 +40,22 @@ def register(subparsers: Any) -> None:
         "--out", type=Path, default=DEFAULT_OUT, help="output folder (default: trials)"
     )
     parser.add_argument(
-        "--seed", type=int, default=0, help="campaign seed (trial seeds derive from it)"
+        "--seed", type=seed_value, default=0, help="campaign seed (trial seeds derive from it)"
     )
     parser.add_argument(
         "--timeout",
-        type=float,
+        type=positive_seconds,
         default=DEFAULT_TIMEOUT_S,
         help=f"per-trial wall time in seconds before the trial is killed (default {DEFAULT_TIMEOUT_S:.0f})",
     )
-    parser.add_argument("--max-chairs", type=int, help="only the first N chairs with a front")
+    parser.add_argument(
+        "--max-chairs", type=positive_int, help="only the first N chairs with a front"
+    )
+    parser.add_argument(
+        "--skip-bad",
+        action="store_true",
+        help="run without the chairs whose mesh or manifest entry is unusable (listed)",
+    )
     parser.add_argument(
         "--worker-cmd",
         help="run each trial with this command instead of 'python -m executive.trial_worker' "
@@ -65,27 +74,11 @@ def resume_command(args: argparse.Namespace) -> str:
         words += ["--address", args.address]
     if args.max_chairs is not None:
         words += ["--max-chairs", str(args.max_chairs)]
+    if getattr(args, "skip_bad", False):
+        words += ["--skip-bad"]
     if args.worker_cmd:
         words += ["--worker-cmd", args.worker_cmd]
     return shlex.join(words)
-
-
-@contextlib.contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
-    """SIGTERM stops the campaign like Ctrl-C: the trial workers run in their own
-    sessions, so the harness must stop them itself rather than die and orphan them."""
-
-    def interrupt(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt
-
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGTERM, interrupt)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
 
 
 def _db_path(args: argparse.Namespace) -> Path:
@@ -93,26 +86,49 @@ def _db_path(args: argparse.Namespace) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Runs (or resumes) the campaign, then prints and writes the summary."""
+    """Runs (or resumes) the campaign, then prints and writes the summary.
+
+    Everything is checked before the first trial: the arguments, every chair mesh and
+    manifest entry (one line per bad one; ``--skip-bad`` goes on without them), the
+    output folder and the database (readable, of this schema, writable, not in use).
+    """
     from executive.cli import CliError
+    from executive.interrupts import exit_status
+    from executive.outputs import ensure_writable_dir
     from executive.trials.backends import BackendUnavailableError, LocalBackend, RayBackend
     from executive.trials.campaign import run_campaign
     from executive.trials.progress import Progress
-    from executive.trials.protocol import ChairSetError, discover_chairs, expand_protocol
-    from executive.trials.store import TrialStore
+    from executive.trials.protocol import (
+        BadChairsError,
+        ChairSetError,
+        discover_chairs,
+        expand_protocol,
+    )
+    from executive.trials.store import TrialStore, campaign_lock
 
-    if args.workers < 1:
-        raise CliError("bearchair trials: --workers must be at least 1")
-    if args.timeout <= 0:
-        raise CliError("bearchair trials: --timeout must be positive")
-    if args.max_chairs is not None and args.max_chairs < 1:
-        raise CliError("bearchair trials: --max-chairs must be at least 1")
+    if args.timeout < MIN_TIMEOUT_S:
+        raise CliError(
+            f"bearchair trials: --timeout {args.timeout:g} s leaves a trial no time to build "
+            f"its world and write its record; give at least {MIN_TIMEOUT_S:.0f} s"
+        )
     if args.address and args.backend != "ray":
         raise CliError("bearchair trials: --address only applies to --backend ray")
     try:
-        chairs, skipped = discover_chairs(args.chairs, args.max_chairs)
+        chairs, skipped = discover_chairs(
+            args.chairs, args.max_chairs, check_meshes=True, skip_bad=args.skip_bad
+        )
+    except BadChairsError as error:
+        for problem in error.problems[:-1]:
+            print(f"bearchair trials: {problem}", file=sys.stderr)
+        raise CliError(
+            f"bearchair trials: {error.problems[-1]} ({len(error.problems)} unusable; fix "
+            "them, or pass --skip-bad to run without them)"
+        ) from error
     except ChairSetError as error:
         raise CliError(f"bearchair trials: {error}") from error
+    for chair in skipped:
+        if chair.reason.startswith("unusable: "):
+            print(f"bearchair trials: skipped {chair.name}: {chair.reason}", file=sys.stderr)
     command = shlex.split(args.worker_cmd) if args.worker_cmd else None
     try:
         if args.backend == "ray":
@@ -124,11 +140,9 @@ def run(args: argparse.Namespace) -> int:
 
     specs = expand_protocol(chairs, args.protocol, args.seed)
     db_path = _db_path(args)
-    try:
-        store = TrialStore(db_path)
-    except Exception as error:  # sqlite3.Error, OSError: a bad --db path
-        raise CliError(f"bearchair trials: cannot open records {db_path}: {error}") from error
-    with store:
+    ensure_writable_dir(args.out, "--out")
+    ensure_writable_dir(db_path.parent, "folder of --db")
+    with campaign_lock(db_path), TrialStore(db_path) as store:
         done_before = len(store.finished_keys() & {spec.key for spec in specs})
         print(
             f"{len(chairs)} chairs x {len(specs) // len(chairs)} trials = {len(specs)} trials "
@@ -138,10 +152,9 @@ def run(args: argparse.Namespace) -> int:
         )
         progress = Progress(len(specs), done_before)
         try:
-            with _sigterm_as_interrupt():
-                result = run_campaign(
-                    specs, store, backend, args.out / "runs", args.timeout, progress=progress
-                )
+            result = run_campaign(
+                specs, store, backend, args.out / "runs", args.timeout, progress=progress
+            )
         except BackendUnavailableError as error:
             raise CliError(f"bearchair trials: {error}") from error
         records = store.records(specs)
@@ -151,20 +164,26 @@ def run(args: argparse.Namespace) -> int:
             f"{db_path} (none lost). Resume with:\n  {resume_command(args)}",
             file=sys.stderr,
         )
-        return 130
-    print(write_report(args, records, skipped))
+        return exit_status()
+    # The report goes to its file first: a closed stdout must not lose it.
+    table_text = write_report(args, records, skipped)
     print(f"report: {args.out / 'report.md'}", file=sys.stderr)
+    print(table_text)
     return 0
 
 
 def write_report(args: argparse.Namespace, records: list[dict], skipped: list) -> str:
     """Writes OUT/report.md and the pictures; returns the table as text."""
+    from executive.outputs import write_text_atomic
     from executive.trials.pictures import copy_trial_scenes, render_chair_pictures
     from executive.trials.report import compute_table, format_table, markdown_report
 
     table = compute_table(records)
     args.out.mkdir(parents=True, exist_ok=True)
-    copy_trial_scenes(records, args.out / "trials")
+    try:
+        copy_trial_scenes(records, args.out / "trials")
+    except OSError as error:  # nor must a missing copy
+        print(f"bearchair trials: could not copy the trial pictures: {error}", file=sys.stderr)
     try:
         chair_pictures = render_chair_pictures(records, args.out / "chairs")
     except Exception as error:  # a picture must never lose the report
@@ -186,5 +205,5 @@ def write_report(args: argparse.Namespace, records: list[dict], skipped: list) -
         settings=settings,
         chair_pictures={c: str(p.relative_to(args.out)) for c, p in chair_pictures.items()},
     )
-    (args.out / "report.md").write_text(markdown)
+    write_text_atomic(args.out / "report.md", markdown)
     return format_table(table)

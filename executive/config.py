@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -52,17 +53,33 @@ def front_yaw_from_manifest(chair_path: Path) -> float | None:
     """The chair's sitting direction (degrees) from a ``manifest.json`` beside it, if any.
 
     Only the simulated world uses this, to place the chair accessibly or not; the
-    mission itself never sees it.
+    mission itself never sees it. An unreadable manifest or an entry whose
+    ``front_yaw_deg`` is not a finite number is ignored with a warning (the world then
+    places the chair with a random yaw and says so).
     """
     manifest = chair_path.parent / "manifest.json"
     if not manifest.is_file():
         return None
     try:
-        entries = json.loads(manifest.read_text()).get("meshes", [])
-    except (OSError, json.JSONDecodeError, AttributeError) as error:
+        entries = json.loads(manifest.read_text(encoding="utf-8")).get("meshes", [])
+        entry = next(
+            (e for e in entries if isinstance(e, dict) and e.get("file") == chair_path.name),
+            None,
+        )
+    except (OSError, ValueError, AttributeError, TypeError) as error:
         logger.warning("ignoring unreadable %s: %s", manifest, error)
         return None
-    for entry in entries:
-        if entry.get("file") == chair_path.name:
-            return entry.get("front_yaw_deg")
-    return None
+    if entry is None:
+        return None
+    front = entry.get("front_yaw_deg")
+    if front is None:
+        return None
+    if isinstance(front, bool) or not isinstance(front, int | float) or not math.isfinite(front):
+        logger.warning(
+            "ignoring %s's front_yaw_deg %r in %s: not a number of degrees",
+            chair_path.name,
+            front,
+            manifest,
+        )
+        return None
+    return float(front)

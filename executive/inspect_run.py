@@ -6,33 +6,69 @@ import json
 from pathlib import Path
 from typing import Any
 
-from executive.record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, load_ticks
+from executive.record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, RunRecordError, read_ticks
 
 STATUS_MARKS = {"SUCCESS": "✓", "FAILURE": "✕", "RUNNING": "*", "INVALID": "-"}
 STRUCTURE_MARKS = {"Sequence": "[-]", "Selector": "[o]", "Retry": "(-)", "Parallel": "[=]"}
 
-
-class RunRecordError(ValueError):
-    """A directory is not a readable run record."""
+__all__ = ["RecordedRun", "RunRecordError"]
 
 
 class RecordedRun:
-    """A run directory written by :class:`executive.record.RunRecorder`."""
+    """A run directory written by :class:`executive.record.RunRecorder`.
+
+    A damaged record is read as far as it can be: unreadable lines of ``ticks.jsonl``
+    are skipped and an unreadable ``summary.json`` is ignored, each with a note
+    (:attr:`notes`); only a missing or unreadable ``tree.json`` or a run without one
+    readable tick is refused (:class:`RunRecordError`).
+    """
 
     def __init__(self, run_dir: Path) -> None:
         run_dir = Path(run_dir)
+        if not run_dir.exists():
+            raise RunRecordError(f"{run_dir}: not a run record (no such folder)")
+        if not run_dir.is_dir():
+            raise RunRecordError(f"{run_dir}: not a run record (a file, not a folder)")
         for name in (TREE_FILE, TICKS_FILE):
             if not (run_dir / name).is_file():
                 raise RunRecordError(f"{run_dir}: not a run record (no {name})")
         self.run_dir = run_dir
-        self.shape: list[dict[str, Any]] = json.loads((run_dir / TREE_FILE).read_text())
-        self.ticks = load_ticks(run_dir)
+        self.notes: list[str] = []
+        self.shape = _read_shape(run_dir / TREE_FILE)
+        self.ticks, skipped = read_ticks(run_dir)
         if not self.ticks:
-            raise RunRecordError(f"{run_dir}: the run recorded no tick")
-        summary_path = run_dir / SUMMARY_FILE
-        self.summary: dict[str, Any] | None = (
-            json.loads(summary_path.read_text()) if summary_path.is_file() else None
-        )
+            raise RunRecordError(f"{run_dir / TICKS_FILE}: no readable tick in the record")
+        if skipped:
+            lines = ", ".join(str(n) for n in skipped[:5]) + (", ..." if len(skipped) > 5 else "")
+            self.notes.append(
+                f"{len(skipped)} unreadable line(s) of {TICKS_FILE} skipped (line {lines})"
+            )
+        self.summary = self._read_summary(run_dir / SUMMARY_FILE)
+
+    def _read_summary(self, path: Path) -> dict[str, Any] | None:
+        if not path.exists():
+            return None
+        try:
+            summary = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as error:  # ValueError: bad JSON or not UTF-8
+            self.notes.append(f"{SUMMARY_FILE} ignored: unreadable ({_reason(error)})")
+            return None
+        if not isinstance(summary, dict):
+            self.notes.append(f"{SUMMARY_FILE} ignored: not a JSON object")
+            return None
+        return summary
+
+    def outcome_text(self) -> str:
+        """``outcome: ...`` from the summary, or why there is none."""
+        if self.summary is None:
+            return "outcome: unknown (no readable summary.json: the run did not finish)"
+        outcome = self.summary.get("outcome", "unknown")
+        line = f"outcome: {outcome}"
+        if self.summary.get("failed_stage"):
+            line += f" at {self.summary['failed_stage']}: {self.summary.get('reason', '')}"
+        if self.summary.get("interrupted"):
+            line += f" (interrupted by {self.summary.get('signal', 'the operator')})"
+        return line
 
     @property
     def last_tick(self) -> int:
@@ -77,12 +113,19 @@ class RecordedRun:
         changes = []
         previous: dict[str, str] = {}
         names = {node["path"]: node["name"] for node in self.shape}
+        names_of = names.get
         for recorded in self.ticks:
             for node in recorded["nodes"]:
                 old = previous.get(node["path"], "INVALID")
                 if node["status"] != old:
                     changes.append(
-                        (recorded["t"], recorded["tick"], names[node["path"]], old, node["status"])
+                        (
+                            recorded["t"],
+                            recorded["tick"],
+                            names_of(node["path"], node["path"]),
+                            old,
+                            node["status"],
+                        )
                     )
                     previous[node["path"]] = node["status"]
         return changes
@@ -92,3 +135,34 @@ class RecordedRun:
             f"{t:8.2f} s  tick {tick:5d}  {name:<36} {old} -> {new}"
             for t, tick, name, old, new in self.timeline()
         )
+
+
+def _reason(error: BaseException) -> str:
+    if isinstance(error, json.JSONDecodeError):
+        return f"{error.msg} at line {error.lineno}"
+    if isinstance(error, UnicodeDecodeError):
+        return "not UTF-8 text"
+    return str(error).splitlines()[0] if str(error) else type(error).__name__
+
+
+def _read_shape(path: Path) -> list[dict[str, Any]]:
+    """``tree.json``: a list of nodes, each with a str path and name, a type and a depth."""
+    try:
+        shape = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as error:
+        raise RunRecordError(f"{path}: unreadable ({_reason(error)})") from error
+    if not isinstance(shape, list) or not shape:
+        raise RunRecordError(f"{path}: not a tree (expected a non-empty JSON list of nodes)")
+    for node in shape:
+        if not (
+            isinstance(node, dict)
+            and isinstance(node.get("path"), str)
+            and isinstance(node.get("name"), str)
+            and isinstance(node.get("depth"), int)
+            and node["depth"] >= 0
+        ):
+            raise RunRecordError(
+                f"{path}: not a tree (a node lacks a str path/name or an int depth)"
+            )
+        node.setdefault("type", "Behaviour")
+    return shape

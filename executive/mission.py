@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import logging
 import math
+import os
+import signal
 import sys
 import time
 from collections.abc import Callable
@@ -11,8 +13,11 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from executive.config import RunConfig, front_yaw_from_manifest
-from executive.record import RunRecorder
+from executive.interrupts import raise_if_received, signal_name
+from executive.outputs import atomic_path
+from executive.record import RecordWriteError, RunRecorder
 from executive.runner import MissionRunner, summarise
+from skills.errors import one_line
 from skills.geometry import wrap_angle
 from skills.meshes import load_mesh
 from skills.toolbox import DefaultSkills, MissionSkills
@@ -24,7 +29,7 @@ logger = logging.getLogger(__name__)
 class StageProgress:
     """Prints a line whenever a stage starts or ends (long stages are the norm here)."""
 
-    def __init__(self, stream: TextIO = sys.stderr) -> None:
+    def __init__(self, stream: TextIO | None = None) -> None:
         self._stream = stream
         self._seen: dict[str, str] = {}
 
@@ -37,7 +42,10 @@ class StageProgress:
                 line = f"[{runner.elapsed():7.1f} s] {stage.name} ..."
             else:
                 line = f"[{runner.elapsed():7.1f} s] {stage.name}: {stage.status} ({stage.seconds:.1f} s) {stage.feedback}"
-            print(line, file=self._stream, flush=True)
+            try:
+                print(line, file=self._stream or sys.stderr, flush=True)
+            except (OSError, ValueError):  # nobody reads stderr any more: the run goes on
+                self._stream = open(os.devnull, "w")  # noqa: SIM115 - lives with the run
 
 
 class StageSnapshots:
@@ -127,7 +135,23 @@ def run_in_simulation(
         arena=config.arena,
         voice=voice,
     )
-    world = SimWorld(sim_config)
+    world = None
+    try:
+        raise_if_received()
+        world = SimWorld(sim_config)
+        raise_if_received()
+    except BaseException as error:
+        if world is not None:
+            world.close()
+        # Interrupted (or failed) before the first tick: the record still gets a summary.
+        summary = summary_before_start(root, run_info, error, "building the simulated world")
+        try:
+            recorder.write_summary(summary)
+        finally:
+            recorder.close()
+        if isinstance(error, KeyboardInterrupt):
+            return summary
+        raise
     if config.snapshots:
         on_tick = _both(on_tick, StageSnapshots(world.render_png, config.out_dir / "snapshots"))
     try:
@@ -193,9 +217,12 @@ def _run_tree(
             on_tick=on_tick,
         )
         summary = summarise(runner.run(), run_info)
+        # The summary first: a SIGKILL while the picture renders must not lose it.
+        recorder.write_summary(summary)
         if render_png is not None:
             try:
-                render_png(config.out_dir / "final_scene.png")
+                with atomic_path(config.out_dir / "final_scene.png") as scratch:
+                    render_png(scratch)
                 summary["picture"] = "final_scene.png"
             except Exception as error:  # a missing picture must not lose the record
                 logger.warning("could not render the final scene: %s", error)
@@ -205,9 +232,35 @@ def _run_tree(
             except Exception as error:  # nor must a missing comparison
                 logger.warning("could not compare with the ground truth: %s", error)
         recorder.write_summary(summary)
+        if summary.get("record_error"):
+            raise RecordWriteError(f"{summary['record_error']} (robots stopped)")
         return summary
     finally:
         recorder.close()
+
+
+def summary_before_start(
+    root: Any, run_info: dict[str, Any], error: BaseException, doing: str
+) -> dict[str, Any]:
+    """The summary of a run that ended before its first tick (Ctrl-C, a failed world)."""
+    from py_trees.common import Status
+
+    from executive.runner import MissionOutcome, StageTiming
+
+    interrupted = isinstance(error, KeyboardInterrupt)
+    outcome = MissionOutcome(
+        status=Status.FAILURE,
+        stages=[StageTiming(child.name) for child in root.children],
+        ticks=0,
+        wall_s=0.0,
+        interrupted=interrupted,
+        stop_signal=signal_name(getattr(error, "signum", signal.SIGINT)) if interrupted else None,
+    )
+    summary = summarise(outcome, run_info)
+    summary["reason"] = (
+        f"interrupted while {doing}" if interrupted else f"failed while {doing}: {one_line(error)}"
+    )
+    return summary
 
 
 def _ground_truth(world: Any, summary: dict[str, Any]) -> dict[str, Any]:
@@ -257,5 +310,7 @@ def format_summary(summary: dict[str, Any]) -> str:
 
 
 def default_out_dir(config: RunConfig) -> Path:
-    """``runs/<date>-<time>-seed<N>``: a new directory per run."""
-    return Path("runs") / f"{time.strftime('%Y%m%d-%H%M%S')}-seed{config.seed}"
+    """``runs/<date>-<time>-seed<N>``: a new directory per run, made now (unique)."""
+    from executive.outputs import default_run_dir
+
+    return default_run_dir(config.seed)

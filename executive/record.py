@@ -13,6 +13,7 @@ A run directory holds:
 
 from __future__ import annotations
 
+import contextlib
 import json
 from pathlib import Path
 from typing import Any
@@ -20,6 +21,9 @@ from typing import Any
 import py_trees
 
 from executive.jsonable import to_jsonable
+from executive.outputs import describe_os_error, write_text_atomic
+from skills import errors
+from skills.errors import OutputError
 
 TICKS_FILE = "ticks.jsonl"
 TREE_FILE = "tree.json"
@@ -41,19 +45,37 @@ def tree_nodes(
     return nodes
 
 
+class RunRecordError(errors.RunRecordError, ValueError):
+    """A directory is not a readable run record."""
+
+
+class RecordWriteError(OutputError):
+    """The run record cannot be written (full disk, folder removed, permissions)."""
+
+
 class RunRecorder:
-    """Writes a run directory as the tree ticks; flushes every line so a crash loses nothing."""
+    """Writes a run directory as the tree ticks; flushes every line so a crash loses nothing.
+
+    ``tree.json`` and ``summary.json`` are written atomically (whole or not at all);
+    ``ticks.jsonl`` grows a flushed line per tick, and a reader ignores a torn last line.
+    A failed write raises :class:`RecordWriteError` with one line saying why.
+    """
 
     def __init__(self, out_dir: Path, root: py_trees.behaviour.Behaviour) -> None:
         self.out_dir = Path(out_dir)
-        self.out_dir.mkdir(parents=True, exist_ok=True)
         self._nodes = tree_nodes(root)
         shape = [
             {"path": path, "name": node.name, "type": type(node).__name__, "depth": depth}
             for path, node, depth in self._nodes
         ]
-        (self.out_dir / TREE_FILE).write_text(json.dumps(shape, indent=1))
-        self._ticks = open(self.out_dir / TICKS_FILE, "w")  # noqa: SIM115 - closed in close()
+        try:
+            self.out_dir.mkdir(parents=True, exist_ok=True)
+            write_text_atomic(self.out_dir / TREE_FILE, json.dumps(shape, indent=1))
+            self._ticks = open(self.out_dir / TICKS_FILE, "w")  # noqa: SIM115 - see close()
+        except (OSError, OutputError) as error:
+            raise RecordWriteError(
+                f"cannot start the run record in {self.out_dir}: {_why(error)}"
+            ) from error
         self._last_nodes: str | None = None
         self._last_blackboard: str | None = None
 
@@ -77,32 +99,91 @@ class RunRecorder:
         if blackboard_text != self._last_blackboard:
             line["blackboard"] = blackboard
         self._last_nodes, self._last_blackboard = nodes_text, blackboard_text
-        self._ticks.write(json.dumps(line) + "\n")
-        self._ticks.flush()
+        try:
+            self._ticks.write(json.dumps(line) + "\n")
+            self._ticks.flush()
+        except (OSError, ValueError) as error:  # ValueError: the file was closed
+            raise RecordWriteError(
+                f"cannot write {self.out_dir / TICKS_FILE}: {_why(error)}"
+            ) from error
 
     def write_summary(self, summary: dict[str, Any]) -> Path:
         path = self.out_dir / SUMMARY_FILE
-        path.write_text(json.dumps(to_jsonable(summary), indent=2) + "\n")
-        return path
+        try:
+            return write_text_atomic(path, json.dumps(to_jsonable(summary), indent=2) + "\n")
+        except OutputError as error:
+            raise RecordWriteError(str(error)) from error
 
     def close(self) -> None:
         if not self._ticks.closed:
-            self._ticks.close()
+            # The last flush may fail again (full disk): that was already reported.
+            with contextlib.suppress(OSError):
+                self._ticks.close()
+
+
+def _why(error: BaseException) -> str:
+    if isinstance(error, OSError):
+        return describe_os_error(error)
+    return str(error)
 
 
 def load_ticks(run_dir: Path) -> list[dict[str, Any]]:
     """The recorded ticks of a run, in order, each with the blackboard in force then.
 
-    A truncated last line (a run killed mid-write) is ignored.
+    Unreadable lines (a torn last line of a killed run, a damaged file) are skipped;
+    :func:`read_ticks` also says which.
     """
-    ticks = []
+    return read_ticks(run_dir)[0]
+
+
+def read_ticks(run_dir: Path) -> tuple[list[dict[str, Any]], list[int]]:
+    """The readable ticks of ``ticks.jsonl`` and the numbers (1-based) of the lines skipped.
+
+    A line is readable when it is a JSON object with an integer ``tick``, a number ``t``
+    and a list of ``nodes`` (objects with ``path`` and ``status``), and its tick comes
+    after the previous readable one.
+
+    Raises:
+        RunRecordError: the file cannot be opened.
+    """
+    path = Path(run_dir) / TICKS_FILE
+    ticks: list[dict[str, Any]] = []
+    skipped: list[int] = []
     blackboard: dict[str, Any] = {}
-    with open(Path(run_dir) / TICKS_FILE) as lines:
-        for line in lines:
-            try:
-                tick = json.loads(line)
-            except json.JSONDecodeError:
-                break
-            blackboard = tick.setdefault("blackboard", blackboard)
-            ticks.append(tick)
-    return ticks
+    try:
+        with open(path, encoding="utf-8", errors="replace") as lines:
+            for number, line in enumerate(lines, start=1):
+                tick = _parse_tick(line)
+                if tick is None or (ticks and tick["tick"] <= ticks[-1]["tick"]):
+                    if line.strip():
+                        skipped.append(number)
+                    continue
+                board = tick.get("blackboard")
+                blackboard = board if isinstance(board, dict) else blackboard
+                tick["blackboard"] = blackboard
+                ticks.append(tick)
+    except OSError as error:
+        raise RunRecordError(f"cannot read {path}: {_why(error)}") from error
+    return ticks, skipped
+
+
+def _parse_tick(line: str) -> dict[str, Any] | None:
+    try:
+        tick = json.loads(line)
+    except ValueError:  # JSONDecodeError, and numbers too large to parse
+        return None
+    if not isinstance(tick, dict):
+        return None
+    number, seconds, nodes = tick.get("tick"), tick.get("t"), tick.get("nodes")
+    if not isinstance(number, int) or isinstance(number, bool):
+        return None
+    if not isinstance(seconds, int | float) or isinstance(seconds, bool):
+        return None
+    if not isinstance(nodes, list) or not all(
+        isinstance(node, dict)
+        and isinstance(node.get("path"), str)
+        and isinstance(node.get("status"), str)
+        for node in nodes
+    ):
+        return None
+    return tick

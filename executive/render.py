@@ -11,11 +11,14 @@ from pathlib import Path
 
 import py_trees
 
+from executive.outputs import atomic_path
+from skills import errors
+
 TEXT_FORMATS = ("ascii", "unicode")
 GRAPH_FORMATS = ("dot", "svg", "png")
 
 
-class RenderError(RuntimeError):
+class RenderError(errors.RenderError, RuntimeError):
     """The tree could not be rendered in the format asked for."""
 
 
@@ -60,5 +63,6 @@ def render_graph(
         if source is None or not os.path.exists(source):
             raise RenderError(f"py_trees did not produce a {fmt} file")
         out.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(source, out)
+        with atomic_path(out) as scratch:
+            shutil.copyfile(source, scratch)
     return out

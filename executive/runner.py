@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import signal
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -12,8 +13,13 @@ import py_trees
 from py_trees.common import Status
 
 from behaviours import keys
+from executive.interrupts import (
+    emergency_stop_on_second_signal,
+    raise_if_received,
+    signal_name,
+)
 from executive.jsonable import to_jsonable
-from executive.record import RunRecorder
+from executive.record import RecordWriteError, RunRecorder
 from hardware.interfaces import Robot
 from skills.arena import Arena
 from skills.toolbox import MissionSkills
@@ -50,6 +56,8 @@ class MissionOutcome:
     interrupted: bool = False
     failed_leaf: py_trees.behaviour.Behaviour | None = None
     blackboard: dict[str, Any] = field(default_factory=dict)
+    stop_signal: str | None = None
+    record_error: str | None = None
 
 
 class MissionRunner:
@@ -97,38 +105,43 @@ class MissionRunner:
         return time.monotonic() - self._start
 
     def run(self) -> MissionOutcome:
-        """Ticks until the root succeeds or fails, the timeout passes, or Ctrl-C."""
+        """Ticks until the root succeeds or fails, the timeout passes, or a stop signal.
+
+        SIGINT/SIGTERM (``KeyboardInterrupt``) and a run record that cannot be written
+        stop the tree and the robots; the outcome says which (``interrupted``,
+        ``record_error``), and the caller writes what it can.
+        """
         py_trees.blackboard.Blackboard.clear()
         writer = py_trees.blackboard.Client(name="executive")
         for key, value in ((keys.SEED, self._seed), (keys.ARENA, self._arena)):
             writer.register_key(key=key, access=py_trees.common.Access.WRITE)
             writer.set(key, value)
-        self.tree.setup(timeout=30.0, skills=self.skills, robot=self.robot)
         self._start = time.monotonic()
-        interrupted = False
+        interrupted, stop_signal, record_error = False, None, None
         try:
-            while True:
-                tick_start = self.elapsed()
-                self.tree.tick()
-                self._time_stages(tick_start)
-                if self.recorder:
-                    self.recorder.record_tick(self.tree.count, self.elapsed())
-                if self.on_tick:
-                    self.on_tick(self)
-                if self.root.status in (Status.SUCCESS, Status.FAILURE):
-                    break
-                if self.elapsed() > self.timeout_s:
-                    self._stop(f"mission timed out after {self.timeout_s:.0f} s")
-                    break
-                time.sleep(self.tick_period_s)
-        except KeyboardInterrupt:
+            with emergency_stop_on_second_signal(lambda: stop_robots(self.robot)):
+                self.tree.setup(timeout=30.0, skills=self.skills, robot=self.robot)
+                self._start = time.monotonic()
+                self._tick_until_done()
+        except KeyboardInterrupt as error:
             interrupted = True
-            self._stop("interrupted by the operator (Ctrl-C)")
+            stop_signal = signal_name(getattr(error, "signum", signal.SIGINT))
+            how = "the operator (Ctrl-C)" if stop_signal == "SIGINT" else stop_signal
+            self._stop(f"interrupted by {how}")
+            logger.warning("writing the run record; a second %s exits at once", stop_signal)
+        except RecordWriteError as error:
+            record_error = str(error)
+            self._stop(f"stopped: {error}")
         finally:
-            self.tree.shutdown()
-            self.robot.close()
-            if self.recorder:
-                self.recorder.record_tick(self.tree.count, self.elapsed())
+            try:
+                self.tree.shutdown()
+            finally:
+                stop_robots(self.robot)
+            if self.recorder and record_error is None:
+                try:
+                    self.recorder.record_tick(self.tree.count, self.elapsed())
+                except RecordWriteError as error:
+                    record_error = str(error)
         return MissionOutcome(
             status=self.root.status,
             stages=self.stages,
@@ -137,7 +150,30 @@ class MissionRunner:
             interrupted=interrupted,
             failed_leaf=_failed_leaf(self.root),
             blackboard=dict(py_trees.blackboard.Blackboard.storage),
+            stop_signal=stop_signal,
+            record_error=record_error,
         )
+
+    def _tick_until_done(self) -> None:
+        while True:
+            raise_if_received()
+            tick_start = self.elapsed()
+            self.tree.tick()
+            self._time_stages(tick_start)
+            self._after_tick()
+            if self.root.status in (Status.SUCCESS, Status.FAILURE):
+                return
+            if self.elapsed() > self.timeout_s:
+                self._stop(f"mission timed out after {self.timeout_s:.0f} s")
+                return
+            time.sleep(self.tick_period_s)
+
+    def _after_tick(self) -> None:
+        """The per-tick hooks: the run record, then the caller's ``on_tick``."""
+        if self.recorder:
+            self.recorder.record_tick(self.tree.count, self.elapsed())
+        if self.on_tick:
+            self.on_tick(self)
 
     def _time_stages(self, tick_start_s: float) -> None:
         now = self.elapsed()
@@ -165,6 +201,19 @@ class MissionRunner:
             stage.ended_s = self.elapsed()
             stage.feedback = reason
         self.root.feedback_message = reason
+
+
+def stop_robots(robot: Robot) -> None:
+    """Stops every actuator of ``robot``: the one place the executive stops the robots.
+
+    Called when a mission ends, fails, is interrupted, or on a second stop signal; it
+    must never raise.
+    """
+    # TODO(issue 15 merge): switch to the robots' emergency_stop() here.
+    try:
+        robot.close()
+    except Exception as error:  # stopping must not hide why we stopped
+        logger.error("stopping the robots raised: %s", error)
 
 
 def _failed_leaf(root: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Behaviour | None:
@@ -203,6 +252,8 @@ def summarise(outcome: MissionOutcome, run_info: dict[str, Any]) -> dict[str, An
         "failed_stage": None if success else failed_stage,
         "reason": reason,
         "interrupted": outcome.interrupted,
+        **({"signal": outcome.stop_signal} if outcome.stop_signal else {}),
+        **({"record_error": outcome.record_error} if outcome.record_error else {}),
         "wall_seconds": round(outcome.wall_s, 3),
         "ticks": outcome.ticks,
         "stages": [

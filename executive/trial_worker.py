@@ -12,7 +12,11 @@ from __future__ import annotations
 
 import faulthandler
 import json
+import os
+import signal
 import sys
+import threading
+import time
 import traceback
 from pathlib import Path
 from typing import Any
@@ -54,6 +58,23 @@ def mission_timeout_s(harness_timeout_s: float) -> float:
     return max(harness_timeout_s - MISSION_TIMEOUT_MARGIN_S, 0.8 * harness_timeout_s)
 
 
+def watch_for_orphaning(poll_s: float = 0.5) -> None:
+    """Kills this worker's process group if the harness goes away (a SIGKILLed parent).
+
+    The harness also asks the kernel to kill the worker when it dies; this takes the
+    worker's own children (the imagination's processes) along, which that does not.
+    """
+    parent = os.getppid()
+
+    def watch() -> None:
+        while True:
+            time.sleep(poll_s)
+            if os.getppid() != parent:
+                os.killpg(0, signal.SIGKILL)
+
+    threading.Thread(target=watch, name="orphan-watch", daemon=True).start()
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) != 1:
@@ -91,5 +112,12 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    from executive.interrupts import handling_signals
+
     faulthandler.enable()  # a segfault leaves "Fatal Python error" in worker.log
-    sys.exit(main())
+    if os.getpgid(0) == os.getpid():  # started by the harness, in its own group
+        watch_for_orphaning()
+    # The harness's SIGTERM (timeout, Ctrl-C) stops the mission like Ctrl-C: the robots
+    # stop and the run folder gets its summary before the SIGKILL that follows.
+    with handling_signals():
+        sys.exit(main())

@@ -216,10 +216,11 @@ def test_cli_json_and_errors(tmp_path, capsys) -> None:
     assert payload["found"] is False and payload["n_drops"] == 56 and payload["reason"]
     assert {"position", "yaw_deg", "n_correct", "seconds"} <= set(payload)
 
+    from executive.cli import main
+
     empty = tmp_path / "empty.obj"
     empty.write_text("")
-    args = parser.parse_args(["imagine", str(empty)])
-    assert args.func(args) != 0
+    assert main(["imagine", str(empty)]) == 2
     captured = capsys.readouterr()
     assert captured.out == "" and len(captured.err.strip().splitlines()) == 1
 

@@ -24,6 +24,7 @@ from skills.planning.se2 import (
 from skills.planning.seat import (
     BEAR_EDGE_MARGIN_M,
     STEP_M,
+    seat_ray,
     seat_support_heights,
     slide_on_seat,
 )
@@ -365,3 +366,42 @@ def test_a_raised_approach_ends_the_path_where_the_bear_is_raised() -> None:
     assert result.raise_at == stepped_back(result.se2_goal, 0.06)
     assert result.path[-1] == result.raise_at
     assert result.summary()["raise_at"]["x_m"] == pytest.approx(result.raise_at.x, abs=1e-3)
+
+
+def _seat_with_hole(hole_half_m: float, open_to_front: bool) -> trimesh.Trimesh:
+    """A 0.3 x 0.3 m seat top at 0.24 m (centred at the origin, front at +x) with a square
+    hole in the middle, as a scan that lost part of the seat leaves it."""
+    pieces = []
+    edges = [-0.15, -hole_half_m, hole_half_m, 0.15]
+    for i in range(3):
+        for j in range(3):
+            if i == j == 1 or (open_to_front and j == 1 and i == 2):
+                continue
+            x0, x1, y0, y1 = edges[i], edges[i + 1], edges[j], edges[j + 1]
+            pieces.append(
+                trimesh.creation.box(
+                    extents=(x1 - x0, y1 - y0, 0.02),
+                    transform=trimesh.transformations.translation_matrix(
+                        ((x0 + x1) / 2, (y0 + y1) / 2, 0.23)
+                    ),
+                )
+            )
+    return trimesh.util.concatenate(pieces)
+
+
+def test_a_hole_in_the_scanned_seat_is_seat_when_the_seat_encloses_it() -> None:
+    p = SittingPose(np.array([-0.02, 0.0, 0.29]), 0.0)
+    moved, _ = slide_on_seat(_seat_with_hole(0.07, open_to_front=False), p, 1.0)
+    # The hole (14 cm wide) is filled: p slides to the bear's margin behind the front edge.
+    assert 0.15 - BEAR_EDGE_MARGIN_M - 0.02 <= moved.position[0] <= 0.15 - BEAR_EDGE_MARGIN_M
+    assert moved.position[2] == pytest.approx(0.29)
+
+
+def test_a_sitting_point_over_a_lost_seat_top_stays_where_it_was_imagined() -> None:
+    p = SittingPose(np.array([-0.02, 0.0, 0.29]), 0.0)
+    seat = _seat_with_hole(0.07, open_to_front=True)
+    moved, slide_m = slide_on_seat(seat, p, 1.0)
+    assert slide_m == 0.0 and np.array_equal(moved.position, p.position)
+    assert seat_ray(seat, p).seat_heights_m == pytest.approx([0.24])
+    nothing = check_seat_reachable(seat, SittingPose(np.array([1.0, 1.0, 0.29]), 0.0))
+    assert not nothing.reachable and nothing.reason == "no seat under the sitting position"

@@ -398,25 +398,25 @@ def test_simulated_run_records_the_ground_truth(tmp_path):
     assert truth["sitting_yaw_error_deg"] == pytest.approx(expected, abs=0.02)
 
 
-@pytest.mark.skipif(not SHARED_CHAIRS.exists(), reason="../shared/chairs is absent")
-def test_the_chair_collides_as_its_own_surface_not_as_convex_pieces():
-    from executive.config import front_yaw_from_manifest
+def test_the_chair_collides_as_its_own_surface_not_as_convex_pieces(tmp_path):
     from skills.geometry import make_transform, rot_z
+    from skills.meshes import box_chair_mesh
 
-    # A director's chair: the seat sits between higher side rails and armrests, and the
-    # convex pieces of seat and rails stood 2-4 cm above the seat.
-    chair_path = SHARED_CHAIRS / "chair-chairgen-09.obj"
-    front_yaw_deg = front_yaw_from_manifest(chair_path)
-    config = SimConfig(chair_path=chair_path, front_yaw_deg=front_yaw_deg, camera_noise=False)
+    # An armchair whose armrest panels stand 12 cm above the seat: convex pieces of the
+    # seat and its sides would bridge them and hold the bear at the armrests' height.
+    seat_top_m = 0.30
+    chair_path = tmp_path / "armchair.obj"
+    box_chair_mesh(seat_height_m=seat_top_m, armrest_height_m=seat_top_m + 0.12).export(chair_path)
+    config = SimConfig(chair_path=chair_path, front_yaw_deg=0.0, camera_noise=False)
     with SimWorld(config) as world:
         world.nao.set_hands(True)
         T_world_chair = world.T_world_chair_true()
-        above_seat = T_world_chair @ np.array([0.0, 0.0, 0.36, 1.0])
+        above_seat = T_world_chair @ np.array([0.0, 0.0, seat_top_m + 0.03, 1.0])
         world.bear.set_T_world_bear(make_transform(rot_z(world.sitting_yaw_true()), above_seat[:3]))
         verdict = world.judge.judge(world.sitting_yaw_true(), settle_s=1.5)
         assert verdict.seated, verdict.reason
-        # The bear frame's origin is its seat point: it rests on the mesh's seat (0.331 m).
-        assert world.bear.T_world_bear()[2, 3] == pytest.approx(0.331, abs=0.006)
+        # The bear frame's origin is its seat point: it rests on the seat itself.
+        assert world.bear.T_world_bear()[2, 3] == pytest.approx(seat_top_m, abs=0.006)
 
 
 def test_the_nao_reaching_into_the_chair_is_recorded(world):

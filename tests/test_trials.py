@@ -81,12 +81,14 @@ FAKE_WORKER = textwrap.dedent(
 
 
 def write_chairs(folder: Path, names: list[str], manifest: dict | None = None) -> Path:
+    """Box "chairs" with a manifest (by default each with a front of 90 degrees)."""
     folder.mkdir(parents=True, exist_ok=True)
     box = trimesh.creation.box((0.4, 0.4, 0.5))
     for name in names:
         box.export(folder / name)
-    if manifest is not None:
-        (folder / "manifest.json").write_text(json.dumps(manifest))
+    if manifest is None:
+        manifest = {"meshes": [{"file": n, "kind": "chair", "front_yaw_deg": 90.0} for n in names]}
+    (folder / "manifest.json").write_text(json.dumps(manifest))
     return folder
 
 
@@ -190,10 +192,13 @@ def test_manifest_keeps_meshes_with_a_front_in_sorted_order(tmp_path: Path):
     assert "--max-chairs 2" in dict(skipped)["d-chair.ply"]
 
 
-def test_without_manifest_every_mesh_takes_part(tmp_path: Path):
+def test_a_folder_needs_a_manifest_and_every_listed_mesh_takes_part(tmp_path: Path):
     folder = write_chairs(tmp_path / "chairs", ["b.obj", "a.off"])
     chosen, skipped = discover_chairs(folder)
     assert [c.name for c in chosen] == ["a.off", "b.obj"] and skipped == []
+    (folder / "manifest.json").unlink()  # placements would be random: refused
+    with pytest.raises(ChairSetError, match=r"no manifest\.json"):
+        discover_chairs(folder)
     with pytest.raises(ChairSetError, match="no chair meshes"):
         discover_chairs(write_chairs(tmp_path / "empty", []))
     with pytest.raises(ChairSetError, match="no such directory"):
@@ -349,7 +354,7 @@ def test_ctrl_c_on_the_cli_keeps_finished_trials_and_says_how_to_resume(
         time.sleep(0.1)
     harness.send_signal(stop_signal)
     _, err = harness.communicate(timeout=30)
-    assert harness.returncode == 130, err
+    assert harness.returncode == 128 + stop_signal, err
     assert "Resume with:" in err and "--seed 9" in err
     assert not [pid for pid in worker_pids(tmp_path) if process_alive(pid)]  # none orphaned
     kept = sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0]
@@ -644,3 +649,22 @@ def test_an_interrupted_run_worker_kills_its_trial_process(tmp_path, fake_worker
     assert time.monotonic() - start < 10  # stopped, not waited for
     pids = worker_pids(tmp_path)
     assert len(pids) == 1 and not process_alive(pids[0])
+
+
+def test_refused_chairs_are_a_cause_of_their_own():
+    reason = "seat too high for the NAO: seat 0.43 m, the NAO places a bear at most 0.40 m high"
+    refused = make_record(
+        "accessible",
+        "failure",
+        chair="tall.obj",
+        failed_stage="CheckSeatReachable",
+        reason=f"CheckSeatReachable: refused: {reason}",
+    )
+    records = [refused] * 3 + [make_record("accessible", "failure")]
+    table = compute_table(records)
+    assert table.refusals == (("tall.obj", reason, 3),)
+    assert ("CheckSeatReachable", 3) in table.failure_stages
+    text = format_table(table)
+    assert "Refused (no stance reaches the seat): 3 trial(s) on 1 chair(s)" in text
+    assert f"tall.obj (3): {reason}" in text
+    assert "## Refused chairs" in markdown_report(table, records)

@@ -14,20 +14,22 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from typing import Any, Protocol
 
+from executive.interrupts import emergency_stop_on_second_signal
 from executive.trials.protocol import TrialSpec
 from executive.trials.worker_process import (
     ProcessGroup,
     WorkerOutcome,
     default_worker_command,
-    run_worker,
+    run_worker_with_retry,
 )
+from skills.errors import BackendError
 
 Job = tuple[TrialSpec, dict[str, Any]]
 """A trial and its worker payload."""
 OnResult = Callable[[TrialSpec, WorkerOutcome], None]
 
 
-class BackendUnavailableError(RuntimeError):
+class BackendUnavailableError(BackendError, RuntimeError):
     """The backend's library is not installed or cannot connect."""
 
 
@@ -55,27 +57,35 @@ class LocalBackend:
         group = ProcessGroup()
         pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="trial")
         pending = {
-            pool.submit(run_worker, self.command, payload, self.timeout_s, group): (index, spec)
+            pool.submit(run_worker_with_retry, self.command, payload, self.timeout_s, group): (
+                index,
+                spec,
+            )
             for index, (spec, payload) in enumerate(jobs)
         }
         try:
-            while pending:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for future in sorted(done, key=lambda f: pending[f][0]):
-                    _, spec = pending.pop(future)
-                    on_result(spec, future.result())
+            with emergency_stop_on_second_signal(group.kill_all_now):
+                self._hand_back(pending, on_result)
         except BaseException:
             group.stop_all()
             pool.shutdown(wait=True, cancel_futures=True)
             raise
         pool.shutdown(wait=True)
 
+    @staticmethod
+    def _hand_back(pending: dict, on_result: OnResult) -> None:
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in sorted(done, key=lambda f: pending[f][0]):
+                _, spec = pending.pop(future)
+                on_result(spec, future.result())
+
 
 def _ray_trial(
     command: list[str] | None, payload: dict[str, Any], timeout_s: float
 ) -> dict[str, Any]:
     """The Ray task: one trial subprocess on whichever node runs it."""
-    outcome = run_worker(command or default_worker_command(), payload, timeout_s)
+    outcome = run_worker_with_retry(command or default_worker_command(), payload, timeout_s)
     return outcome._asdict()
 
 

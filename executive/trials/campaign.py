@@ -74,10 +74,16 @@ def run_campaign(
             return
         run_dir = str(runs_dir / spec.run_dir_name())
         if outcome.summary is not None:
-            row = record_from_summary(spec, outcome.summary, outcome.wall_seconds, run_dir)
+            row = record_from_summary(
+                spec, outcome.summary, outcome.wall_seconds, run_dir, outcome.attempts
+            )
         else:
             row = record_from_error(
-                spec, outcome.error or "unknown error", outcome.wall_seconds, run_dir
+                spec,
+                outcome.error or "unknown error",
+                outcome.wall_seconds,
+                run_dir,
+                outcome.attempts,
             )
         store.add(row)
         ran += 1

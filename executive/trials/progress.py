@@ -92,12 +92,20 @@ class Progress:
 
     def finish(self) -> None:
         if self._tty:
-            self._stream.write("\n")
-            self._stream.flush()
+            try:
+                self._stream.write("\n")
+                self._stream.flush()
+            except (OSError, ValueError):
+                self._tty = False
 
     def _print(self, text: str) -> None:
-        if self._tty:
-            self._stream.write("\r\033[K" + text)
-        else:
-            self._stream.write(text + "\n")
-        self._stream.flush()
+        # A closed stderr (``2>&1 | head``) must not stop the campaign: the records and
+        # the report are what matter, and they go to files.
+        try:
+            if self._tty:
+                self._stream.write("\r\033[K" + text)
+            else:
+                self._stream.write(text + "\n")
+            self._stream.flush()
+        except (OSError, ValueError):
+            self._tty = False

@@ -11,9 +11,11 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from skills import errors
 from skills.meshes import SUPPORTED_SUFFIXES
 
 EXPERIMENTS = ("accessible", "inaccessible_obeys", "inaccessible_disobeys")
@@ -38,7 +40,7 @@ PROTOCOLS: dict[str, tuple[str, ...]] = {
 """Protocol name -> the experiment of each trial index, per chair."""
 
 
-class ChairSetError(ValueError):
+class ChairSetError(errors.ChairSetError, ValueError):
     """The chairs folder is missing, unreadable or holds no usable mesh."""
 
 
@@ -124,68 +126,149 @@ def read_manifest(chairs_dir: Path) -> dict[str, dict[str, Any]] | None:
     """``manifest.json``'s entries by file name, or None when the folder has none.
 
     Raises:
-        ChairSetError: the manifest exists but is not valid JSON of the expected shape.
+        ChairSetError: the manifest exists but is not valid JSON of the expected shape
+            (an object whose ``meshes`` is a list of objects, each with a ``file``
+            name); entries' values are checked by :func:`manifest_entry_problem`.
     """
     manifest_path = chairs_dir / "manifest.json"
-    if not manifest_path.is_file():
+    if not manifest_path.exists():
         return None
     try:
-        entries = json.loads(manifest_path.read_text())["meshes"]
-        return {str(entry["file"]): entry for entry in entries}
-    except (OSError, ValueError, KeyError, TypeError) as error:
-        raise ChairSetError(f"{manifest_path}: unreadable manifest ({error})") from error
+        document = json.loads(manifest_path.read_text(encoding="utf-8"))
+    except OSError as error:
+        raise ChairSetError(f"{manifest_path}: unreadable ({error.strerror or error})") from error
+    except ValueError as error:  # JSON or UTF-8
+        reason = error.msg if isinstance(error, json.JSONDecodeError) else "not UTF-8 text"
+        raise ChairSetError(f"{manifest_path}: not valid JSON ({reason})") from error
+    entries = document.get("meshes") if isinstance(document, dict) else None
+    if not isinstance(entries, list):
+        raise ChairSetError(
+            f'{manifest_path}: expected an object with a "meshes" list, as in ../shared/chairs'
+        )
+    by_name: dict[str, dict[str, Any]] = {}
+    for number, entry in enumerate(entries):
+        if not isinstance(entry, dict) or not isinstance(entry.get("file"), str):
+            raise ChairSetError(
+                f'{manifest_path}: meshes[{number}] is not an object with a "file" name'
+            )
+        by_name[entry["file"]] = entry
+    return by_name
+
+
+def manifest_entry_problem(entry: dict[str, Any]) -> str | None:
+    """What is wrong with a manifest entry's values, or None.
+
+    ``front_yaw_deg`` must be a finite number of degrees or null; ``kind`` a string.
+    """
+    front = entry.get("front_yaw_deg")
+    if front is not None and (
+        isinstance(front, bool) or not isinstance(front, int | float) or not math.isfinite(front)
+    ):
+        return f"front_yaw_deg is {json.dumps(front)[:40]}, not a number of degrees or null"
+    if "kind" in entry and not isinstance(entry["kind"], str):
+        return f"kind is {json.dumps(entry['kind'])[:40]}, not a string"
+    return None
 
 
 def discover_chairs(
-    chairs_dir: Path, max_chairs: int | None = None
+    chairs_dir: Path,
+    max_chairs: int | None = None,
+    *,
+    check_meshes: bool = False,
+    skip_bad: bool = False,
 ) -> tuple[list[ChairEntry], list[SkippedChair]]:
     """The chairs of a folder that take part, in sorted file order, and those skipped.
 
-    Every file with a supported mesh suffix is a candidate. With a ``manifest.json``,
-    only meshes with a front (``front_yaw_deg`` not null) take part: the simulated world
-    needs it to place the chair accessibly or not. ``max_chairs`` keeps the first N that
-    take part (deterministic), the rest are listed as skipped.
+    Every file with a supported mesh suffix is a candidate. The folder must have a
+    ``manifest.json``: the simulated world needs each chair's front to place it
+    accessibly or not (without it "inaccessible" trials would be placed at random).
+    Only meshes with a front (``front_yaw_deg`` not null) take part. ``max_chairs``
+    keeps the first N that take part (deterministic), the rest are listed as skipped.
+
+    Args:
+        chairs_dir: the folder.
+        max_chairs: keep the first N chairs that take part.
+        check_meshes: also load and check each taking part (``load_chair_mesh``), so a
+            bad file is found before the first trial instead of trial by trial.
+        skip_bad: list bad entries (manifest values, meshes) as skipped instead of
+            raising; they do not count toward ``max_chairs``.
 
     Raises:
-        ChairSetError: the folder is missing or holds no supported mesh, or none takes part.
+        BadChairsError: bad entries (one line each in ``problems``), unless ``skip_bad``.
+        ChairSetError: the folder is missing, holds no supported mesh or no manifest,
+            or none takes part.
     """
+    from skills.meshes import MeshLoadError, load_chair_mesh
+
     if not chairs_dir.exists():
         raise ChairSetError(f"{chairs_dir}: no such directory")
     if not chairs_dir.is_dir():
         raise ChairSetError(f"{chairs_dir}: not a directory")
-    meshes = sorted(
-        p for p in chairs_dir.iterdir() if p.is_file() and p.suffix.lower() in SUPPORTED_SUFFIXES
-    )
+    try:
+        meshes = sorted(
+            p
+            for p in chairs_dir.iterdir()
+            if p.suffix.lower() in SUPPORTED_SUFFIXES and not p.is_dir()
+        )
+    except OSError as error:
+        raise ChairSetError(f"{chairs_dir}: cannot list it ({error.strerror or error})") from error
     if not meshes:
         raise ChairSetError(
             f"{chairs_dir}: no chair meshes ({', '.join(SUPPORTED_SUFFIXES)}) in this directory"
         )
     manifest = read_manifest(chairs_dir)
+    if manifest is None:
+        raise ChairSetError(
+            f"{chairs_dir}: no manifest.json; trials need each chair's front_yaw_deg to place "
+            "it accessibly or not (see ../shared/chairs/README.md for the format)"
+        )
     chosen: list[ChairEntry] = []
     skipped: list[SkippedChair] = []
+    problems: list[str] = []
+
+    def bad(path: Path, problem: str) -> None:
+        if skip_bad:
+            skipped.append(SkippedChair(path.name, f"unusable: {problem}"))
+        else:
+            problems.append(problem)
+
     for path in meshes:
-        if manifest is None:
-            entry = ChairEntry(path, "unknown", None)
-        elif path.name not in manifest:
+        if path.name not in manifest:
             skipped.append(SkippedChair(path.name, "not in manifest.json"))
             continue
-        else:
-            info = manifest[path.name]
-            front = info.get("front_yaw_deg")
-            kind = str(info.get("kind", "unknown"))
-            if front is None:
-                skipped.append(
-                    SkippedChair(path.name, f"{kind} without a front (front_yaw_deg null)")
-                )
-                continue
-            entry = ChairEntry(path, kind, float(front))
+        info = manifest[path.name]
+        problem = manifest_entry_problem(info)
+        if problem is not None:
+            bad(path, f"{chairs_dir / 'manifest.json'}: {path.name}: {problem}")
+            continue
+        front = info.get("front_yaw_deg")
+        kind = str(info.get("kind", "unknown"))
+        if front is None:
+            skipped.append(SkippedChair(path.name, f"{kind} without a front (front_yaw_deg null)"))
+            continue
         if max_chairs is not None and len(chosen) >= max_chairs:
             skipped.append(SkippedChair(path.name, f"beyond --max-chairs {max_chairs}"))
             continue
-        chosen.append(entry)
+        if check_meshes:
+            try:
+                load_chair_mesh(path)
+            except MeshLoadError as error:
+                bad(path, str(error))
+                continue
+        chosen.append(ChairEntry(path, kind, float(front)))
+    if problems:
+        raise BadChairsError(problems)
     if not chosen:
-        raise ChairSetError(f"{chairs_dir}: none of its {len(meshes)} meshes has a front")
+        raise ChairSetError(f"{chairs_dir}: none of its {len(meshes)} meshes has a usable front")
     return chosen, skipped
+
+
+class BadChairsError(ChairSetError):
+    """Some chairs of the campaign are unusable; ``problems`` has one line per chair."""
+
+    def __init__(self, problems: list[str]) -> None:
+        super().__init__(problems[-1])
+        self.problems = problems
 
 
 def expand_protocol(

@@ -49,6 +49,8 @@ class TrialsTable(NamedTuple):
         failure_causes: (cause, count), most frequent first.
         errors: trials that crashed or hung.
         assisted_accessible_trials: accessible placements that were nevertheless assisted.
+        refusals: (chair, the refusal's reason, trials) for chairs whose seat no stance
+            reaches: refused right after imagination, a cause of their own.
     """
 
     seating: list[RateRow]
@@ -60,6 +62,7 @@ class TrialsTable(NamedTuple):
     failure_causes: list[tuple[str, int]]
     errors: int
     assisted_accessible_trials: int
+    refusals: tuple[tuple[str, str, int], ...] = ()
 
 
 def compute_table(records: list[dict[str, Any]]) -> TrialsTable:
@@ -113,6 +116,24 @@ def compute_table(records: list[dict[str, Any]]) -> TrialsTable:
         assisted_accessible_trials=sum(
             r["experiment"] == "accessible" and (r.get("instructions") or 0) > 0 for r in records
         ),
+        refusals=_refusals(failed),
+    )
+
+
+REFUSING_STAGE = "CheckSeatReachable"
+"""The stage that refuses a seat out of the NAO's reach (trees.mission)."""
+
+
+def _refusals(failed: list[dict[str, Any]]) -> tuple[tuple[str, str, int], ...]:
+    """(chair, reason, trials) of the refused trials, by chair."""
+    by_chair: dict[str, list[str]] = {}
+    for record in failed:
+        if record.get("failed_stage") == REFUSING_STAGE:
+            reason = failure_cause(record).split(": ", 1)[1].removeprefix("refused: ")
+            by_chair.setdefault(record["chair"], []).append(reason)
+    return tuple(
+        (chair, Counter(reasons).most_common(1)[0][0], len(reasons))
+        for chair, reasons in sorted(by_chair.items())
     )
 
 
@@ -160,6 +181,14 @@ def format_table(table: TrialsTable) -> str:
         lines.append(f"  {stage:<22}{median:>8.1f} s  (n={n})")
     if table.trial_median_s is not None:
         lines.append(f"  {'whole trial (wall)':<22}{table.trial_median_s:>8.1f} s")
+    if table.refusals:
+        trials = sum(n for _, _, n in table.refusals)
+        lines += [
+            "",
+            f"Refused (no stance reaches the seat): {trials} trial(s) on "
+            f"{len(table.refusals)} chair(s)",
+        ]
+        lines += [f"  {chair} ({n}): {reason}" for chair, reason, n in table.refusals]
     lines += ["", "Causes of failure"]
     if not table.failure_causes:
         lines.append("  none")
@@ -219,6 +248,9 @@ def markdown_report(
     out += [f"| {s} | {m:.1f} | {n} |" for s, (m, n) in table.stage_median_s.items()]
     if table.trial_median_s is not None:
         out.append(f"| whole trial (wall) | {table.trial_median_s:.1f} | {len(records)} |")
+    if table.refusals:
+        out += ["", "## Refused chairs (no stance reaches the seat)", ""]
+        out += [f"- {chair} ({n} trials): {_md(reason)}" for chair, reason, n in table.refusals]
     out += ["", "## Causes of failure", ""]
     if not table.failure_causes:
         out.append("None.")

@@ -11,8 +11,10 @@ imagination's pool processes included).
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -34,12 +36,17 @@ class WorkerOutcome(NamedTuple):
         error: why there is no summary (crash, timeout, exception), None otherwise.
         wall_seconds: the subprocess's wall time, world building included.
         cancelled: the harness stopped it (Ctrl-C): not a result, never recorded.
+        crashed: the worker died without a result (a signal, an exit without the result
+            line): worth one retry, unlike a timeout or an error the mission reported.
+        attempts: how many times the worker ran (2 after a retry).
     """
 
     summary: dict[str, Any] | None
     error: str | None
     wall_seconds: float
     cancelled: bool = False
+    crashed: bool = False
+    attempts: int = 1
 
 
 def default_worker_command() -> list[str]:
@@ -65,9 +72,18 @@ class ProcessGroup:
         with self._lock:
             if self.stopping:
                 return None
-            process = subprocess.Popen(command, start_new_session=True, **popen_kwargs)
+            process = subprocess.Popen(
+                command, start_new_session=True, preexec_fn=_die_with_parent, **popen_kwargs
+            )
             self._live.add(process)
             return process
+
+    def kill_all_now(self) -> None:
+        """SIGKILLs every live worker's group without waiting (a second Ctrl-C)."""
+        self.stopping = True
+        for process in list(self._live):
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(process.pid, signal.SIGKILL)
 
     def finished(self, process: subprocess.Popen) -> None:
         with self._lock:
@@ -81,6 +97,24 @@ class ProcessGroup:
         for process in live:
             kill_process_group(process)
         return len(live)
+
+
+_PR_SET_PDEATHSIG = 1
+try:
+    _libc: Any = ctypes.CDLL(None, use_errno=True)  # loaded before any fork
+except OSError:  # not Linux, or no libc symbols: the orphan watch in the worker remains
+    _libc = None
+
+
+def _die_with_parent() -> None:
+    """In the forked child: SIGKILL it when the harness dies (even by SIGKILL).
+
+    The workers run in their own sessions (the terminal's Ctrl-C must not reach them),
+    so without this a killed harness would orphan them and they would go on writing
+    into run folders that a resumed campaign is reusing.
+    """
+    if _libc is not None:
+        _libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
 
 
 def kill_process_group(process: subprocess.Popen, grace_s: float = KILL_GRACE_S) -> None:
@@ -150,7 +184,34 @@ def run_worker(
         return WorkerOutcome(message["summary"], None, elapsed)
     if message is not None and "error" in message:
         return WorkerOutcome(None, f"worker error: {message['error']}", elapsed)
-    return WorkerOutcome(None, _crash_description(process.returncode, log_path), elapsed)
+    return WorkerOutcome(
+        None, _crash_description(process.returncode, log_path), elapsed, crashed=True
+    )
+
+
+def run_worker_with_retry(
+    command: list[str],
+    payload: dict[str, Any],
+    timeout_s: float,
+    group: ProcessGroup | None = None,
+) -> WorkerOutcome:
+    """:func:`run_worker`, run once more (from a clean run folder) if the worker crashed.
+
+    A killed or crashed worker (out of memory, a native library's segfault) says
+    nothing about the trial; a second crash is recorded, with ``attempts`` 2.
+    """
+    group = group or ProcessGroup()
+    first = run_worker(command, payload, timeout_s, group)
+    if not first.crashed or group.stopping:
+        return first
+    out_dir = Path(payload["out_dir"])
+    with contextlib.suppress(OSError):
+        shutil.rmtree(out_dir)
+    second = run_worker(command, payload, timeout_s, group)
+    error = second.error
+    if error is not None and not second.cancelled:
+        error = f"{error} (retried once; first: {first.error})"
+    return second._replace(error=error, attempts=2)
 
 
 def _last_result(stdout: str) -> dict[str, Any] | None:

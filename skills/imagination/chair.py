@@ -14,7 +14,6 @@ Everything is cached by the mesh's digest: in memory for this process and on dis
 from __future__ import annotations
 
 import math
-import pickle
 import threading
 from pathlib import Path
 from typing import NamedTuple
@@ -23,7 +22,13 @@ import numpy as np
 import trimesh
 
 from skills.geometry import make_transform, rot_z
-from skills.meshes import cache_dir, mesh_digest, solid_below_surface_boxes
+from skills.meshes import (
+    cache_dir,
+    mesh_digest,
+    read_cached_arrays,
+    solid_below_surface_boxes,
+    write_cached_arrays,
+)
 
 PREPARATION_VERSION = "v7"
 CHAIR_DENSITY_KG_M3 = 500.0
@@ -123,26 +128,45 @@ def prepare_chair(mesh: trimesh.Trimesh) -> PreparedChair:
     with _memory_lock:
         if digest in _memory:
             return _memory[digest]
-    path = cache_dir() / "imagination" / f"{digest}-{PREPARATION_VERSION}.pkl"
-    prepared: PreparedChair | None = None
-    if path.exists():
-        try:
-            with path.open("rb") as stream:
-                prepared = PreparedChair(*pickle.load(stream))
-            if not Path(prepared.collision_obj).exists():
-                prepared = None
-        except Exception:
-            prepared = None
+    path = cache_dir() / "imagination" / f"{digest}-{PREPARATION_VERSION}.npz"
+    prepared = _from_cache(read_cached_arrays(path))
+    if prepared is not None and not Path(prepared.collision_obj).exists():
+        prepared = None
     if prepared is None:
         prepared = _prepare(mesh, digest)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        scratch = path.with_suffix(f".{threading.get_ident()}.tmp")
-        with scratch.open("wb") as stream:
-            pickle.dump(tuple(prepared), stream)
-        scratch.replace(path)
+        write_cached_arrays(path, _to_cache(prepared))
     with _memory_lock:
         _memory[digest] = prepared
     return prepared
+
+
+def _to_cache(prepared: PreparedChair) -> dict[str, np.ndarray]:
+    """The cache entry's arrays (npz, no pickle: see ``skills.meshes.read_cached_arrays``)."""
+    arrays = {name: np.asarray(value) for name, value in prepared._asdict().items()}
+    arrays["pieces"] = np.stack([np.asarray(piece, dtype=float) for piece in prepared.pieces])
+    return arrays
+
+
+def _from_cache(arrays: dict[str, np.ndarray] | None) -> PreparedChair | None:
+    """A PreparedChair from its cache entry; None when missing or not of this shape."""
+    if arrays is None or set(arrays) != set(PreparedChair._fields):
+        return None
+    try:
+        return PreparedChair(
+            digest=str(arrays["digest"]),
+            T_obb_mesh=np.asarray(arrays["T_obb_mesh"], dtype=float).reshape(4, 4),
+            gamma_obb_rad=float(arrays["gamma_obb_rad"]),
+            extents_m=np.asarray(arrays["extents_m"], dtype=float).reshape(3),
+            z_min_m=float(arrays["z_min_m"]),
+            z_top_m=float(arrays["z_top_m"]),
+            pieces=tuple(np.asarray(piece, dtype=float) for piece in arrays["pieces"]),
+            collision_obj=str(arrays["collision_obj"]),
+            com_obb_m=np.asarray(arrays["com_obb_m"], dtype=float).reshape(3),
+            mass_kg=float(arrays["mass_kg"]),
+            inertia_diag=np.asarray(arrays["inertia_diag"], dtype=float).reshape(3),
+        )
+    except (TypeError, ValueError):
+        return None
 
 
 def _prepare(mesh: trimesh.Trimesh, digest: str) -> PreparedChair:

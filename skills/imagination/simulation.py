@@ -20,6 +20,7 @@ from __future__ import annotations
 import ctypes
 import math
 import os
+import signal
 import time
 from typing import Any, NamedTuple
 
@@ -158,7 +159,12 @@ def _connection() -> tuple[Any, int]:
 
 
 def worker_initializer() -> None:
-    """Runs in each worker process: C-level prints must not reach the caller's stdout."""
+    """Runs in each worker process: C-level prints must not reach the caller's stdout.
+
+    Ctrl-C reaches every process of the terminal's group: the caller cancels and
+    shuts the pool down, so a worker ignores SIGINT instead of printing a traceback.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 1)
     os.close(devnull)

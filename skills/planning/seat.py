@@ -16,6 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 import trimesh
+from scipy import ndimage
 
 from skills.geometry import SittingPose
 from skills.nao_carrying import BEAR_COM_AHEAD_M, BEAR_TORSO_DEPTH_M
@@ -111,27 +112,106 @@ class SeatRay(NamedTuple):
     seat_heights_m: np.ndarray
 
 
-def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
-    """The supported sitting points along the ray from p toward the NAO (see module doc)."""
+SEAT_MAP_BEHIND_M = 0.15
+"""The seat map starts this far (metres) behind p: the bear's footprint and a hole's rim."""
+SEAT_MAP_HALF_WIDTH_M = 0.15
+"""... and reaches this far (metres) either side of the ray."""
+SLAT_GAP_M = 0.06
+"""Gaps in the seat up to this wide (metres) are closed: slats, a scan's cracks. The bear's
+torso (0.085 m deep, 0.10 m wide) bridges them."""
+
+
+class SeatMap(NamedTuple):
+    """The seat around the sitting ray (see :func:`seat_map`).
+
+    Attributes:
+        along_m: (R,) the rows' distances along u from p, metres.
+        seat: (R, C) seat cells, gaps closed and enclosed holes filled.
+        heights_m: (R, C) the first surface below p in each cell, metres (NaN: none).
+        seat_height_m: h₀, the seat's height under p (NaN: no seat there).
+    """
+
+    along_m: np.ndarray
+    seat: np.ndarray
+    heights_m: np.ndarray
+    seat_height_m: float
+
+
+def seat_map(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatMap:
+    """The seat around the sitting ray as a height map (metres).
+
+    A grid of ``STEP_M`` cells in the ray's frame (rows along u from
+    ``-SEAT_MAP_BEHIND_M``, columns across from ``-SEAT_MAP_HALF_WIDTH_M``) holds the first
+    surface below p (plus 2 cm) in each cell. The seat's height h₀ is the surface under p
+    (:func:`_seat_height_under`); a cell is seat when its surface lies within
+    ``SEAT_HEIGHT_TOLERANCE_M`` of h₀. Gaps up to
+    ``SLAT_GAP_M`` are closed and holes enclosed by seat are filled: a scan's holes are
+    not holes in the chair.
+
+    """
     p = np.asarray(sitting_pose.position, dtype=float)
     u = sitting_pose.direction()
-    ahead = np.arange(0.0, MAX_SLIDE_M + BEAR_EDGE_MARGIN_M + SUPPORT_RADIUS_M + STEP_M, STEP_M)
-    heights = seat_support_heights(chair_mesh, p[:2] + ahead[:, None] * u, float(p[2]) + 0.02)
-    if np.isnan(heights[0]):
+    v = np.array([-u[1], u[0]])
+    along = np.arange(-SEAT_MAP_BEHIND_M, MAX_SLIDE_M + BEAR_EDGE_MARGIN_M + 2 * STEP_M, STEP_M)
+    across = np.arange(-SEAT_MAP_HALF_WIDTH_M, SEAT_MAP_HALF_WIDTH_M + 1e-9, STEP_M)
+    a, c = np.meshgrid(along, across, indexing="ij")
+    xy = p[:2] + a.reshape(-1, 1) * u + c.reshape(-1, 1) * v
+    heights = _first_surface_below(chair_mesh, xy, float(p[2]) + 0.02).reshape(a.shape)
+    h0 = _seat_height_under(heights, np.hypot(a, c), float(p[2]))
+    if math.isnan(h0):
+        return SeatMap(along, np.zeros(a.shape, dtype=bool), heights, math.nan)
+    seat = np.abs(np.nan_to_num(heights, nan=-1.0) - h0) <= SEAT_HEIGHT_TOLERANCE_M
+    radius = round(SLAT_GAP_M / 2.0 / STEP_M)
+    disc = np.hypot(*np.mgrid[-radius : radius + 1, -radius : radius + 1]) <= radius + 1e-9
+    padded = np.pad(seat, radius + 1, mode="edge")
+    closed = ndimage.binary_closing(padded, structure=disc)[
+        radius + 1 : -radius - 1, radius + 1 : -radius - 1
+    ]
+    return SeatMap(along, ndimage.binary_fill_holes(closed | seat), heights, h0)
+
+
+def _seat_height_under(heights: np.ndarray, distance_m: np.ndarray, p_z: float) -> float:
+    """h₀ (metres): the median surface height within ``SUPPORT_RADIUS_M`` of p; where the
+    scan lost the seat there, the median of the surfaces within ``SEAT_MAP_BEHIND_M`` that
+    lie where a seat under a sitting child's pelvis can (1 to 12 cm below p). NaN: none."""
+    disc = (distance_m <= SUPPORT_RADIUS_M) & ~np.isnan(heights)
+    if disc.sum() >= 0.2 * (distance_m <= SUPPORT_RADIUS_M).sum():
+        return float(np.median(heights[disc]))
+    near = (distance_m <= SEAT_MAP_BEHIND_M) & (heights <= p_z - 0.01) & (heights >= p_z - 0.12)
+    return float(np.median(heights[near])) if near.any() else math.nan
+
+
+def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
+    """The supported sitting points along the ray from p toward the NAO (see module doc).
+
+    A point p(s) is on the seat when at least half of the seat map's cells within
+    ``SUPPORT_RADIUS_M`` across the ray at s are seat; the seat ends at the first s that
+    is not, and p(s) is supported up to ``BEAR_EDGE_MARGIN_M`` before that.
+    """
+    along, seat, heights, h0 = seat_map(chair_mesh, sitting_pose)
+    if math.isnan(h0):
         return SeatRay(np.zeros(0), np.zeros(0))
-    on_seat = np.abs(heights - heights[0]) <= SEAT_HEIGHT_TOLERANCE_M
-    # The support disc sees the seat up to its radius past the edge.
-    seat_ends_m = (
-        ahead[int(np.argmin(on_seat))] - STEP_M - SUPPORT_RADIUS_M
-        if not on_seat.all()
-        else math.inf
-    )
-    limit = min(MAX_SLIDE_M, seat_ends_m - BEAR_EDGE_MARGIN_M)
+    columns = round(SUPPORT_RADIUS_M / STEP_M)
+    middle = seat.shape[1] // 2
+    band = slice(middle - columns, middle + columns + 1)
+    on_seat = seat[:, band].mean(axis=1) >= 0.5
+    # The seat's height along the ray: its measured cells' median (h₀ across a filled hole).
+    measured = np.where(seat[:, band] & ~np.isnan(heights[:, band]), heights[:, band], np.nan)
+    row_heights = np.full(len(along), h0)
+    has = ~np.isnan(measured).all(axis=1)
+    row_heights[has] = np.nanmedian(measured[has], axis=1)
+    ahead = along >= -1e-9
+    along, on_seat, row_heights = along[ahead], on_seat[ahead], row_heights[ahead]
+    if not on_seat[0]:
+        # The scan lost the seat's top here, yet the imagined child sat on it: p stays.
+        return SeatRay(np.zeros(1), np.full(1, h0))
+    seat_ends_m = along[int(np.argmin(on_seat))] if not on_seat.all() else math.inf
+    limit = min(MAX_SLIDE_M, seat_ends_m - STEP_M - BEAR_EDGE_MARGIN_M)
     # p stays where it was imagined when that is already within the margin: the
     # imagination's p is where the child sat, so the seat holds the bear there.
-    supported = (ahead <= max(limit, 0.0) + 1e-9) & on_seat
+    supported = (along <= max(limit, 0.0) + 1e-9) & on_seat
     supported &= np.cumprod(supported).astype(bool)
-    return SeatRay(ahead[supported], heights[supported])
+    return SeatRay(along[supported], row_heights[supported])
 
 
 def slide_on_seat(

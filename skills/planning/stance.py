@@ -259,6 +259,12 @@ def choose_stance(
         pose = SittingPose(moved, sitting_pose.yaw)
         goal = goal_on_ray(sitting_pose, stance)
         if scene and (checker.collides_with_walls(goal) or checker.collides_with_obstacles(goal)):
+            blocked = "the wall" if checker.collides_with_walls(goal) else "the obstacle"
+            if not last.reason:
+                last = none._replace(
+                    reason=f"every stance that reaches the seat touches {blocked}",
+                    depends_on_scene=True,
+                )
             continue
         check = validator(chair_mesh, pose, goal)
         preplans += 1
@@ -375,6 +381,9 @@ def check_seat_reachable(
     from skills.planning.se2 import default_seating_validator
 
     began = time.perf_counter()
+    if len(seat_ray(chair_mesh, sitting_pose).slides_m) == 0:
+        p_z = float(sitting_pose.position[2])
+        return SeatReachability(False, "no seat under the sitting position", p_z)
     checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_convex_pieces(chair_mesh))
     validator = seating_validator or default_seating_validator()
     choice = choose_stance(chair_mesh, sitting_pose, checker, validator, scene=False)

@@ -64,9 +64,9 @@ arms switch to the planar posture during the lead-in."""
 RAISED_POSTURE = np.array([0.0, 0.0, 0.0, 0.0, 0.41])
 """q with the bear raised for stepping up to a high seat: standing straight, the arms
 forward, the bear's seat point 0.40 m high and 0.20 m ahead (0.32 m and 0.16 m in
-:data:`STANDING_POSTURE`), tilted 0.2 deg. Over a seat higher than the carried bear (a
-director's chair at 0.33 m) the NAO stops where the carried bear is clear, raises it,
-and steps in: standing there with the bear low, it could not reach the seat."""
+:data:`STANDING_POSTURE`), tilted 0.2 deg. Over a seat higher than the carried bear
+(0.32 m) the NAO stops where the carried bear is clear, raises it, and steps in:
+standing there with the bear low, it could not reach the seat."""
 RAISE_STEP_M = 0.02
 """The raising pose steps back from s_goal in these steps until the raise is clear..."""
 MAX_RAISE_BACKOFF_M = 0.2
@@ -460,8 +460,8 @@ def plan_seating(
         raise InfeasibleSeating(
             STANCE, f"the NAO's feet are {-toe_clearance:.2f} m under the chair"
         )
-    # Standing there with the bear held in front must be clear of the chair too: a high
-    # seat (a director's chair) reaches the carried bear before the NAO's ellipsoid.
+    # Standing there with the bear held in front must be clear of the chair too: a seat
+    # higher than the carried bear reaches it before the NAO's ellipsoid does.
     start_posture = RAISED_POSTURE if raised else STANDING_POSTURE
     standing = exact_posture_violation(
         problems,
@@ -525,9 +525,9 @@ def plan_seating_where_standing(
 ) -> SeatingPlan:
     """:func:`plan_seating` from where the NAO stopped, sliding p closer when needed.
 
-    The walk stops within 5 mm of s_goal, and some chairs leave the pre-plan at s_goal
-    less reach to spare than that (a director's chair's high seat). Then p slides toward
-    the NAO along the seat, up to 3 cm, as the accessibility check slides it
+    The walk stops within 5 mm of s_goal, and the stance search accepts a pre-plan at
+    s_goal with less reach to spare than that (it goes to the reach model's limit). Then
+    p slides toward the NAO along the seat, up to 3 cm, over supported seat only
     (:func:`skills.planning.seat.slide_on_seat`, which keeps it off the seat's edge).
 
     Raises:
