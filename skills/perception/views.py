@@ -4,10 +4,13 @@ The joint vectors were chosen offline by ``bench/perception_views.py``: for each
 camera pose (an eye looking at a target in the chair area) it solved the Panda's IK in
 pybullet (panda.urdf, base at the world origin, camera along the hand's approach axis),
 and checked by forward kinematics the optical axis (within 3 degrees), the eye (within
-2 cm), joint limits, self-collision and 5 cm clearance to the floor and 3 cm to
-:data:`CHAIR_VOLUME`. The camera pose of every capture still comes from the arm's own
-forward kinematics (``RGBDFrame.T_world_camera``), so a different hand-eye extrinsic
-only shifts the views by a few centimetres.
+2 cm), joint limits, self-collision and 5 cm clearance to the floor and 3 cm to the
+chair volume of that time (the chair area widened by 0.25 m, 0.58 m high). A larger
+chair can reach into some of them: before every scan the views are checked again
+against the chair's extent as seen from HOME, inside :data:`CHAIR_VOLUME`, and routed,
+replaced or skipped (``skills.perception.clearance``). The camera pose of every capture
+still comes from the arm's own forward kinematics (``RGBDFrame.T_world_camera``), so a
+different hand-eye extrinsic only shifts the views by a few centimetres.
 """
 
 from __future__ import annotations
