@@ -58,8 +58,9 @@ class RegistrationConfig:
             the inlier distance: the depth noise at 1-1.5 m plus the reference's voxel.
         min_visible_fitness: accept a fit whose seen / (seen + contradicted) share of the
             reference is at least this. A right fit's contradictions come from silhouette
-            pixels only; a yaw off by 30 degrees or more puts whole parts of the chair in
-            free space.
+            pixels only: 0.90-0.97 on generated chairs turned 90 and 180 degrees (rendered
+            and simulated views); a fit 3 cm off along the chair scored 0.77-0.84, a yaw
+            10 degrees off 0.64-0.77, 30 degrees or more below 0.6.
         global_voxel_m: downsampling of the FPFH + RANSAC global registration.
     """
 
@@ -72,7 +73,7 @@ class RegistrationConfig:
     min_fitness: float = 0.6
     max_rmse_m: float = 0.01
     visible_tolerance_m: float = 0.03
-    min_visible_fitness: float = 0.8
+    min_visible_fitness: float = 0.88
     global_voxel_m: float = 0.02
 
 
@@ -204,6 +205,25 @@ def register_chair(
                     best = (key, T, fit_fitness, fit_rmse, score)
             _, T_old_new, fitness, rmse, visible = best
         if visible >= config.min_visible_fitness and rmse <= config.max_rmse_m:
+            # Refine on what the new views saw of the reference: every such point has
+            # its counterpart in the new cloud, unlike new points on sides the
+            # reference lacks, which pull the fit along the chair.
+            T_new_old = np.linalg.inv(T_old_new)
+            carried = transform_points(T_new_old, reference)
+            mask, _ = _visibility(carried, new_frames, config)
+            if mask.sum() >= 100:
+                target = _cloud(new_points, config.fine_voxel_m)
+                source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(reference[mask]))
+                centre = reference[mask].mean(axis=0)
+                for distance in (config.fine_distance_m, 0.5 * config.fine_distance_m):
+                    fit = _icp(source, target, T_new_old, distance, 30)
+                    T_new_old = _planar(np.asarray(fit.transformation), centre)
+                T_old_new = np.linalg.inv(T_new_old)
+                quality = o3d.pipelines.registration.evaluate_registration(
+                    source_fine, target_fine, config.inlier_distance_m, T_old_new
+                )
+                fitness, rmse = float(quality.fitness), float(quality.inlier_rmse)
+                visible = seen(T_old_new)
             return Registration(np.linalg.inv(T_old_new), fitness, rmse, visible)
     raise RegistrationError(
         "chair registration rejected: "
@@ -262,7 +282,15 @@ def visible_fitness(
     Returns:
         seen / (seen + contradicted), or 0 when no frame could see any point.
     """
-    config = config or RegistrationConfig()
+    seen, contradicted = _visibility(points_world, frames, config or RegistrationConfig())
+    judged = int(seen.sum() + contradicted.sum())
+    return float(seen.sum()) / judged if judged else 0.0
+
+
+def _visibility(
+    points_world: np.ndarray, frames: list[RGBDFrame], config: RegistrationConfig
+) -> tuple[np.ndarray, np.ndarray]:
+    """(seen, contradicted) masks of ``points_world`` (see :func:`visible_fitness`)."""
     points = np.asarray(points_world, dtype=np.float64)
     seen = np.zeros(len(points), bool)
     through = np.zeros(len(points), bool)
@@ -283,9 +311,7 @@ def visible_fitness(
         residual = z - depth
         seen |= valid & (np.abs(residual) <= config.visible_tolerance_m)
         through |= valid & (residual < -config.visible_tolerance_m)
-    contradicted = through & ~seen
-    judged = int(seen.sum() + contradicted.sum())
-    return float(seen.sum()) / judged if judged else 0.0
+    return seen, through & ~seen
 
 
 def measure_chair_rotation(
