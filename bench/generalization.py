@@ -122,7 +122,34 @@ def _percent(part: int, whole: int) -> str:
     return f"{part}/{whole} ({100.0 * part / whole:.0f}%)" if whole else "0/0"
 
 
+def workspace_split(outcomes: list[Outcome]) -> None:
+    """Chairs whose true seat height the reach model covers must pass; the others must be
+    stopped with a reason (refused, or no sitting imagined on them)."""
+    from skills.planning.wholebody.reach_model import reach_model
+
+    model = reach_model()
+    low, high = model.min_seat_height_m(), model.max_seat_height_m()
+    inside = [o for o in outcomes if low <= o.chair.seat_height_m <= high]
+    beyond = [o for o in outcomes if not low <= o.chair.seat_height_m <= high]
+    passed = [o for o in inside if o.imagined and o.accessible]
+    print(
+        f"within the workspace (seat {low:.2f}-{high:.2f} m): {len(inside)} chairs, pass "
+        f"{_percent(len(passed), len(inside))}, refused {sum(bool(o.refused) for o in inside)}"
+    )
+    for family in FAMILIES:
+        group = [o for o in inside if o.chair.family == family]
+        if group:
+            ok = sum(o.imagined and o.accessible for o in group)
+            print(f"  {family:<11} {_percent(ok, len(group))}")
+    stopped = [o for o in beyond if not o.accessible and o.reason]
+    print(
+        f"beyond the workspace: {len(beyond)} chairs, stopped with a reason "
+        f"{_percent(len(stopped), len(beyond))} (refused {sum(bool(o.refused) for o in beyond)})"
+    )
+
+
 def report(outcomes: list[Outcome]) -> None:
+    workspace_split(outcomes)
     by_family: dict[str, list[Outcome]] = defaultdict(list)
     for outcome in outcomes:
         by_family[outcome.chair.family].append(outcome)

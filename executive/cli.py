@@ -29,7 +29,13 @@ from executive.interrupts import exit_status, handling_signals, received, signal
 from skills.errors import BearchairError, InputError, one_line
 
 # Skill commands live beside their skills' owners: each module has register(subparsers).
-SKILL_COMMANDS = ("executive.cmd_imagine", "executive.cmd_scan", "executive.cmd_trials")
+SKILL_COMMANDS = (
+    "executive.cmd_imagine",
+    "executive.cmd_scan",
+    "executive.cmd_trials",
+    "executive.cmd_check_hardware",
+    "executive.cmd_view",
+)
 
 
 EXIT_SUCCESS = 0
@@ -75,12 +81,14 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="in simulation, also save a picture whenever a stage ends (OUT/snapshots)",
     )
+    add_recording_arguments(run, record_default=False)
     run.add_argument(
         "--robots",
         type=Path,
         metavar="CELL_JSON",
         help="run on the real NAO and Panda described by this file instead of the simulation",
     )
+    run.add_argument("--yes", action="store_true", help="with --robots: start without asking")
     run.set_defaults(func=_run)
 
     tree = subparsers.add_parser("tree", help="render the mission tree")
@@ -130,7 +138,10 @@ def _run(args: argparse.Namespace) -> int:
         mute=args.mute,
         timeout_s=args.timeout,
         snapshots=args.snapshots,
+        record=args.record,
+        live=args.live,
     )
+    check_recording_arguments("bearchair run", args)
     # Every input and the output place are checked before anything runs.
     if args.robots is not None:
         if args.chair is not None:
@@ -147,7 +158,9 @@ def _run(args: argparse.Namespace) -> int:
     config = RunConfig(**{**config.__dict__, "out_dir": out_dir})
     with _log_to(out_dir / LOG_FILE):
         if args.robots is not None:
-            summary = run_on_robots(config, args.robots, on_tick=StageProgress())
+            summary = run_on_robots(
+                config, args.robots, on_tick=StageProgress(), confirm=None if args.yes else _ask
+            )
         else:
             summary = run_in_simulation(config, on_tick=StageProgress())
     print(format_summary(summary))
@@ -174,6 +187,53 @@ def _log_to(path: Path):
         if handler is not None:
             logging.getLogger().removeHandler(handler)
             handler.close()
+
+
+def _ask(question: str) -> bool:
+    """The operator's yes (no terminal: no)."""
+    try:
+        return input(question).strip().lower() in ("y", "yes")
+    except EOFError:
+        return False
+
+
+def add_recording_arguments(parser: argparse.ArgumentParser, *, record_default: bool) -> None:
+    """``--record/--no-record`` and ``--live`` (Rerun recordings, ``executive.recording``)."""
+    parser.add_argument(
+        "--record",
+        action=argparse.BooleanOptionalAction,
+        default=record_default,
+        help="write a Rerun recording of the run, OUT/mission.rrd (open it with "
+        f"'bearchair view OUT'; default: {'on' if record_default else 'off'})",
+    )
+    parser.add_argument(
+        "--live",
+        nargs="?",
+        const="spawn",
+        metavar="WHERE",
+        help="stream the run to a Rerun viewer as it happens: no value starts the native "
+        "viewer, 'web' serves the web viewer, or a viewer's URL (rerun+http://HOST:9876/proxy)",
+    )
+
+
+def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
+    """One line before any work when a recording was asked for and cannot be made."""
+    from executive.recording import INSTALL_HINT, has_display, rerun_available
+
+    live = getattr(args, "live", None)
+    if (args.record or live) and not rerun_available():
+        flag = "--record" if args.record else "--live"
+        raise CliError(f"{command}: {flag} needs rerun-sdk: {INSTALL_HINT}")
+    if live == "spawn" and not has_display():
+        raise CliError(
+            f"{command}: --live: no display for the native viewer; use --live web "
+            "(a web viewer on a port) or --live rerun+http://HOST:9876/proxy"
+        )
+    if live not in (None, "spawn", "web") and not live.startswith(("rerun://", "rerun+http")):
+        raise CliError(
+            f"{command}: --live takes no value, 'web', or a viewer URL "
+            f"(rerun+http://HOST:9876/proxy), not {live!r}"
+        )
 
 
 def _tree(args: argparse.Namespace) -> int:

@@ -57,6 +57,13 @@ def register(subparsers: Any) -> None:
         help="run without the chairs whose mesh or manifest entry is unusable (listed)",
     )
     parser.add_argument(
+        "--record",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="write a Rerun recording in each trial's run folder, mission.rrd (default: on "
+        "when rerun-sdk is installed; open one with 'bearchair view RUN_DIR')",
+    )
+    parser.add_argument(
         "--worker-cmd",
         help="run each trial with this command instead of 'python -m executive.trial_worker' "
         "(the trial's JSON is appended)",
@@ -78,7 +85,19 @@ def resume_command(args: argparse.Namespace) -> str:
         words += ["--skip-bad"]
     if args.worker_cmd:
         words += ["--worker-cmd", args.worker_cmd]
+    if not getattr(args, "record", True):
+        words += ["--no-record"]
     return shlex.join(words)
+
+
+def _recording_available() -> bool:
+    """Recordings are on by default; without rerun-sdk the campaign runs without them."""
+    from executive.recording import INSTALL_HINT, rerun_available
+
+    if rerun_available():
+        return True
+    print(f"bearchair trials: no recordings (mission.rrd): {INSTALL_HINT}", file=sys.stderr)
+    return False
 
 
 def _db_path(args: argparse.Namespace) -> Path:
@@ -138,6 +157,7 @@ def run(args: argparse.Namespace) -> int:
     except BackendUnavailableError as error:
         raise CliError(f"bearchair trials: {error}") from error
 
+    record = args.record and _recording_available()
     specs = expand_protocol(chairs, args.protocol, args.seed)
     db_path = _db_path(args)
     ensure_writable_dir(args.out, "--out")
@@ -153,7 +173,13 @@ def run(args: argparse.Namespace) -> int:
         progress = Progress(len(specs), done_before)
         try:
             result = run_campaign(
-                specs, store, backend, args.out / "runs", args.timeout, progress=progress
+                specs,
+                store,
+                backend,
+                args.out / "runs",
+                args.timeout,
+                progress=progress,
+                record=record,
             )
         except BackendUnavailableError as error:
             raise CliError(f"bearchair trials: {error}") from error

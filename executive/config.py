@@ -32,6 +32,8 @@ class RunConfig:
         timeout_s: wall time after which the mission is stopped as failed.
         arena: the workspace layout.
         snapshots: in simulation, save a picture whenever a stage ends.
+        record: write a Rerun recording, ``out_dir/mission.rrd`` (``executive.recording``).
+        live: stream to a Rerun viewer while running: ``"spawn"``, ``"web"`` or a URL.
     """
 
     chair_path: Path | None = None
@@ -44,6 +46,8 @@ class RunConfig:
     timeout_s: float = 900.0
     arena: Arena = field(default=DEFAULT_ARENA)
     snapshots: bool = False
+    record: bool = False
+    live: str | None = None
 
     def chair_name(self) -> str:
         return self.chair_path.name if self.chair_path else "box-chair (built in)"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import logging
 import math
 import os
@@ -16,6 +17,7 @@ from executive.config import RunConfig, front_yaw_from_manifest
 from executive.interrupts import raise_if_received, signal_name
 from executive.outputs import atomic_path
 from executive.record import RecordWriteError, RunRecorder
+from executive.recording import open_recording
 from executive.runner import MissionRunner, summarise
 from skills.errors import one_line
 from skills.geometry import wrap_angle
@@ -175,19 +177,46 @@ def run_on_robots(
     cell_file: Path,
     skills: MissionSkills | None = None,
     on_tick: Callable[[MissionRunner], None] | None = None,
+    confirm: Callable[[str], bool] | None = None,
 ) -> dict[str, Any]:
-    """Runs the mission on the real NAO and Panda described by ``cell_file``."""
-    from hardware.real.robots import connect_robots
+    """Runs the mission on the real NAO and Panda described by ``cell_file``.
 
-    robot = connect_robots(cell_file)
+    The cell file is checked first; connecting moves nothing; the robots are activated
+    (the NAO set up for carrying) only once ``confirm`` agrees (None: agreed, ``--yes``).
+
+    Raises:
+        executive.cell_config.CellConfigError: the cell file is wrong (one line).
+        hardware.real.BackendUnavailable: an SDK or a robot is missing, or the operator
+            said no.
+    """
+    from executive.cell_config import load_cell_config
+    from hardware.real import BackendUnavailable, sdk_versions
+    from hardware.real.robots import activate, connect_robots
+
+    cell = load_cell_config(cell_file, config.arena)
+    robot = connect_robots(cell)
+    if confirm is not None and not confirm("The NAO and the Panda will move now. Go on? [y/N] "):
+        robot.close()
+        raise BackendUnavailable("the operator did not confirm: nothing moved")
+    try:
+        activate(robot)
+    except Exception as error:
+        robot.emergency_stop()
+        raise BackendUnavailable(f"could not set the NAO up for carrying: {error}") from error
+    except BaseException:  # Ctrl-C while setting up: stop, then let it through
+        robot.emergency_stop()
+        raise
     root = create_tree()
     recorder = RunRecorder(config.out_dir, root)
+    (config.out_dir / "cell.json").write_text(json.dumps(cell.to_json(), indent=2))
     run_info = {
         "chair": "real",
         "placement": "real",
         "helper": "person",
         "seed": config.seed,
         "backend": "real",
+        "cell_file": str(cell_file),
+        "sdk_versions": sdk_versions(),
         "started_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
     return _run_tree(root, recorder, robot, config, run_info, skills, on_tick, None)
@@ -205,16 +234,24 @@ def _run_tree(
     ground_truth: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """Ticks the tree on ``robot`` and writes the summary; the record survives any error."""
+    recording = None
     try:
+        skills = skills or DefaultSkills()
+        recording = open_recording(root, config.out_dir, record=config.record, live=config.live)
+        if recording is not None:
+            skills = recording.watch_skills(skills, robot.clock)
+            if recording.viewer_url:
+                print(f"live viewer: {recording.viewer_url}", file=sys.stderr, flush=True)
         runner = MissionRunner(
             root,
-            skills or DefaultSkills(),
+            skills,
             robot,
             seed=config.seed,
             arena=config.arena,
             recorder=recorder,
             timeout_s=config.timeout_s,
             on_tick=on_tick,
+            post_tick=() if recording is None else (recording,),
         )
         summary = summarise(runner.run(), run_info)
         # The summary first: a SIGKILL while the picture renders must not lose it.
@@ -231,12 +268,17 @@ def _run_tree(
                 summary["ground_truth"] = ground_truth(summary)
             except Exception as error:  # nor must a missing comparison
                 logger.warning("could not compare with the ground truth: %s", error)
+        if recording is not None:
+            summary["recording"] = recording.cost()
+            recording.log_summary(summary)
         recorder.write_summary(summary)
         if summary.get("record_error"):
             raise RecordWriteError(f"{summary['record_error']} (robots stopped)")
         return summary
     finally:
         recorder.close()
+        if recording is not None:
+            recording.close()
 
 
 def summary_before_start(

@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 import signal
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -73,6 +73,8 @@ class MissionRunner:
         tick_period_s: wall time between ticks; the leaves' workers run meanwhile.
         timeout_s: wall time after which the mission is stopped as failed.
         on_tick: called after each tick (progress display).
+        post_tick: hooks called after each tick and once more when the run has ended
+            (the tree stopped): recordings and viewers (``executive.recording``).
     """
 
     def __init__(
@@ -87,6 +89,7 @@ class MissionRunner:
         tick_period_s: float = 0.05,
         timeout_s: float = 900.0,
         on_tick: Callable[[MissionRunner], None] | None = None,
+        post_tick: Sequence[Callable[[MissionRunner], None]] = (),
     ) -> None:
         self.root = root
         self.tree = py_trees.trees.BehaviourTree(root)
@@ -96,6 +99,7 @@ class MissionRunner:
         self.tick_period_s = tick_period_s
         self.timeout_s = timeout_s
         self.on_tick = on_tick
+        self.post_tick = tuple(post_tick)
         self.stages = [StageTiming(child.name) for child in root.children]
         self._seed = seed
         self._arena = arena
@@ -142,6 +146,8 @@ class MissionRunner:
                     self.recorder.record_tick(self.tree.count, self.elapsed())
                 except RecordWriteError as error:
                     record_error = str(error)
+            for hook in self.post_tick:
+                hook(self)
         return MissionOutcome(
             status=self.root.status,
             stages=self.stages,
@@ -169,9 +175,11 @@ class MissionRunner:
             time.sleep(self.tick_period_s)
 
     def _after_tick(self) -> None:
-        """The per-tick hooks: the run record, then the caller's ``on_tick``."""
+        """The per-tick hooks: the run record, ``post_tick``, then the caller's ``on_tick``."""
         if self.recorder:
             self.recorder.record_tick(self.tree.count, self.elapsed())
+        for hook in self.post_tick:
+            hook(self)
         if self.on_tick:
             self.on_tick(self)
 
@@ -209,9 +217,8 @@ def stop_robots(robot: Robot) -> None:
     Called when a mission ends, fails, is interrupted, or on a second stop signal; it
     must never raise.
     """
-    # TODO(issue 15 merge): switch to the robots' emergency_stop() here.
     try:
-        robot.close()
+        robot.emergency_stop()
     except Exception as error:  # stopping must not hide why we stopped
         logger.error("stopping the robots raised: %s", error)
 

@@ -1,7 +1,7 @@
 """One trial of a campaign, in its own process: ``python -m executive.trial_worker '<json>'``.
 
 The JSON is ``executive.trials.protocol.TrialSpec.to_payload``: chair_path, placement,
-helper, seed, trial_index, out_dir, timeout_s. The worker runs the whole mission in the
+helper, seed, trial_index, out_dir, timeout_s, record. The worker runs the whole mission in the
 simulated world (``executive.mission.run_in_simulation``), which writes the run record
 into out_dir, keeps the robot's reconstructed chair (``chair_reconstructed.ply``) for the
 imagined-pose picture, and prints one line ``BEARCHAIR-TRIAL-RESULT {...}`` on stdout
@@ -53,6 +53,15 @@ class ChairKeeper:
             self.chair_mesh.export(out_dir / "chair_reconstructed.ply")
 
 
+def _rerun_installed() -> bool:
+    from executive.recording import rerun_available
+
+    if rerun_available():
+        return True
+    print("no recording: rerun-sdk is not installed here", file=sys.stderr)
+    return False
+
+
 def mission_timeout_s(harness_timeout_s: float) -> float:
     """The mission's own timeout: a margin before the harness's kill."""
     return max(harness_timeout_s - MISSION_TIMEOUT_MARGIN_S, 0.8 * harness_timeout_s)
@@ -95,6 +104,7 @@ def main(argv: list[str] | None = None) -> int:
             out_dir=out_dir,
             mute=True,
             timeout_s=mission_timeout_s(float(payload["timeout_s"])),
+            record=bool(payload.get("record", False)) and _rerun_installed(),
         )
         keeper = ChairKeeper()
         summary = run_in_simulation(config, on_tick=keeper)

@@ -42,6 +42,9 @@ class FakeArm:
         self._joints = np.asarray(joint_positions_rad, dtype=float)
         self.moves.append(self._joints.copy())
 
+    def emergency_stop(self) -> None:
+        self.emergency_stops = getattr(self, "emergency_stops", 0) + 1
+
     def capture(self) -> RGBDFrame:
         intrinsics = CameraIntrinsics(64, 48, 57.0, 57.0, 31.5, 23.5)
         return RGBDFrame(
@@ -78,6 +81,9 @@ class FakeHumanoid:
         self.hands_open = open_hands
 
     def stop(self) -> None:
+        self.stopped += 1
+
+    def emergency_stop(self) -> None:
         self.stopped += 1
 
 

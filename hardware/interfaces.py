@@ -83,6 +83,13 @@ class ScanningArm(Protocol):
         """Captures one RGB-D frame with the camera pose from forward kinematics."""
         ...
 
+    def emergency_stop(self) -> None:
+        """Stops the arm now from any thread: a running ``move_to`` ends with an error.
+
+        Latching: later motions are refused. Must not raise.
+        """
+        ...
+
 
 @runtime_checkable
 class Humanoid(Protocol):
@@ -116,6 +123,14 @@ class Humanoid(Protocol):
         """Stops walking and holds the current posture."""
         ...
 
+    def emergency_stop(self) -> None:
+        """Stops every motion now from any thread (walk, trajectory, hands).
+
+        A blocking ``play_joint_trajectory`` returns or raises; latching: later motions
+        are refused. Must not raise.
+        """
+        ...
+
 
 @runtime_checkable
 class Speaker(Protocol):
@@ -144,6 +159,7 @@ class SeatingJudgement(NamedTuple):
         torso_tilt_deg: angle between the bear's torso axis and vertical.
         facing_error_deg: angle between the bear's facing and the sitting direction.
         reason: empty on success, else which criterion failed.
+        T_world_bear: 4x4 pose of the bear when judged (None when not known).
     """
 
     seated: bool
@@ -151,6 +167,7 @@ class SeatingJudgement(NamedTuple):
     torso_tilt_deg: float
     facing_error_deg: float
     reason: str = ""
+    T_world_bear: np.ndarray | None = None
 
 
 @runtime_checkable
@@ -182,8 +199,17 @@ class Robot:
     helper: Helper | None = None
     judge: SeatingJudge | None = None
 
+    def emergency_stop(self) -> None:
+        """Stops every actuator now (Ctrl-C, SIGTERM, a timeout, an error); never raises.
+
+        Safe from any thread and more than once; motions are refused afterwards.
+        """
+        # Stopping must never raise, whatever state the robot is in: one device's error
+        # must not keep the other moving.
+        for device in (self.humanoid, self.arm):
+            with contextlib.suppress(Exception):
+                device.emergency_stop()
+
     def close(self) -> None:
         """Stops every actuator; safe to call more than once."""
-        # Stopping must never raise during shutdown, whatever state the robot is in.
-        with contextlib.suppress(Exception):
-            self.humanoid.stop()
+        self.emergency_stop()

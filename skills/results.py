@@ -13,6 +13,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import trimesh
 
+from hardware.interfaces import RGBDFrame
 from skills.geometry import SE2Pose, SittingPose
 
 
@@ -24,6 +25,8 @@ class ChairScan(NamedTuple):
         chair_points: (N, 3) point cloud of the chair in the world frame.
         views: number of RGB-D views fused.
         seconds: wall time per step (for example ``capture``, ``tsdf``, ``floor``).
+        frames: the RGB-D views fused, each with its camera pose (for looking at the scan
+            afterwards; empty when the scan did not keep them).
         notes: scan views skipped or replaced to keep the arm clear of the chair.
     """
 
@@ -31,6 +34,7 @@ class ChairScan(NamedTuple):
     chair_points: np.ndarray
     views: int
     seconds: dict[str, float]
+    frames: tuple[RGBDFrame, ...] = ()
     notes: tuple[str, ...] = ()
 
     def summary(self) -> dict[str, Any]:
@@ -57,6 +61,8 @@ class DropOutcome(NamedTuple):
         upper_contacts: contact points of upper-body links with the chair.
         lower_contacts: contact points of lower-body links with the chair.
         correct: every threshold of the sitting affordance model holds.
+        link_poses: (n_links, 4, 4) each link's final frame T_chair_link, in
+            ``skills.imagination.agent.LINK_NAMES`` order (None when not measured).
     """
 
     rotation_index: int
@@ -69,6 +75,7 @@ class DropOutcome(NamedTuple):
     upper_contacts: int
     lower_contacts: int
     correct: bool
+    link_poses: np.ndarray | None = None
 
 
 class RotationVote(NamedTuple):
@@ -127,6 +134,8 @@ class ImaginationResult(NamedTuple):
         drops: every drop's outcome.
         seconds: wall time per step (``prepare``, ``simulate``, ``total``).
         reason: why no sitting pose was found (empty when found).
+        T_mesh_chair: 4x4 pose of the drops' chair frame (after g_obb) in the frame of
+            the mesh given (None when no drop was simulated).
         vote: how the correct sittings were spread over the rotations (None when none).
     """
 
@@ -137,6 +146,7 @@ class ImaginationResult(NamedTuple):
     drops: tuple[DropOutcome, ...]
     seconds: dict[str, float]
     reason: str = ""
+    T_mesh_chair: np.ndarray | None = None
     vote: RotationVote | None = None
 
     def summary(self) -> dict[str, Any]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import threading
 
+import numpy as np
 import pytest
 
 from skills.control import PID, WalkError, walk_path
@@ -55,6 +56,23 @@ def test_walk_through_tag_dropouts_uses_odometry() -> None:
     assert locate.misses > 10
     assert result.reached, result.reason
     assert humanoid.true_pose.distance_to(PATH[-1]) <= 0.035
+
+
+def test_a_tag_frame_every_track_period_and_odometry_between() -> None:
+    humanoid, clock, locate = _world(seed=5)
+    frames = []
+
+    def counted() -> SE2Pose | None:
+        frames.append(clock.now())
+        return locate()
+
+    result = walk_path(humanoid, clock, counted, PATH)
+    assert result.reached, result.reason
+    assert humanoid.true_pose.distance_to(PATH[-1]) <= 0.03
+    # 0.1 s control steps, a frame every 0.3 s (and after each settle).
+    gaps = np.diff(frames)
+    assert np.median(gaps) == pytest.approx(0.3, abs=1e-6)
+    assert len(frames) < 0.5 * result.seconds / 0.1
 
 
 def test_commands_respect_nao_speed_limits() -> None:

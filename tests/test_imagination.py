@@ -125,6 +125,60 @@ def test_solid_below_surface_fills_an_open_scan_like_surface(box_chair: trimesh.
     assert _volume_m3(solid_open) == pytest.approx(_volume_m3(solid_closed), rel=0.05)
 
 
+def test_column_tops_close_cracks_as_a_3d_binary_closing_does() -> None:
+    from scipy import ndimage
+
+    from skills.meshes import _column_tops, surface_samples
+
+    # A scan-like seat: a 0.3 m plate 0.2 m up, of 1 cm quads with 5 % of them missing
+    # (one-cell holes at a 1 cm pitch), on one leg.
+    rng = np.random.default_rng(5)
+    u, v = np.meshgrid(np.arange(31) * 0.01, np.arange(31) * 0.01, indexing="ij")
+    vertices = np.column_stack([u.ravel(), v.ravel(), np.full(u.size, 0.2)])
+    quads = [
+        (i * 31 + j, (i + 1) * 31 + j, (i + 1) * 31 + j + 1, i * 31 + j + 1)
+        for i in range(30)
+        for j in range(30)
+    ]
+    kept = [q for q in quads if rng.random() > 0.05]
+    faces = [(a, b, c) for a, b, c, _ in kept] + [(a, c, d) for a, _, c, d in kept]
+    leg = trimesh.creation.box(extents=(0.02, 0.02, 0.2))
+    leg.apply_translation((0.01, 0.01, 0.1))
+    mesh = trimesh.util.concatenate([trimesh.Trimesh(vertices, faces, process=False), leg])
+    top, pitch, origin = _column_tops(mesh, 0.01, 256)
+    # The same solid built cell by cell in 3D, closed by scipy.
+    shape = np.floor(np.asarray(mesh.extents) / pitch).astype(int) + 1
+    cells = np.clip(
+        np.floor((surface_samples(mesh, 0.5 * pitch) - origin) / pitch).astype(int), 0, shape - 1
+    )
+    highest = np.full(shape[:2], -1)
+    np.maximum.at(highest, (cells[:, 0], cells[:, 1]), cells[:, 2])
+    filled = np.arange(shape[2])[None, None, :] <= highest[:, :, None]
+    filled |= ndimage.binary_closing(filled, structure=np.ones((3, 3, 3), dtype=bool))
+    expected = np.where(
+        filled.any(axis=2), shape[2] - 1 - np.argmax(filled[:, :, ::-1], axis=2), -1
+    )
+    assert np.any(expected != highest), (
+        "the cracks must need closing for this test to mean anything"
+    )
+    np.testing.assert_array_equal(top, expected)
+
+
+def test_a_sliver_is_sampled_in_rows_and_covered_within_the_spacing() -> None:
+    from scipy.spatial import cKDTree
+
+    from skills.meshes import surface_samples
+
+    # 1 m long, 1 cm wide: a lattice at 5 mm would put 20,000 points on it.
+    sliver = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0.5, 0.01, 0]], [[0, 1, 2]], process=False)
+    samples = surface_samples(sliver, 0.005)
+    assert len(samples) < 1000
+    weights = np.random.default_rng(2).dirichlet(np.ones(3), size=2000)
+    on_triangle = weights @ np.asarray(sliver.vertices, dtype=float)
+    distances, _ = cKDTree(samples).query(on_triangle)
+    assert distances.max() <= 0.005
+
+
 ARMCHAIR = {"seat_width_m": 0.30, "armrest_height_m": 0.38}
 """A box chair with armrest panels: 0.24 m between them, 0.14 m above the seat."""
 

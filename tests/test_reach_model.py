@@ -72,16 +72,18 @@ def test_the_planner_refuses_the_bear_beyond_the_model_reach(height, front):
     assert refused.value.constraint == "bear placement"
 
 
-def test_lookup_is_conservative_between_grid_points():
+def test_lookup_interpolates_and_stops_where_a_neighbour_has_no_posture():
     heights = np.array([0.2, 0.3])
     fronts = np.array([0.1, 0.2])
-    model = ReachModel(heights, fronts, np.array([[0.30, 0.32], [0.28, np.nan]]), 0.4)
+    model = ReachModel(heights, fronts, np.array([[0.30, 0.32], [0.28, 0.30]]), 0.4)
     assert model.max_forward(0.2, 0.1) == pytest.approx(0.30)
-    assert model.max_forward(0.25, 0.15) == pytest.approx(0.28)  # the lowest neighbour
+    assert model.max_forward(0.25, 0.15) == pytest.approx(0.30)  # bilinear
     assert model.max_forward(0.2, 0.5) == pytest.approx(0.32)  # beyond the grid: last column
-    assert math.isnan(model.max_forward(0.25, 0.2))  # a neighbour without a posture
     assert math.isnan(model.max_forward(0.2, 0.05))  # feet in the seat
     assert not model.reachable(0.2, 0.1, 0.31) and model.reachable(0.2, 0.1, 0.29)
+    holed = model._replace(max_forward_m=np.array([[0.30, 0.32], [0.28, np.nan]]))
+    assert math.isnan(holed.max_forward(0.25, 0.15))  # a neighbour without a posture
+    assert holed.max_forward(0.2, 0.15) == pytest.approx(0.31)  # on the row that has both
 
 
 def test_seats_higher_than_the_raised_bear_are_out_of_reach():

@@ -1,123 +1,387 @@
-"""The real-robot backends against test doubles of their SDKs (no robot needed)."""
+"""The real-robot backends against the SDK stand-ins (no robot needed).
+
+The NAO tests talk to :class:`hardware.real.standins.NaoqiStandin` over real ``qi``
+networking (skipped without the ``nao`` extra): a wrong method name or argument type
+raises there as on the robot. The arm and camera run against fakes built from
+panda-py's and openni's signatures, checked against the installed SDKs when present.
+"""
 
 from __future__ import annotations
 
+import inspect
 import math
+import threading
+import time
 
 import numpy as np
 import pytest
 
 from hardware.interfaces import Humanoid, ScanningArm, Speaker
-from hardware.real import BackendUnavailable, import_sdk
-from hardware.real.nao import MAX_FORWARD_MPS, NaoHumanoid, NaoSpeaker
-from hardware.real.panda import CARMINE_INTRINSICS, PandaArm
-from skills.geometry import SE2Pose, yaw_transform
+from hardware.real import BackendUnavailable, EmergencyStopped, import_sdk
+from hardware.real.camera import CarmineCamera
+from hardware.real.panda import JOINT_LIMITS_LOWER_RAD, ArmFault, PandaArm, into_walls
+from hardware.real.standins import (
+    FRANKA_HAND_F_T_EE,
+    FakeOpenNI2,
+    FakePanda,
+    panda_flange_pose,
+)
+from skills.geometry import SE2Pose
+from skills.perception.views import SCAN_CONFIGURATIONS
 
 
-class FakeService:
-    """Records every call made to a NAOqi service."""
-
-    def __init__(self, returns=None):
-        self.calls = []
-        self._returns = returns or {}
-
-    def __getattr__(self, name):
-        def call(*args):
-            self.calls.append((name, args))
-            return self._returns.get(name)
-
-        return call
+def test_missing_sdk_names_the_extra_to_install():
+    with pytest.raises(BackendUnavailable, match=r"pip install 'bearchair\[nao\]'"):
+        import_sdk("not_a_robot_sdk_module", "bearchair[nao]")
 
 
-class FakeSession:
-    def __init__(self):
-        self.services = {
-            "ALMotion": FakeService({"getRobotPosition": [1.0, 0.0, math.pi / 2]}),
-            "ALRobotPosture": FakeService(),
-            "ALTextToSpeech": FakeService(),
-        }
-
-    def service(self, name):
-        return self.services[name]
+# --- NAO over qi --------------------------------------------------------------------------
 
 
-def test_missing_sdk_names_the_package_to_install():
-    with pytest.raises(BackendUnavailable, match="pip install not-a-robot-sdk"):
-        import_sdk("not_a_robot_sdk_module", "not-a-robot-sdk")
+def _eventually(condition, timeout_s: float = 3.0) -> bool:
+    """Polls ``condition``: async qi calls reach the stand-in a moment after they are sent."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(0.005)
+    return condition()
 
 
-def test_nao_pose_is_odometry_mapped_into_the_world():
-    nao = NaoHumanoid(FakeSession(), odom_origin=SE2Pose(2.0, 0.0, math.pi))
-    pose = nao.pose()
+@pytest.fixture
+def naoqi():
+    pytest.importorskip("qi")
+    from hardware.real.standins import NaoqiStandin
+
+    with NaoqiStandin(time_scale=4.0) as standin:
+        yield standin
+
+
+@pytest.fixture
+def nao(naoqi):
+    from hardware.real.nao import NaoHumanoid, connect
+
+    session = connect(naoqi.url)
+    yield NaoHumanoid(session, odom_origin=SE2Pose(1.9, 0.0, math.pi))
+    session.close()
+
+
+def test_connecting_moves_nothing_and_activation_sets_up_carrying(naoqi, nao):
     assert isinstance(nao, Humanoid)
-    assert pose.x == pytest.approx(1.0) and pose.y == pytest.approx(0.0, abs=1e-12)
-    assert pose.theta == pytest.approx(-math.pi / 2)
+    state = nao.state()
+    assert state == {
+        "awake": False,
+        "arm_swing": True,
+        "autonomous_life": "solitary",
+        "basic_awareness": True,
+        "battery_percent": 87,
+    }
+    moving = {"wakeUp", "moveTo", "angleInterpolation", "goToPosture", "setState", "setEnabled"}
+    assert not moving & {name for _, name, _ in naoqi.calls}
+    nao.activate()
+    assert naoqi.called("setState") == [("disabled",)]
+    assert naoqi.called("setEnabled") == [(False,)]
+    assert naoqi.called("setMoveArmsEnabled") == [(False, False)]
+    assert naoqi.called("closeHand") == [("LHand",), ("RHand",)]
+    names, angles, speed = naoqi.called("angleInterpolationWithSpeed")[0]
+    assert names[:2] == ["HeadYaw", "HeadPitch"] and "LShoulderPitch" in names
+    assert len(angles) == len(names) and 0.0 < speed <= 1.0
+    order = [name for _, name, _ in naoqi.calls]
+    assert order.index("setState") < order.index("wakeUp") < order.index("goToPosture")
 
 
-def test_nao_velocity_is_clipped_to_walking_limits():
-    session = FakeSession()
-    nao = NaoHumanoid(session)
-    nao.set_velocity(1.0, 0.0, -3.0)
-    name, (vx, vy, omega) = session.services["ALMotion"].calls[-1]
-    assert name == "move" and vx == MAX_FORWARD_MPS and omega == -0.5 and vy == 0.0
+def test_odometry_counts_from_the_first_reading(naoqi, nao):
+    # NAOqi's odometry reads (3, -1, 0.7) at the start: the pose must still be the start.
+    pose = nao.pose()
+    assert (pose.x, pose.y) == pytest.approx((1.9, 0.0), abs=1e-6)
+    assert pose.theta == pytest.approx(math.pi, abs=1e-6) or pose.theta == pytest.approx(
+        -math.pi, abs=1e-6
+    )
+    nao.activate()
+    nao.set_velocity(0.1, 0.0, 0.0)
+    assert _eventually(lambda: naoqi.called("moveTo"))
+    assert _eventually(lambda: not naoqi.motion.walking())  # the 0.5 s command ran out
+    pose = nao.pose()
+    # Forward from a start facing -x: 5 cm toward -x.
+    assert pose.x == pytest.approx(1.9 - 0.05, abs=2e-3) and pose.y == pytest.approx(0.0, abs=2e-3)
 
 
-def test_nao_trajectory_becomes_one_angle_interpolation():
-    session = FakeSession()
-    nao = NaoHumanoid(session)
+def test_walking_commands_are_bounded_moves_that_end_by_themselves(naoqi, nao):
+    nao.activate()
+    nao.set_velocity(1.0, 0.0, -3.0)  # clipped to 0.1 m/s and 0.5 rad/s
+    assert _eventually(lambda: naoqi.called("moveTo"))
+    sent = time.monotonic()
+    x, y, theta = naoqi.called("moveTo")[-1]
+    assert x == pytest.approx(0.05) and y == 0.0 and theta == pytest.approx(-0.25)
+    # The process "dies": no more commands. The walk ends 0.5 s of robot time later.
+    assert _eventually(lambda: not naoqi.motion.walking())
+    assert time.monotonic() - sent < 0.5 / naoqi.time_scale + 0.1
+
+
+def test_trajectory_is_one_cancellable_angle_interpolation(naoqi, nao):
+    nao.activate()
     positions = np.array([[0.0, 0.1], [0.2, 0.3], [0.4, 0.5]])
-    nao.play_joint_trajectory(["LHipPitch", "RHipPitch"], [0.0, 1.0, 2.0], positions)
-    name, (names, angles, times, absolute) = session.services["ALMotion"].calls[-1]
-    assert name == "angleInterpolation" and absolute is True
-    assert names == ["LHipPitch", "RHipPitch"]
-    assert angles == [[0.2, 0.4], [0.3, 0.5]] and times == [[1.0, 2.0], [1.0, 2.0]]
+    nao.play_joint_trajectory(["LHipPitch", "RHipPitch"], [0.0, 0.4, 0.8], positions)
+    names, angles, times, absolute = naoqi.called("angleInterpolation")[-1]
+    assert names == ["LHipPitch", "RHipPitch"] and absolute is True
+    assert angles == [[0.2, 0.4], [0.3, 0.5]] and times == [[0.4, 0.8], [0.4, 0.8]]
+    assert naoqi.motion.joints["RHipPitch"] == pytest.approx(0.5)
     with pytest.raises(ValueError, match="does not match"):
         nao.play_joint_trajectory(["LHipPitch"], [1.0], positions)
 
 
-def test_nao_hands_and_speech():
-    session = FakeSession()
-    nao = NaoHumanoid(session)
-    nao.set_hands(True)
-    assert ("openHand", ("LHand",)) in session.services["ALMotion"].calls
+@pytest.mark.parametrize("motion", ["trajectory", "walk", "hands"])
+def test_emergency_stop_ends_every_nao_motion(naoqi, nao, motion):
+    nao.activate()
+    errors: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            if motion == "trajectory":
+                nao.play_joint_trajectory(["LKneePitch"], [20.0], np.array([[1.0]]))
+            elif motion == "walk":
+                for _ in range(100):
+                    nao.set_velocity(0.1, 0.0, 0.0)
+                    time.sleep(0.02)
+            else:
+                for _ in range(100):
+                    nao.set_hands(True)
+        except EmergencyStopped as error:
+            errors.append(error)
+
+    worker = threading.Thread(target=run)
+    worker.start()
+    time.sleep(0.15)
+    stopped_at = time.monotonic()
+    nao.emergency_stop()
+    worker.join(5.0)
+    assert not worker.is_alive() and time.monotonic() - stopped_at < 0.5
+    assert errors, "the running motion must end with EmergencyStopped"
+    assert not naoqi.motion.walking()
+    assert naoqi.called("stopMove") and naoqi.called("killTasksUsingResources")
+    assert "LKneePitch" in naoqi.called("killTasksUsingResources")[-1][0]
+    if motion == "trajectory":
+        assert "LKneePitch" not in naoqi.motion.joints  # cancelled, never completed
+    with pytest.raises(EmergencyStopped):
+        nao.set_velocity(0.1, 0.0, 0.0)
+
+
+def test_speech_goes_through_text_to_speech(naoqi):
+    from hardware.real.nao import NaoSpeaker, connect
+
+    session = connect(naoqi.url)
     speaker = NaoSpeaker(session)
     assert isinstance(speaker, Speaker)
     speaker.say("hello")
-    assert session.services["ALTextToSpeech"].calls == [("say", ("hello",))]
+    assert naoqi.called("say") == [("hello",)]
 
 
-class FakePanda:
-    def __init__(self):
-        self.q = np.zeros(7)
+def test_the_standin_refuses_what_naoqi_would(naoqi):
+    from hardware.real.nao import connect
 
-    def move_to_joint_position(self, q, speed_factor=0.2):
-        self.q = np.asarray(q)
-        return True
-
-    def get_state(self):
-        return type("State", (), {"q": self.q})()
-
-    def get_pose(self):
-        pose = np.eye(4)
-        pose[:3, 3] = [0.4, 0.0, 0.5 + self.q[0]]
-        return pose
+    session = connect(naoqi.url)
+    motion = session.service("ALMotion")
+    with pytest.raises(RuntimeError, match="did not match"):
+        motion.moveTo(0.1, 0.0)
+    with pytest.raises(AttributeError):
+        motion.walkTo(0.1, 0.0, 0.0)
+    with pytest.raises(RuntimeError, match="not awake"):
+        motion.moveTo(0.1, 0.0, 0.0)
 
 
-class FakeCamera:
-    intrinsics = CARMINE_INTRINSICS
+def test_unreachable_nao_fails_fast_with_its_url():
+    pytest.importorskip("qi")
+    from hardware.real.nao import connect
 
-    def read(self):
-        return np.zeros((480, 640, 3), np.uint8), np.ones((480, 640), np.float32)
+    started = time.monotonic()
+    with pytest.raises(BackendUnavailable, match=r"tcp://127\.0\.0\.1:9"):
+        connect("tcp://127.0.0.1:9", timeout_s=2.0)
+    assert time.monotonic() - started < 5.0
 
 
-def test_panda_camera_pose_is_forward_kinematics_times_hand_eye():
-    T_world_base = yaw_transform(math.pi / 2)
-    T_hand_camera = np.eye(4)
-    T_hand_camera[:3, 3] = [0.0, 0.0, 0.1]
-    arm = PandaArm(FakePanda(), FakeCamera(), T_world_base, T_hand_camera)
+# --- Panda --------------------------------------------------------------------------------
+
+
+def _arm(panda: FakePanda | None = None, camera=None) -> PandaArm:
+    camera = camera or CarmineCamera(FakeOpenNI2())
+    return PandaArm(panda or FakePanda("standin"), camera, np.eye(4), np.eye(4))
+
+
+def test_fake_panda_matches_the_installed_sdk():
+    panda_py = pytest.importorskip("panda_py")
+    for name in ("get_state", "get_pose", "get_robot", "recover", "raise_error", "stop_controller"):
+        assert hasattr(panda_py.Panda, name)
+    doc = panda_py.Panda.move_to_joint_position.__doc__
+    for parameter in inspect.signature(FakePanda.move_to_joint_position).parameters:
+        if parameter not in ("self", "positions"):
+            assert f"{parameter}:" in doc, parameter
+    assert "speed_factor: typing.SupportsFloat | typing.SupportsIndex = 0.2" in doc
+    for name in ("stop", "read_once", "automatic_error_recovery", "server_version"):
+        assert hasattr(panda_py.libfranka.Robot, name)
+    for name in ("O_T_EE", "F_T_EE", "q", "robot_mode", "current_errors"):
+        assert hasattr(panda_py.libfranka.RobotState, name)
+    assert set(panda_py.libfranka.RobotMode.__members__) >= {"kReflex", "kIdle", "kUserStopped"}
+
+
+def test_camera_pose_uses_the_flange_not_o_t_ee():
+    panda = FakePanda("standin")
+    arm = _arm(panda)
     assert isinstance(arm, ScanningArm)
-    arm.move_to([0.1, 0, 0, 0, 0, 0, 0])
     frame = arm.capture()
-    np.testing.assert_allclose(frame.T_world_camera[:3, 3], [0.0, 0.4, 0.7], atol=1e-12)
-    with pytest.raises(ValueError, match="7 joints"):
-        arm.move_to([0.0, 0.0])
+    np.testing.assert_allclose(frame.T_world_camera, panda_flange_pose(panda.q), atol=1e-12)
+    # O_T_EE is 10.34 cm further along the flange's z axis.
+    offset = np.linalg.norm(panda.get_pose()[:3, 3] - frame.T_world_camera[:3, 3])
+    assert offset == pytest.approx(np.linalg.norm(FRANKA_HAND_F_T_EE[:3, 3]))
+
+
+def test_scan_view_inside_the_joint_wall_is_moved_to_its_edge():
+    assert SCAN_CONFIGURATIONS[4][1] - JOINT_LIMITS_LOWER_RAD[1] < 0.01  # the 9 mrad view
+    target, notes = into_walls(np.asarray(SCAN_CONFIGURATIONS[4]))
+    assert notes and notes[0].startswith("joint 2")
+    assert target[1] == pytest.approx(JOINT_LIMITS_LOWER_RAD[1] + 0.09)
+    with pytest.raises(ValueError, match="joint 4"):
+        into_walls(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]))
+
+
+def test_arm_moves_and_reports_libfranka_faults_without_recovering():
+    panda = FakePanda("standin")
+    arm = _arm(panda)
+    target = np.asarray(SCAN_CONFIGURATIONS[0])
+    arm.move_to(target)
+    np.testing.assert_allclose(arm.joint_positions(), target, atol=1e-9)
+    panda.inject_reflex("cartesian_reflex")
+    with pytest.raises(ArmFault, match=r"kReflex.*cartesian_reflex"):
+        arm.move_to(SCAN_CONFIGURATIONS[1])
+    assert not [call for call in panda.calls if "recovery" in call[0] or call[0] == "recover"]
+
+
+def test_arm_timeout_is_honoured_and_stops_the_arm():
+    panda = FakePanda("standin")
+    panda.time_scale = 0.05  # a slow arm: the move would take many seconds
+    arm = _arm(panda)
+    started = time.monotonic()
+    with pytest.raises(TimeoutError, match="stopped"):
+        arm.move_to(SCAN_CONFIGURATIONS[2], timeout_s=0.3)
+    assert time.monotonic() - started < 1.0
+    assert ("Robot.stop", ()) in panda.calls
+
+
+def test_emergency_stop_preempts_a_running_arm_move():
+    panda = FakePanda("standin")
+    panda.time_scale = 0.2
+    arm = _arm(panda)
+    errors: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            arm.move_to(SCAN_CONFIGURATIONS[2])
+        except EmergencyStopped as error:
+            errors.append(error)
+
+    worker = threading.Thread(target=run)
+    worker.start()
+    time.sleep(0.2)
+    arm.emergency_stop()
+    worker.join(2.0)
+    assert not worker.is_alive() and errors
+    assert ("Robot.stop", ()) in panda.calls
+    q = arm.joint_positions()
+    time.sleep(0.05)
+    np.testing.assert_array_equal(arm.joint_positions(), q)
+    with pytest.raises(EmergencyStopped):
+        arm.move_to(SCAN_CONFIGURATIONS[0])
+
+
+# --- Carmine ------------------------------------------------------------------------------
+
+
+def test_carmine_sets_640x480_depth_in_mm_registered_and_synchronised():
+    openni = FakeOpenNI2()
+    camera = CarmineCamera(openni)
+    rgb, depth_m = camera.read()
+    assert rgb.shape == (480, 640, 3) and depth_m.shape == (480, 640)
+    assert depth_m.dtype == np.float32 and np.all(depth_m == pytest.approx(1.0))
+    assert rgb[0, 0].tolist() == [128, 128, 128]  # copied before the frame was released
+    assert openni.registration == openni.IMAGE_REGISTRATION_DEPTH_TO_COLOR and openni.sync
+    assert camera.mode()["depth"].startswith("640x480")
+
+
+def test_carmine_library_folder_and_missing_device_are_one_line_errors():
+    with pytest.raises(BackendUnavailable, match="openni_library_dir"):
+        CarmineCamera(FakeOpenNI2(library_dir="/usr/lib/x86_64-linux-gnu"))
+    CarmineCamera(
+        FakeOpenNI2(library_dir="/usr/lib/x86_64-linux-gnu"),
+        library_dir="/usr/lib/x86_64-linux-gnu",
+    )
+    with pytest.raises(BackendUnavailable, match="no OpenNI2 camera found"):
+        CarmineCamera(FakeOpenNI2(devices=0))
+
+
+def test_fake_openni_matches_the_installed_binding():
+    openni2 = pytest.importorskip("openni.openni2")
+    for name in ("initialize", "Device", "PIXEL_FORMAT_DEPTH_1_MM", "PIXEL_FORMAT_RGB888"):
+        assert hasattr(openni2, name)
+    assert "IMAGE_REGISTRATION_DEPTH_TO_COLOR" in dir(openni2)
+    for name in (
+        "open_any",
+        "create_depth_stream",
+        "create_color_stream",
+        "is_image_registration_mode_supported",
+        "set_image_registration_mode",
+        "set_depth_color_sync_enabled",
+    ):
+        assert hasattr(openni2.Device, name), name
+    for name in ("configure_mode", "get_video_mode", "start", "stop", "read_frame"):
+        assert hasattr(openni2.VideoStream, name), name
+    for name in ("get_buffer_as_uint16", "get_buffer_as_uint8"):
+        assert hasattr(openni2.VideoFrame, name), name
+    assert list(inspect.signature(openni2.VideoStream.configure_mode).parameters) == [
+        "self",
+        "width",
+        "height",
+        "fps",
+        "pixel_format",
+    ]
+
+
+# --- RealSense ----------------------------------------------------------------------------
+
+
+def test_realsense_aligns_depth_to_colour_in_metres():
+    from hardware.real.camera import RealSenseCamera
+    from hardware.real.standins import FakeRealSense
+
+    rs = FakeRealSense(depth_scale_m=0.0001)  # a D405-like 0.1 mm unit
+    camera = RealSenseCamera(rs)
+    rgb, depth_m = camera.read()
+    assert rgb.shape == (480, 640, 3) and depth_m.dtype == np.float32
+    assert np.all(depth_m == pytest.approx(1.0))
+    assert rs.aligned_to == rs.stream.color
+    assert (rs.stream.depth, 640, 480, rs.format.z16, 30) in rs.enabled
+    assert camera.intrinsics.fx == 615.0 and "0.1 mm" in camera.mode()["depth"]
+    with pytest.raises(BackendUnavailable, match="no RealSense camera"):
+        RealSenseCamera(FakeRealSense(devices=0))
+
+
+def test_fake_realsense_matches_the_installed_sdk():
+    rs = pytest.importorskip("pyrealsense2")
+    assert {"depth", "color"} <= set(dir(rs.stream)) and {"z16", "rgb8"} <= set(dir(rs.format))
+    for owner, name in (
+        (rs.config, "enable_stream"),
+        (rs.config, "enable_device"),
+        (rs.pipeline, "start"),
+        (rs.pipeline, "wait_for_frames"),
+        (rs.pipeline, "stop"),
+        (rs.align, "process"),
+        (rs.device, "first_depth_sensor"),
+        (rs.depth_sensor, "get_depth_scale"),
+        (rs.pipeline_profile, "get_stream"),
+        (rs.stream_profile, "as_video_stream_profile"),
+        (rs.video_stream_profile, "get_intrinsics"),
+        (rs.composite_frame, "get_depth_frame"),
+        (rs.composite_frame, "get_color_frame"),
+    ):
+        assert hasattr(owner, name), f"{owner.__name__}.{name}"
+    assert "width: int, height: int, format: pyrealsense2.pyrealsense2.format, framerate: int" in (
+        rs.config.enable_stream.__doc__
+    )

@@ -42,6 +42,38 @@ def test_world_builds_with_the_box_chair_and_protocols(world):
     assert world.bear.held
 
 
+def test_a_window_of_the_image_is_the_full_frame_cropped_and_tracks_the_tag():
+    from skills.perception.tags import locate_humanoid
+
+    with SimWorld(SimConfig(seed=3, camera_noise=False)) as quiet:
+        full = quiet.panda.capture()
+        window = quiet.panda.capture_region(200, 150, 120, 90)
+        with pytest.raises(ValueError, match="leaves"):
+            quiet.panda.capture_region(600, 0, 100, 10)
+        # Where the walk passes, 1.3 m from the arm: a full frame first, then a window.
+        quiet.place_nao(SE2Pose(1.3, 0.2, 2.8))
+        first = locate_humanoid(quiet.panda)
+        first_shape = quiet.panda.last_view.rgb.shape[:2]
+        second = locate_humanoid(quiet.panda)
+        second_shape = quiet.panda.last_view.rgb.shape[:2]
+        truth = quiet.nao.true_pose()
+    assert window.rgb.shape == (90, 120, 3) and window.depth_m.shape == (90, 120)
+    assert window.intrinsics.cx == pytest.approx(full.intrinsics.cx - 200)
+    assert window.intrinsics.cy == pytest.approx(full.intrinsics.cy - 150)
+    crop_rgb = full.rgb[150:240, 200:320].astype(int)
+    assert np.mean(np.abs(window.rgb.astype(int) - crop_rgb)) < 2.0
+    crop_depth = full.depth_m[150:240, 200:320]
+    both = (crop_depth > 0) & (window.depth_m > 0)
+    assert both.mean() > 0.9
+    assert np.median(np.abs(window.depth_m[both] - crop_depth[both])) < 1e-3
+
+    assert first is not None and first_shape == (480, 640)
+    assert second_shape[0] * second_shape[1] < 0.1 * 480 * 640
+    assert second is not None and second.distance_to(truth) < 0.02
+    assert abs(wrap_angle(second.theta - truth.theta)) < math.radians(3.0)
+    assert second.distance_to(first) < 0.01
+
+
 def test_capture_depth_matches_the_chair_and_pose_comes_from_fk(world):
     frame = world.panda.capture()
     assert frame.rgb.shape == (480, 640, 3) and frame.depth_m.shape == (480, 640)

@@ -41,6 +41,7 @@ def run_campaign(
     timeout_s: float,
     progress: Progress | None = None,
     on_record: Callable[[dict[str, Any]], None] | None = None,
+    record: bool = False,
 ) -> CampaignResult:
     """Runs the trials the records do not hold yet, recording each as it ends.
 
@@ -52,6 +53,7 @@ def run_campaign(
         timeout_s: per-trial wall time, given to the worker (its mission stops earlier).
         progress: the progress bar (optional).
         on_record: called after each record is committed (tests use it to interrupt).
+        record: each trial writes a Rerun recording, ``mission.rrd``, in its run folder.
 
     Returns:
         What ran; ``interrupted`` when Ctrl-C stopped it (finished trials are kept).
@@ -65,7 +67,7 @@ def run_campaign(
         run_dir = runs_dir / spec.run_dir_name()
         if run_dir.exists():  # left by an interrupted run: start clean
             shutil.rmtree(run_dir)
-        jobs.append((spec, spec.to_payload(run_dir, timeout_s)))
+        jobs.append((spec, spec.to_payload(run_dir, timeout_s, record=record)))
     ran = 0
 
     def record(spec: TrialSpec, outcome: WorkerOutcome) -> None:

@@ -2,8 +2,10 @@
 
 * :mod:`hardware.real.nao`: the NAO through NAOqi (``qi``): walking, joint
   trajectories, hands, speech.
-* :mod:`hardware.real.panda`: the Franka Panda through ``panda_py`` with a PrimeSense
-  Carmine through OpenNI2 (``openni``) on its wrist.
+* :mod:`hardware.real.panda`: the Franka Panda through ``panda_py``.
+* :mod:`hardware.real.camera`: the PrimeSense Carmine through OpenNI2 (``openni``).
+* :mod:`hardware.real.robots`: all of them from a checked cell file.
+* :mod:`hardware.real.standins`: SDK stand-ins for tests and ``check-hardware`` dry runs.
 
 The SDKs are imported only when a backend is built, so the rest of the project installs
 and tests without them; a missing SDK raises :class:`BackendUnavailable` saying what to
@@ -20,11 +22,37 @@ class BackendUnavailable(RuntimeError):
     """A robot SDK is not installed or the robot cannot be reached."""
 
 
+class EmergencyStopped(RuntimeError):
+    """A motion was refused or ended because the robot was emergency-stopped."""
+
+
+SDK_DISTRIBUTIONS = {
+    "qi": "nao",
+    "panda-python": "panda",
+    "openni": "carmine",
+    "pyrealsense2": "realsense",
+}
+"""Each robot SDK's pip distribution and the bearchair extra that installs it."""
+
+
+def sdk_versions() -> dict[str, str | None]:
+    """The installed version of each robot SDK (None where it is not installed)."""
+    from importlib import metadata
+
+    versions: dict[str, str | None] = {}
+    for distribution in SDK_DISTRIBUTIONS:
+        try:
+            versions[distribution] = metadata.version(distribution)
+        except metadata.PackageNotFoundError:
+            versions[distribution] = None
+    return versions
+
+
 def import_sdk(module: str, package: str) -> ModuleType:
     """Imports a robot SDK module, or raises BackendUnavailable naming the pip package."""
     try:
         return importlib.import_module(module)
     except ImportError as error:
         raise BackendUnavailable(
-            f"the '{module}' SDK is not installed ({error}); install it with: pip install {package}"
+            f"the '{module}' SDK is not installed; install it with: pip install '{package}'"
         ) from error

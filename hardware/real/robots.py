@@ -1,47 +1,60 @@
-"""Connecting the real robots from a JSON description of the cell."""
+"""Connecting the real robots from a checked cell configuration.
+
+Connecting reads state and moves nothing; :func:`activate` sets the NAO up for carrying
+(it moves) and is called only after the operator agrees.
+"""
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
-import numpy as np
+from typing import Any
 
 from hardware.interfaces import Robot
-from hardware.real import BackendUnavailable
 from hardware.real.nao import NaoHumanoid, NaoSpeaker, WallClock, connect
 from hardware.real.panda import PandaArm
-from skills.geometry import SE2Pose
-
-EXAMPLE = """{
-  "nao_url": "tcp://nao.local:9559",
-  "panda_host": "172.16.0.2",
-  "T_world_base": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]],
-  "T_hand_camera": [[1,0,0,0.05],[0,1,0,0],[0,0,1,0.06],[0,0,0,1]],
-  "nao_start": [1.9, 0.0, 3.14159]
-}"""
+from hardware.real.standins import STANDIN_HOST, FakeOpenNI2, FakePanda
 
 
-def connect_robots(cell_file: Path) -> Robot:
-    """Connects the NAO and the Panda described by ``cell_file`` (see :data:`EXAMPLE`).
+def connect_panda(config: Any) -> PandaArm:
+    """The arm and its camera (``panda_host`` "standin": the SDK stand-ins)."""
+    if config.panda_host == STANDIN_HOST:
+        from hardware.real.camera import CarmineCamera
+
+        camera = CarmineCamera(FakeOpenNI2(), library_dir=config.openni_library_dir)
+        panda = FakePanda(STANDIN_HOST)
+        panda.time_scale = 100.0  # a dry run: the stand-in arm moves 100 times faster
+        return PandaArm(
+            panda,
+            camera,
+            config.T_world_base,
+            config.T_flange_camera,
+            config.panda_speed_factor,
+        )
+    return PandaArm.connect(
+        config.panda_host,
+        config.T_world_base,
+        config.T_flange_camera,
+        config.panda_speed_factor,
+        config.openni_library_dir,
+        camera=config.camera,
+    )
+
+
+def connect_robots(config: Any) -> Robot:
+    """Connects the NAO and the Panda of an :class:`executive.cell_config.CellConfig`.
 
     Raises:
-        BackendUnavailable: a file, an SDK or a robot is missing.
+        BackendUnavailable: an SDK or a robot is missing (the message names which).
     """
-    try:
-        cell = json.loads(Path(cell_file).read_text())
-        nao_url, panda_host = cell["nao_url"], cell["panda_host"]
-        T_world_base = np.asarray(cell["T_world_base"], dtype=float).reshape(4, 4)
-        T_hand_camera = np.asarray(cell["T_hand_camera"], dtype=float).reshape(4, 4)
-        nao_start = SE2Pose(*map(float, cell.get("nao_start", (0.0, 0.0, 0.0))))
-    except (OSError, ValueError, KeyError, TypeError) as error:
-        raise BackendUnavailable(
-            f"{cell_file}: not a usable cell description ({error}); see README, 'Real robots'"
-        ) from error
-    session = connect(nao_url)
+    session = connect(config.nao_url, config.nao_user, config.nao_password)
     return Robot(
-        arm=PandaArm.connect(panda_host, T_world_base, T_hand_camera),
-        humanoid=NaoHumanoid(session, odom_origin=nao_start),
+        arm=connect_panda(config),
+        humanoid=NaoHumanoid(session, odom_origin=config.nao_start),
         speaker=NaoSpeaker(session),
         clock=WallClock(),
     )
+
+
+def activate(robot: Robot) -> None:
+    """Sets the NAO up for carrying (Autonomous Life and awareness off, no arm swing,
+    carrying posture, hands closed, head held): the robots move from here on."""
+    robot.humanoid.activate()

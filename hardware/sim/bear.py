@@ -141,6 +141,7 @@ class SimBear:
         self._anchor: Callable[[], np.ndarray] | None = None
         self._T_anchor_bear = np.eye(4)
         self._ignored: list[tuple[int, int]] = []
+        self._last_anchor: np.ndarray | None = None
         self.set_T_world_bear(T_world_bear)
         clock.add_process(self._step)
 
@@ -167,6 +168,7 @@ class SimBear:
         with self._bullet.lock:
             self.release()
             self._anchor = anchor
+            self._last_anchor = None
             self._T_anchor_bear = np.linalg.inv(anchor()) @ self.T_world_bear()
             position, orientation = matrix_to_pose(self.T_world_bear() @ self._T_bear_base)
             self._constraint = self._bullet.createConstraint(
@@ -221,6 +223,7 @@ class SimBear:
             self._bullet.removeConstraint(self._constraint)
             self._constraint = None
             self._anchor = None
+            self._last_anchor = None
             for holder_body, holder_link in set(self._ignored):
                 overlapping = self._bullet.getClosestPoints(
                     holder_body, self.body, 0.0, linkIndexA=holder_link
@@ -236,8 +239,12 @@ class SimBear:
     def _step(self, now_s: float, dt_s: float) -> None:
         if self._constraint is None or self._anchor is None:
             return
+        T_world_anchor = self._anchor()
+        if T_world_anchor is self._last_anchor:
+            return  # the holder has not moved: the constraint already holds the bear there
+        self._last_anchor = T_world_anchor
         position, orientation = matrix_to_pose(
-            self._anchor() @ self._T_anchor_bear @ self._T_bear_base
+            T_world_anchor @ self._T_anchor_bear @ self._T_bear_base
         )
         self._bullet.changeConstraint(
             self._constraint,

@@ -45,6 +45,7 @@ class LockedBullet:
         )
         self.gui = gui
         self._closed = False
+        self._inertial_frames: dict[int, tuple[Any, Any]] = {}
 
     def __getattr__(self, name: str) -> Any:
         attribute = getattr(self.client, name)
@@ -58,7 +59,21 @@ class LockedBullet:
                     raise RuntimeError("the simulated world is closed")
                 return attribute(*args, **kwargs)
 
+        # Kept, so later calls skip this method: the world makes thousands of calls per
+        # simulated second, and building the wrapper cost more than many of the calls.
+        self.__dict__[name] = locked
         return locked
+
+    def local_inertial_frame(self, body: int) -> tuple[Any, Any]:
+        """(position, orientation) of a body's base inertial frame in its link frame.
+
+        Fixed for the life of a body, so read once.
+        """
+        frame = self._inertial_frames.get(body)
+        if frame is None:
+            frame = tuple(self.getDynamicsInfo(body, -1)[3:5])
+            self._inertial_frames[body] = frame
+        return frame
 
     @property
     def closed(self) -> bool:
@@ -116,7 +131,7 @@ def T_world_base_link(bullet: LockedBullet, body: int) -> np.ndarray:
     """The base's link frame in the world (pybullet reports the inertial frame instead)."""
     with bullet.lock:
         position, orientation = bullet.getBasePositionAndOrientation(body)
-        local_position, local_orientation = bullet.getDynamicsInfo(body, -1)[3:5]
+        local_position, local_orientation = bullet.local_inertial_frame(body)
     T_world_inertial = pose_to_matrix(position, orientation)
     T_link_inertial = pose_to_matrix(local_position, local_orientation)
     return T_world_inertial @ np.linalg.inv(T_link_inertial)
@@ -125,7 +140,7 @@ def T_world_base_link(bullet: LockedBullet, body: int) -> np.ndarray:
 def reset_base_link(bullet: LockedBullet, body: int, T_world_link: np.ndarray) -> None:
     """Teleports a body so that its base link frame is ``T_world_link``; zeroes its velocity."""
     with bullet.lock:
-        local_position, local_orientation = bullet.getDynamicsInfo(body, -1)[3:5]
+        local_position, local_orientation = bullet.local_inertial_frame(body)
         T_world_inertial = T_world_link @ pose_to_matrix(local_position, local_orientation)
         position, orientation = matrix_to_pose(T_world_inertial)
         bullet.resetBasePositionAndOrientation(body, position, orientation)

@@ -3,10 +3,36 @@
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 from hardware.sim.bullet import LockedBullet, StepProcess
 
 PHYSICS_RATE_HZ = 240.0
+
+
+@dataclass
+class WorldTimers:
+    """Wall time the simulated world spends on itself, for ``bench/mission.py``.
+
+    Attributes:
+        stepping_s: in :meth:`SimClock.step` (the processes and the physics together).
+        physics_s: in pybullet's ``stepSimulation`` alone (part of ``stepping_s``).
+        steps: physics steps taken.
+        render_s: rendering camera frames and pictures (TinyRenderer, depth conversion).
+        noise_s: applying the camera noise model to captures.
+        frames: frames rendered; pixels: their pixels in total.
+    """
+
+    stepping_s: float = 0.0
+    physics_s: float = 0.0
+    steps: int = 0
+    render_s: float = 0.0
+    noise_s: float = 0.0
+    frames: int = 0
+    pixels: int = 0
+
+    def copy(self) -> WorldTimers:
+        return WorldTimers(**vars(self))
 
 
 class SimClock:
@@ -25,6 +51,7 @@ class SimClock:
         self._steps = 0
         self._processes: list[StepProcess] = []
         self._realtime = realtime
+        self.timers = WorldTimers()
         bullet.setTimeStep(self._dt_s)
 
     @property
@@ -55,8 +82,14 @@ class SimClock:
     def step(self) -> None:
         """Advances every process and the physics by one step."""
         with self._bullet.lock:
+            started = time.perf_counter()
             now_s = self.now()
             for process in tuple(self._processes):
                 process(now_s, self._dt_s)
+            physics_started = time.perf_counter()
             self._bullet.stepSimulation()
             self._steps += 1
+            ended = time.perf_counter()
+            self.timers.stepping_s += ended - started
+            self.timers.physics_s += ended - physics_started
+            self.timers.steps += 1

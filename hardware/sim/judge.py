@@ -99,6 +99,7 @@ class SimJudge:
             torso_tilt_deg=tilt_deg,
             facing_error_deg=facing_deg,
             reason="; ".join(reasons),
+            T_world_bear=T_world_bear,
         )
 
 

@@ -80,6 +80,10 @@ class SimNao:
         body: pybullet body id.
         joint_indices: revolute joint name (qibullet's names) -> pybullet index.
         joint_limits: name -> (lower, upper) radians.
+        motion_count: goes up whenever the body's links may have moved (for caches of
+            link poses).
+        posture_count: goes up whenever the joint angles may have changed (links fixed
+            in the feet frame stay so until then).
     """
 
     def __init__(
@@ -130,8 +134,11 @@ class SimNao:
         self._yaw_drift_radps = 0.0
         self._trajectory: _Trajectory | None = None
         self._stop_trajectory = threading.Event()
+        self._emergency_stopped = False
         self._T_feet_base: np.ndarray | None = None
         self.on_hands: Callable[[bool], None] | None = None
+        self.motion_count = 0
+        self.posture_count = 0
         with bullet.lock:
             for index in self.joint_indices.values():
                 bullet.changeDynamics(self.body, index, linearDamping=0.0, angularDamping=0.0)
@@ -151,6 +158,7 @@ class SimNao:
 
     def set_velocity(self, vx_mps: float, vy_mps: float, omega_radps: float) -> None:
         """Commands a walking velocity in the robot frame, clipped to 0.1 m/s and 0.5 rad/s."""
+        self._refuse_if_stopped()
         command = np.array([vx_mps, vy_mps, omega_radps], dtype=float)
         if not np.all(np.isfinite(command)):
             raise ValueError(f"walking velocity must be finite, got {command}")
@@ -159,6 +167,7 @@ class SimNao:
             command[:2] *= MAX_SPEED_MPS / speed
         command[2] = float(np.clip(command[2], -MAX_TURN_RADPS, MAX_TURN_RADPS))
         with self._bullet.lock:
+            self._refuse_if_stopped()  # again under the lock: a stop may have come meanwhile
             if not np.allclose(command, self._command):
                 self._scale = np.array(
                     [
@@ -185,6 +194,7 @@ class SimNao:
             ValueError: unknown joint names, mismatched shapes, non-increasing times or
                 positions outside the joint limits.
         """
+        self._refuse_if_stopped()
         names = list(joint_names)
         unknown = [name for name in names if name not in self.joint_indices]
         if unknown:
@@ -209,11 +219,13 @@ class SimNao:
                 current = np.array([self._positions[name] for name in names])
                 times = np.concatenate([[0.0], times])
                 positions = np.vstack([current, positions])
+            self._refuse_if_stopped()
             self._stop_trajectory.clear()
             trajectory = _Trajectory(names, self._clock.now(), times, positions)
             self._trajectory = trajectory
         while not trajectory.finished(self._clock.now()) and not self._stop_trajectory.is_set():
             self._clock.sleep(min(0.05, max(self._clock.dt_s, trajectory.times_s[-1])))
+        self._refuse_if_stopped()
         with self._bullet.lock:
             if self._trajectory is trajectory:
                 self._trajectory = None
@@ -222,13 +234,18 @@ class SimNao:
                 self._apply_joints()
                 self._T_feet_base = None
                 self._place_body()
+                self.motion_count += 1
+                self.posture_count += 1
 
     def set_hands(self, open_hands: bool) -> None:
         """Opens or closes both hands; opening releases the bear if it is held."""
         with self._bullet.lock:
+            self._refuse_if_stopped()
             self._positions["LHand"] = self._positions["RHand"] = 1.0 if open_hands else 0.0
             self._apply_joints()
             self._T_feet_base = None
+            self.motion_count += 1
+            self.posture_count += 1
         if self.on_hands is not None:
             self.on_hands(open_hands)
         self._clock.sleep(0.25)
@@ -240,6 +257,19 @@ class SimNao:
             self._velocity = np.zeros(3)
             self._stop_trajectory.set()
             self._trajectory = None
+
+    def emergency_stop(self) -> None:
+        """Stops walking and any trajectory at once and refuses every later motion.
+
+        The simulated NAO is kinematic, so it is still from the next physics step on.
+        """
+        with self._bullet.lock:
+            self._emergency_stopped = True
+        self.stop()
+
+    def _refuse_if_stopped(self) -> None:
+        if self._emergency_stopped:
+            raise RuntimeError("the NAO is emergency-stopped: motion refused")
 
     # --- ground truth and helpers --------------------------------------------------------
     def place(self, pose: SE2Pose) -> None:
@@ -258,6 +288,7 @@ class SimNao:
             self._true = values.copy()
             self._odometry = values.copy()
             self._place_body()
+            self.motion_count += 1
 
     def true_pose(self) -> SE2Pose:
         """Ground-truth planar pose of the feet frame (tests and benchmarks only)."""
@@ -294,10 +325,12 @@ class SimNao:
             for name, value in zip(trajectory.joints, trajectory.at(now_s), strict=True):
                 self._positions[name] = float(value)
             self._T_feet_base = None
+            self.posture_count += 1
         # The joints are kinematic: re-imposed every step, or gravity would fold the body.
         self._apply_joints()
         if moved or trajectory is not None:
             self._place_body()
+            self.motion_count += 1
 
     def _apply_joints(self) -> None:
         self._bullet.resetJointStatesMultiDof(

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import hashlib
 import math
+import os
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -11,7 +14,7 @@ import pybullet
 import pybullet_data
 
 from hardware.interfaces import CameraIntrinsics, RGBDFrame
-from hardware.sim.bullet import LockedBullet, T_world_link, link_index_by_name
+from hardware.sim.bullet import LockedBullet, T_world_link, link_index_by_name, sim_cache_dir
 from hardware.sim.camera import (
     CARMINE_INTRINSICS,
     T_HAND_CAMERA,
@@ -24,6 +27,7 @@ from hardware.sim.clock import SimClock
 from skills.geometry import make_transform
 
 PANDA_URDF = Path(pybullet_data.getDataPath()) / "franka_panda" / "panda.urdf"
+_PANDA_MESHES = PANDA_URDF.parent / "meshes"
 ARM_JOINTS = 7
 HAND_LINK = "panda_hand"
 JOINT_FORCE_LIMITS_NM = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
@@ -44,6 +48,28 @@ def look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
     right /= np.linalg.norm(right)
     down = np.cross(forward, right)
     return make_transform(np.column_stack([right, down, forward]), eye)
+
+
+def coarse_panda_urdf() -> Path:
+    """``panda.urdf`` drawn with its collision meshes instead of its visual ones.
+
+    TinyRenderer transforms every triangle of every visual shape for every frame, even
+    a 160x120 one, and the visual meshes (about 10 MB of OBJ) cost about 130 ms a frame
+    on this machine, against under 1 ms for everything else in the scene. The wrist
+    camera never sees the arm (the fingers stay above the image's top edge), so only the
+    scene pictures show the coarser arm. Kinematics, inertias and collision shapes are
+    the file's own.
+    """
+    text = PANDA_URDF.read_text()
+    text = text.replace("package://meshes/visual/", "package://meshes/collision/")
+    text = text.replace("package://meshes/", f"{_PANDA_MESHES.as_posix()}/")
+    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
+    path = sim_cache_dir() / f"panda-coarse-{digest}.urdf"
+    if not path.exists():
+        scratch = path.with_suffix(f".{os.getpid()}.tmp")
+        scratch.write_text(text)
+        os.replace(scratch, path)
+    return path
 
 
 class SimPanda:
@@ -76,7 +102,7 @@ class SimPanda:
         self._noise = CarmineNoise() if camera_noise else None
         self.intrinsics: CameraIntrinsics = CARMINE_INTRINSICS
         self.body = bullet.loadURDF(
-            str(PANDA_URDF),
+            str(coarse_panda_urdf()),
             basePosition=[base_xy[0], base_xy[1], 0.0],
             useFixedBase=True,
             flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
@@ -86,6 +112,7 @@ class SimPanda:
         self.lower_limits = np.array([item[8] for item in info])
         self.upper_limits = np.array([item[9] for item in info])
         self.last_view: RenderedView | None = None
+        self._emergency_stopped = False
         with bullet.lock:
             for joint, angle in enumerate(initial_joints):
                 bullet.resetJointState(self.body, joint, angle)
@@ -115,6 +142,7 @@ class SimPanda:
             ValueError: not 7 finite angles, or outside the joint limits.
             TimeoutError: not reached within ``timeout_s`` simulated seconds.
         """
+        self._refuse_if_stopped()
         target = np.asarray(joint_positions_rad, dtype=float).reshape(-1)
         if target.shape != (ARM_JOINTS,) or not np.all(np.isfinite(target)):
             raise ValueError(f"the Panda needs {ARM_JOINTS} finite joint angles, got {target}")
@@ -122,9 +150,12 @@ class SimPanda:
         if np.any(outside):
             joints = ", ".join(f"joint {index + 1}" for index in np.flatnonzero(outside))
             raise ValueError(f"target outside the Panda's joint limits at {joints}")
-        self._command(target)
+        with self._bullet.lock:
+            self._refuse_if_stopped()  # again under the lock: a stop may have come meanwhile
+            self._command(target)
         start_s = self._clock.now()
         while True:
+            self._refuse_if_stopped()
             error = np.max(np.abs(self.joint_positions() - target))
             speed = np.max(np.abs(self.joint_velocities()))
             if error < REACHED_TOLERANCE_RAD and speed < SETTLED_SPEED_RADPS:
@@ -136,6 +167,25 @@ class SimPanda:
                 )
             self._clock.sleep(1.0 / 60.0)
 
+    def emergency_stop(self) -> None:
+        """Brakes every joint (zero velocity at full torque, as the Panda's stop does) and
+        refuses later moves; a ``move_to`` running in another thread raises at its next check.
+        """
+        with self._bullet.lock:
+            self._emergency_stopped = True
+            for joint in range(ARM_JOINTS):
+                self._bullet.setJointMotorControl2(
+                    self.body,
+                    joint,
+                    pybullet.VELOCITY_CONTROL,
+                    targetVelocity=0.0,
+                    force=JOINT_FORCE_LIMITS_NM[joint],
+                )
+
+    def _refuse_if_stopped(self) -> None:
+        if self._emergency_stopped:
+            raise RuntimeError("the Panda is emergency-stopped: motion refused")
+
     def T_world_camera(self) -> np.ndarray:
         """Camera pose: forward kinematics of the hand link composed with the hand-eye extrinsic."""
         with self._bullet.lock:
@@ -143,16 +193,49 @@ class SimPanda:
 
     def capture(self) -> RGBDFrame:
         """Renders one RGB-D frame (640x480) at the current arm configuration."""
+        return self._render(self.intrinsics)
+
+    def capture_region(self, x0: int, y0: int, width: int, height: int) -> RGBDFrame:
+        """Reads out only a window of the image, as a camera's region of interest does.
+
+        The frame holds the pixels [y0, y0 + height) x [x0, x0 + width) of the full
+        image, with the same noise model; its intrinsics are the full camera's with the
+        principal point moved to the window's origin (cx - x0, cy - y0), so every
+        pinhole computation on it holds unchanged. Rendering costs in proportion to the
+        pixels: a 100x100 window of the head tag costs 1/30 of a full frame.
+
+        Raises:
+            ValueError: an empty window or one not inside the image.
+        """
+        full = self.intrinsics
+        if width < 1 or height < 1 or x0 < 0 or y0 < 0:
+            raise ValueError(f"bad image window x0={x0} y0={y0} {width}x{height}")
+        if x0 + width > full.width or y0 + height > full.height:
+            raise ValueError(
+                f"image window x0={x0} y0={y0} {width}x{height} leaves the "
+                f"{full.width}x{full.height} image"
+            )
+        window = CameraIntrinsics(width, height, full.fx, full.fy, full.cx - x0, full.cy - y0)
+        return self._render(window)
+
+    def _render(self, intrinsics: CameraIntrinsics) -> RGBDFrame:
+        timers = self._clock.timers
         with self._bullet.lock:
+            started = time.perf_counter()
             T_world_camera = self.T_world_camera()
-            view = render_view(self._bullet, T_world_camera, self.intrinsics)
+            view = render_view(self._bullet, T_world_camera, intrinsics)
             stamp_s = self._clock.now()
+            timers.render_s += time.perf_counter() - started
+            timers.frames += 1
+            timers.pixels += intrinsics.width * intrinsics.height
         self.last_view = view
+        started = time.perf_counter()
         if self._noise is None:
             rgb, depth = view.rgb.copy(), clip_range(view.depth_m)
         else:
-            rgb, depth = self._noise.apply(view.rgb, view.depth_m, self.intrinsics, self._rng)
-        return RGBDFrame(rgb, depth, self.intrinsics, T_world_camera, stamp_s)
+            rgb, depth = self._noise.apply(view.rgb, view.depth_m, intrinsics, self._rng)
+        timers.noise_s += time.perf_counter() - started
+        return RGBDFrame(rgb, depth, intrinsics, T_world_camera, stamp_s)
 
     def joints_looking_at(
         self,

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -98,6 +99,8 @@ class SimWorld:
         if config.placement not in ("accessible", "inaccessible"):
             raise ValueError(f"unknown placement {config.placement!r} (accessible or inaccessible)")
         self.config = config
+        self._hands_cache: tuple[int, np.ndarray] | None = None
+        self._hands_in_feet: tuple[int, np.ndarray] | None = None
         chair_mesh = box_chair_mesh() if config.chair_path is None else load_mesh(config.chair_path)
         front_yaw_deg = (
             0.0
@@ -141,6 +144,7 @@ class SimWorld:
                     nao_rng,
                     texture_id=texture,
                 )
+                self._ignore_floor(self.nao.body, self.panda.body)
                 self.chair_touch = ChairTouchMonitor(
                     bullet,
                     self.nao.body,
@@ -222,7 +226,11 @@ class SimWorld:
         T_world_camera = make_transform(np.column_stack([right, down, forward]), eye)
         focal = 480.0 / math.tan(math.radians(30.0))
         intrinsics = CameraIntrinsics(960, 720, focal, focal, 479.5, 359.5)
+        started = time.perf_counter()
         rendered = render_view(self._bullet, T_world_camera, intrinsics)
+        self.clock.timers.render_s += time.perf_counter() - started
+        self.clock.timers.frames += 1
+        self.clock.timers.pixels += intrinsics.width * intrinsics.height
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         Image.fromarray(rendered.rgb).save(path)
 
@@ -244,7 +252,26 @@ class SimWorld:
 
     # --- construction -------------------------------------------------------------------
     def hands_frame(self) -> np.ndarray:
-        """The frame between the NAO's palms: mean position, averaged orientation."""
+        """The frame between the NAO's palms: mean position, averaged orientation.
+
+        The carried bear asks for it before every physics step; it is computed again only
+        when the NAO has moved (the same array is returned until then), by forward
+        kinematics only when its joints have moved.
+        """
+        with self._bullet.lock:
+            nao = self.nao
+            if self._hands_cache is not None and self._hands_cache[0] == nao.motion_count:
+                return self._hands_cache[1]
+            # Walking moves the whole body rigidly with the feet frame: forward kinematics
+            # only when the posture changed.
+            if self._hands_in_feet is None or self._hands_in_feet[0] != nao.posture_count:
+                T_feet_hands = np.linalg.inv(nao.T_world_feet()) @ self._hands_frame_now()
+                self._hands_in_feet = (nao.posture_count, T_feet_hands)
+            frame = nao.T_world_feet() @ self._hands_in_feet[1]
+            self._hands_cache = (nao.motion_count, frame)
+            return frame
+
+    def _hands_frame_now(self) -> np.ndarray:
         left = self.nao.T_world_link("l_wrist") @ _PALM
         right = self.nao.T_world_link("r_wrist") @ _PALM
         q_left = np.array(matrix_to_pose(left)[1])
@@ -290,6 +317,17 @@ class SimWorld:
             placement_yaw = wrap_angle(sitting_yaw - self.front_yaw_rad)
         self.placement_yaw_rad = placement_yaw
         return make_transform(rot_z(placement_yaw), np.array([x, y, 0.0]))
+
+    def _ignore_floor(self, *bodies: int) -> None:
+        """No collision between the floor and the links of kinematic or fixed robots.
+
+        The NAO's feet are placed on the floor, not stood on it, and the Panda is bolted
+        down, so their contacts with the floor change nothing; but the floor's bounds are
+        infinite, so each of their links would be tested against it at every step.
+        """
+        for body in bodies:
+            for link in range(-1, self._bullet.getNumJoints(body)):
+                self._bullet.setCollisionFilterPair(body, self.floor, link, -1, 0)
 
     def _build_walls(self, arena: Arena) -> list[int]:
         """The arena's boundary tape (visual only) and its solid obstacles."""

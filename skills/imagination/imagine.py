@@ -227,6 +227,7 @@ def imagine_sitting_details(
         result = ImaginationResult(False, None, 0, len(drops), drops, seconds, "cancelled")
     else:
         result = choose_sitting_pose(prepared, drops, seconds, raw, extra_drops=extra)
+    result = result._replace(T_mesh_chair=np.linalg.inv(prepared.T_obb_mesh))
     return ImaginationDetails(result, tuple(raw), steps, physics_seconds, prepared)
 
 
@@ -304,7 +305,7 @@ def choose_sitting_pose(
     T_mesh_obb = np.linalg.inv(prepared.T_obb_mesh)
     position = transform_points(T_mesh_obb, position_chair[None, :])[0]
     pose = SittingPose(position, wrap_angle(yaw_chair - prepared.gamma_obb_rad))
-    return ImaginationResult(True, pose, len(chosen), len(drops), drops, seconds, "", vote)
+    return ImaginationResult(True, pose, len(chosen), len(drops), drops, seconds, "", vote=vote)
 
 
 def _correct_by_rotation(drops: tuple[DropOutcome, ...]) -> dict[int, list[DropOutcome]]:

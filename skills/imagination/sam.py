@@ -149,4 +149,5 @@ def score_drop(raw: RawDrop, thresholds: SamThresholds = DEFAULT_THRESHOLDS) -> 
         upper_contacts=upper,
         lower_contacts=lower,
         correct=bool(correct),
+        link_poses=raw.link_poses,
     )

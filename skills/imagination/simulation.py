@@ -107,6 +107,8 @@ class RawDrop(NamedTuple):
         sitting_height_m: pelvis height above the floor.
         steps: physics steps simulated.
         stopped_by: ``rest``, ``fell`` or ``time``.
+        link_poses: (n_links, 4, 4) each link's frame T_chair_link, in ``LINK_NAMES``
+            order (what a viewer draws; the scores use ``link_z``).
     """
 
     spec: DropSpec
@@ -118,6 +120,7 @@ class RawDrop(NamedTuple):
     sitting_height_m: float
     steps: int
     stopped_by: str
+    link_poses: np.ndarray | None = None
 
 
 TRUNK_LINKS = ("pelvis", "chest", "head")
@@ -365,10 +368,16 @@ def _measure(
     position = to_chair(base_position)
     yaw = math.atan2(R_chair_pelvis[1, 0], R_chair_pelvis[0, 0])
     link_z = [R_chair_pelvis[:, 2]]
-    for link_index in item["links"][1:]:
+    link_poses = np.tile(np.eye(4), (len(item["links"]), 1, 1))
+    link_poses[0, :3, :3], link_poses[0, :3, 3] = R_chair_pelvis, position
+    for k, link_index in enumerate(item["links"][1:], start=1):
         state = p.getLinkState(agent, link_index, physicsClientId=cid)
         R_world_link = np.array(p.getMatrixFromQuaternion(state[5])).reshape(3, 3)
         link_z.append(R_chair_world @ R_world_link[:, 2])
+        link_poses[k, :3, :3], link_poses[k, :3, 3] = (
+            R_chair_world @ R_world_link,
+            to_chair(state[4]),
+        )
     joints = p.getJointStates(agent, item["joints"], physicsClientId=cid)
     position_of_link = {index: k for k, index in enumerate(item["links"])}
     contacts = np.zeros(len(LINK_NAMES), dtype=int)
@@ -384,4 +393,5 @@ def _measure(
         sitting_height_m=float(base_position[2] - chair.z_min_m),
         steps=step,
         stopped_by=stopped_by,
+        link_poses=link_poses,
     )

@@ -37,8 +37,8 @@ def scan_chair(
         config: reconstruction parameters (default: :class:`ReconstructionConfig`).
 
     Returns:
-        The chair scan; ``seconds`` has ``motion`` and ``capture`` besides the
-        reconstruction's steps.
+        The chair scan with the frames captured; ``seconds`` has ``motion`` and
+        ``capture`` besides the reconstruction's steps.
 
     Raises:
         ScanCancelled: ``cancel`` was set.
@@ -57,4 +57,4 @@ def scan_chair(
         raise ScanCancelled("chair scan cancelled")
     scan = reconstruct_chair(frames, config)
     seconds = {**timing, **scan.seconds}
-    return scan._replace(seconds=seconds, notes=tuple(notes))
+    return scan._replace(seconds=seconds, notes=tuple(notes), frames=tuple(frames))

@@ -15,7 +15,9 @@ tag only a few tens of pixels wide.
 from __future__ import annotations
 
 import math
+import weakref
 from functools import lru_cache
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -143,21 +145,64 @@ def estimate_tag_pose(
     Returns None, never a guess, when the tag is not detected, PnP fails or the fit is
     tilted more than :data:`MAX_TILT_DEG` from horizontal.
     """
+    return _tag_pose_and_corners(frame, tag, planar_heading)[0]
+
+
+def _tag_pose_and_corners(
+    frame: RGBDFrame, tag: TagSpec, planar_heading: bool = True
+) -> tuple[SE2Pose | None, np.ndarray | None]:
+    """:func:`estimate_tag_pose` and the corners (pixels of ``frame``) it used."""
     corners = detect_tag_corners(frame.rgb, tag)
     if corners is None:
-        return None
+        return None, None
     T_camera_tag = tag_pose_in_camera(corners, frame, tag.side_m)
     if T_camera_tag is None:
-        return None
+        return None, None
     T_camera_tag[:3, 3] = _depth_range_correction(corners, frame, T_camera_tag[:3, 3])
     T_world_tag = np.asarray(frame.T_world_camera) @ T_camera_tag
     if T_world_tag[2, 2] < math.cos(math.radians(MAX_TILT_DEG)):
-        return None
+        return None, None
     if planar_heading:
         heading = planar_yaw(corners, frame, float(T_world_tag[2, 3]))
     else:
         heading = math.atan2(T_world_tag[1, 0], T_world_tag[0, 0])
-    return SE2Pose(float(T_world_tag[0, 3]), float(T_world_tag[1, 3]), heading)
+    return SE2Pose(float(T_world_tag[0, 3]), float(T_world_tag[1, 3]), heading), corners
+
+
+WINDOW_MARGIN_PX = 40
+"""How far around the tag's last sighting the next tag frame reaches, at least (pixels).
+
+Between two tag frames of the walk (0.3 s, :class:`skills.control.walk.WalkGains`) the
+NAO moves at most 3 cm and turns at most 0.15 rad: 29 px at the near end of the arena
+(0.6 m from the camera, fx = 577 px), less farther away. The margin is also at least the
+tag's own size in the image. A tag not found in its window is looked for in a full frame.
+"""
+
+
+class _Sighting(NamedTuple):
+    """The window around the tag's last sighting by an arm's camera, in full-image pixels."""
+
+    x0: int
+    y0: int
+    width: int
+    height: int
+    image_width: int
+    image_height: int
+
+
+_sightings: weakref.WeakKeyDictionary[object, _Sighting] = weakref.WeakKeyDictionary()
+"""The last sighting per arm: the next tag frame is read out around it (arms that can)."""
+
+
+def _window_around(corners_px: np.ndarray, image_width: int, image_height: int) -> _Sighting:
+    """The window around corners given in full-image pixels."""
+    size = float(np.max(corners_px.max(axis=0) - corners_px.min(axis=0)))
+    margin = max(WINDOW_MARGIN_PX, size)
+    x0, y0 = np.maximum(np.floor(corners_px.min(axis=0) - margin).astype(int), 0)
+    x1, y1 = np.minimum(
+        np.ceil(corners_px.max(axis=0) + margin).astype(int), [image_width, image_height]
+    )
+    return _Sighting(int(x0), int(y0), int(x1 - x0), int(y1 - y0), image_width, image_height)
 
 
 def locate_humanoid(
@@ -169,6 +214,12 @@ def locate_humanoid(
     """Moves the arm to the overview through HOME (unless already there), captures and
     finds the tag.
 
+    An arm whose camera can read out a window of its image (``capture_region(x0, y0,
+    width, height)``, as the simulated one can) is asked only for the window around the
+    tag's last sighting (:data:`WINDOW_MARGIN_PX`) while the arm has not moved since; if
+    the tag is not in it, a full frame is taken. Only where the mission last saw the tag
+    chooses the window.
+
     Returns:
         The humanoid's SE(2) pose in the world frame from this capture, or None when the
         tag is not in it.
@@ -176,6 +227,24 @@ def locate_humanoid(
     current = np.asarray(arm.joint_positions(), dtype=np.float64)
     wanted = np.asarray(configuration, dtype=np.float64)
     if current.shape != wanted.shape or np.max(np.abs(current - wanted)) > AT_CONFIGURATION_RAD:
+        _sightings.pop(arm, None)
         arm.move_to(HOME_CONFIGURATION)
         arm.move_to(configuration)
-    return estimate_tag_pose(arm.capture(), tag)
+    capture_region = getattr(arm, "capture_region", None)
+    sighting = _sightings.get(arm)
+    if sighting is not None and capture_region is not None:
+        frame = capture_region(sighting.x0, sighting.y0, sighting.width, sighting.height)
+        pose, corners = _tag_pose_and_corners(frame, tag)
+        if pose is not None:
+            offset = np.array([sighting.x0, sighting.y0], dtype=np.float64)
+            _sightings[arm] = _window_around(
+                corners + offset, sighting.image_width, sighting.image_height
+            )
+            return pose
+    frame = arm.capture()
+    pose, corners = _tag_pose_and_corners(frame, tag)
+    if pose is None:
+        _sightings.pop(arm, None)
+    elif capture_region is not None:
+        _sightings[arm] = _window_around(corners, frame.intrinsics.width, frame.intrinsics.height)
+    return pose

@@ -44,7 +44,7 @@ from skills.arena import Arena, Box2D
 from skills.geometry import SE2Pose, SittingPose, wrap_angle
 from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
 from skills.planning.seat import STEP_M, SeatRay, seat_ray
-from skills.planning.wholebody.chair_profile import BAND_HALF_WIDTH_M
+from skills.planning.wholebody.chair_profile import BAND_HALF_WIDTH_M, stands_above_seat
 from skills.planning.wholebody.optimisation import BEAR_CHAIR_MARGIN_M, BEAR_DEPTH_M
 from skills.planning.wholebody.reach_model import ReachModel, reach_model
 from skills.results import SeatReachability
@@ -142,9 +142,10 @@ def chair_along_ray(
     points = np.vstack([points, chair_mesh.vertices])
     rel = points[:, :2] - p[:2]
     along = rel @ u
-    in_band = np.abs(rel @ np.array([-u[1], u[0]])) <= BAND_HALF_WIDTH_M
+    across = rel @ np.array([-u[1], u[0]])
+    in_band = np.abs(across) <= BAND_HALF_WIDTH_M
     below = in_band & (points[:, 2] <= seat_top_m + 0.01)
-    above = in_band & (points[:, 2] > seat_top_m + 0.015)
+    above = in_band & stands_above_seat(across, points[:, 2], seat_top_m)
     return ChairAlongRay(
         float(along[below].max()) if below.any() else 0.0,
         float(along[above].max()) if above.any() else -math.inf,

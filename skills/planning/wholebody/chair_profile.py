@@ -32,6 +32,24 @@ BAND_HALF_WIDTH_M = 0.11
 """Half-width of the lateral band the planar motion sweeps (the hands' centres at
 |y| = 0.105 m; wider bands put many armrests in the way of the bear)."""
 
+BEAR_LANE_HALF_WIDTH_M = 0.06
+"""Half-width of the lane the bear itself sweeps (its torso is 0.10 m wide), metres."""
+HANDS_ABOVE_SEAT_M = 0.02 + 0.065 - 0.015
+"""Beside the bear's lane only the hands and arms pass; the lowest of them, the palms
+(0.065 m above the bear's seat point, which is let go 0.02 m over the seat; the planner's
+hand points have a 0.015 m radius), stays this high over the seat top, metres: lower
+rails beside the bear are not in their way."""
+
+
+def stands_above_seat(lateral_m: np.ndarray, z_m: np.ndarray, seat_top_m: float) -> np.ndarray:
+    """Which points (lateral offset from the sagittal plane, height; metres) stand above the
+    seat in the way of the bear or the hands: above the seat top in the bear's lane, above
+    the hands' lowest point beside it."""
+    lateral = np.abs(lateral_m)
+    in_lane = lateral <= BEAR_LANE_HALF_WIDTH_M
+    return (z_m > seat_top_m + 0.015) & (in_lane | (z_m > seat_top_m + HANDS_ABOVE_SEAT_M))
+
+
 HORIZONTAL_NORMAL_Z = 0.95
 """A surface sample with |n_z| at least this belongs to a horizontal surface."""
 
@@ -114,7 +132,7 @@ def fit_chair_profile(
     seat_top_z = float(np.max(candidates[:, 2]))
     below = points[:, 2] <= seat_top_z + 0.01
     seat_front_x = float(np.min(points[below, 0]))
-    above = points[:, 2] > seat_top_z + 0.015
+    above = stands_above_seat(points[:, 1], points[:, 2], seat_top_z)
     if np.any(above):
         back_front_x = float(np.min(points[above, 0]))
         back_top_z = float(np.max(points[above, 2]))

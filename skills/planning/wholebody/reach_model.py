@@ -90,24 +90,30 @@ class ReachModel(NamedTuple):
     def max_forward(self, seat_height_m: float, seat_front_m: float) -> float:
         """d_max (metres) at a seat height and front, NaN when nothing is reachable.
 
-        Conservative between grid points: the grid column at or before the front (d_max
-        grows with the front), the smaller of the rows above and below the height (a
-        row with no posture there makes the point unreachable); a front beyond the grid
-        counts as its last column (the knees have room enough there), a front nearer
-        than the grid's first column or a height outside the grid is unreachable.
+        Bilinear between grid points, NaN when a surrounding cell has no posture; a front
+        beyond the grid counts as its last column (the knees have room enough there), a
+        front nearer than the grid's first column or a height outside the grid is
+        unreachable. Between grid points this may promise up to a few millimetres more
+        than a solve would: the pre-plan that follows decides.
         """
         heights, fronts = self.seat_heights_m, self.seat_fronts_m
         if not heights[0] <= seat_height_m <= min(heights[-1], self.carried_over_m()):
             return math.nan
-        if seat_front_m < fronts[0]:
+        if seat_front_m < fronts[0] - 1e-9:
             return math.nan
-        # d_max grows with the front (more room for the knees): the nearest grid column at
-        # or before it bounds it; between two heights, both rows do.
-        j = int(np.searchsorted(fronts, seat_front_m + 1e-9, side="right") - 1)
-        i = int(np.searchsorted(heights, seat_height_m + 1e-9, side="right") - 1)
-        rows = [i] if math.isclose(seat_height_m, heights[i], abs_tol=1e-9) else [i, i + 1]
-        cells = self.max_forward_m[rows, j]
-        return math.nan if np.any(np.isnan(cells)) else float(np.min(cells))
+        front = min(seat_front_m, float(fronts[-1]))
+        i = int(
+            np.clip(np.searchsorted(heights, seat_height_m, side="right") - 1, 0, len(heights) - 2)
+        )
+        j = int(np.clip(np.searchsorted(fronts, front, side="right") - 1, 0, len(fronts) - 2))
+        cells = self.max_forward_m[i : i + 2, j : j + 2]
+        t = (seat_height_m - heights[i]) / (heights[i + 1] - heights[i])
+        w = (front - fronts[j]) / (fronts[j + 1] - fronts[j])
+        weights = np.outer([1.0 - t, t], [1.0 - w, w])
+        used = weights > 1e-9
+        if np.any(np.isnan(cells[used])):
+            return math.nan
+        return float(np.sum(weights[used] * cells[used]))
 
     def reachable(self, seat_height_m: float, seat_front_m: float, forward_m: float) -> bool:
         """Whether a bear placement ``forward_m`` ahead on that seat is within d_max."""

@@ -1,0 +1,212 @@
+"""``bearchair check-hardware --robots cell.json [--move]``: check the cell without moving it.
+
+Prints one line per check, ``ok``, ``warn`` or ``FAIL``: the cell file, the SDK versions,
+the NAO's state (awake, Autonomous Life, BasicAwareness, battery, arm swing), the Panda's
+mode and errors, every arm configuration the mission uses against panda-py's joint walls,
+one camera frame (modes, depth units, valid pixels) and whether the NAO's tag is in it.
+Each device gets ``--timeout`` seconds (default 5), so an unreachable one fails, never
+hangs. Only ``--move`` moves anything: the arm to HOME, then its overview configuration
+(where the tag is looked for), at a tenth of its speed limits.
+
+Exit status: 0 every check passed (warnings allowed), 1 a check failed (the last line
+names the failing devices), 2 the cell file is wrong.
+"""
+
+from __future__ import annotations
+
+import argparse
+import threading
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+MOVE_SPEED_FACTOR = 0.1
+
+
+class _Report:
+    def __init__(self) -> None:
+        self.failed: list[str] = []
+
+    def line(self, status: str, device: str, detail: str) -> None:
+        print(f"[{status:>4}] {device}: {detail}", flush=True)
+        if status == "FAIL" and device not in self.failed:
+            self.failed.append(device)
+
+
+def register(subparsers: Any) -> None:
+    parser = subparsers.add_parser(
+        "check-hardware", help="check the robots of a cell file (moves nothing without --move)"
+    )
+    parser.add_argument("--robots", type=Path, required=True, metavar="CELL_JSON")
+    parser.add_argument(
+        "--move", action="store_true", help="also move the arm to its overview view, slowly"
+    )
+    parser.add_argument(
+        "--timeout", type=float, default=5.0, help="seconds each device may take to answer"
+    )
+    parser.set_defaults(func=check_hardware)
+
+
+def _within(timeout_s: float, job: Callable[[], Any]) -> Any:
+    """Runs ``job`` in a daemon thread; raises TimeoutError if it takes longer."""
+    result: dict[str, Any] = {}
+
+    def run() -> None:
+        try:
+            result["value"] = job()
+        except BaseException as error:
+            result["error"] = error
+
+    worker = threading.Thread(target=run, daemon=True)
+    worker.start()
+    worker.join(timeout_s)
+    if worker.is_alive():
+        raise TimeoutError(f"no answer in {timeout_s:g} s")
+    if "error" in result:
+        raise result["error"]
+    return result.get("value")
+
+
+def _describe(error: BaseException) -> str:
+    return (str(error) or type(error).__name__).splitlines()[0]
+
+
+def check_hardware(args: argparse.Namespace) -> int:
+    from executive.cell_config import load_cell_config
+    from hardware.real import SDK_DISTRIBUTIONS, sdk_versions
+    from hardware.real.panda import into_walls
+
+    if not args.timeout > 0:
+        from executive.cli import CliError
+
+        raise CliError("bearchair check-hardware: --timeout must be positive")
+    report = _Report()
+    cell = load_cell_config(args.robots)  # CellConfigError: one line, exit 2
+    report.line("ok", "cell", f"{args.robots} (NAO {cell.nao_url}, Panda {cell.panda_host})")
+    for distribution, version in sdk_versions().items():
+        extra = SDK_DISTRIBUTIONS[distribution]
+        status = "ok" if version else ("FAIL" if extra in ("nao", "panda") else "warn")
+        if extra == cell.camera and not version:
+            status = "FAIL"
+        detail = version or f"not installed (pip install 'bearchair[{extra}]')"
+        report.line(status, f"sdk {distribution}", detail)
+
+    # The devices first: an unreachable one is reported before the slower checks.
+    _check_nao(cell, args.timeout, report)
+    arm = _check_panda(cell, args.timeout, report)
+
+    from skills.perception.views import (
+        HOME_CONFIGURATION,
+        OVERVIEW_CONFIGURATION,
+        SCAN_CONFIGURATIONS,
+    )
+
+    views = {"HOME": HOME_CONFIGURATION, "OVERVIEW": OVERVIEW_CONFIGURATION}
+    views.update({f"scan{i}": q for i, q in enumerate(SCAN_CONFIGURATIONS)})
+    for name, joints in views.items():
+        try:
+            _, notes = into_walls(np.asarray(joints, dtype=float))
+        except ValueError as error:
+            report.line("FAIL", f"view {name}", _describe(error))
+            continue
+        if notes:
+            report.line(
+                "warn", f"view {name}", "inside panda-py's joint walls, moved: " + "; ".join(notes)
+            )
+        else:
+            report.line("ok", f"view {name}", "clear of the joint walls")
+
+    if arm is not None:
+        _check_camera(arm, args.timeout, report, move=args.move)
+    if report.failed:
+        print(f"check-hardware: FAILED: {', '.join(report.failed)}")
+        return 1
+    print("check-hardware: all checks passed" + ("" if args.move else " (nothing moved)"))
+    return 0
+
+
+def _check_nao(cell: Any, timeout_s: float, report: _Report) -> None:
+    from hardware.real.nao import NaoHumanoid, connect
+
+    try:
+        session = connect(cell.nao_url, cell.nao_user, cell.nao_password, timeout_s=timeout_s)
+        state = _within(timeout_s, lambda: NaoHumanoid(session, cell.nao_start).state())
+    except Exception as error:
+        report.line("FAIL", "nao", _describe(error))
+        return
+    report.line("ok", "nao", f"reached at {cell.nao_url}")
+    report.line("ok", "nao awake", str(state["awake"]))
+    life = state["autonomous_life"]
+    report.line(
+        "ok" if life == "disabled" else "warn",
+        "nao autonomous life",
+        f"{life}" + ("" if life == "disabled" else " (the mission turns it off)"),
+    )
+    report.line(
+        "ok" if not state["basic_awareness"] else "warn",
+        "nao basic awareness",
+        f"{state['basic_awareness']}"
+        + (" (the mission turns it off)" if state["basic_awareness"] else ""),
+    )
+    battery = state["battery_percent"]
+    report.line("ok" if battery >= 30 else "FAIL", "nao battery", f"{battery} %")
+    report.line("ok", "nao arm swing", f"{state['arm_swing']} (the mission turns it off)")
+    session.close()
+
+
+def _check_panda(cell: Any, timeout_s: float, report: _Report) -> Any:
+    from hardware.real.robots import connect_panda
+
+    try:
+        arm = _within(timeout_s, lambda: connect_panda(cell))
+        state = _within(timeout_s, arm.state)
+    except Exception as error:
+        report.line("FAIL", "panda", _describe(error))
+        return None
+    faulted = state["mode"] not in ("kIdle", "kMove") or state["errors"] != "none"
+    report.line(
+        "FAIL" if faulted else "ok",
+        "panda",
+        f"mode {state['mode']}, errors {state['errors']}"
+        + (": clear it in Desk with the operator" if faulted else ""),
+    )
+    return None if faulted else arm
+
+
+def _check_camera(arm: Any, timeout_s: float, report: _Report, move: bool) -> None:
+    from skills.arena import HUMANOID_TAG
+    from skills.perception.tags import estimate_tag_pose
+    from skills.perception.views import HOME_CONFIGURATION, OVERVIEW_CONFIGURATION
+
+    if move:
+        arm._speed_factor = MOVE_SPEED_FACTOR
+        try:
+            arm.move_to(HOME_CONFIGURATION, timeout_s=60.0)
+            arm.move_to(OVERVIEW_CONFIGURATION, timeout_s=60.0)
+        except Exception as error:
+            arm.emergency_stop()
+            report.line("FAIL", "panda move", _describe(error))
+            return
+        report.line("ok", "panda move", f"at the overview view (speed factor {MOVE_SPEED_FACTOR})")
+    try:
+        frame = _within(timeout_s, arm.capture)
+    except Exception as error:
+        report.line("FAIL", "camera", _describe(error))
+        return
+    mode = arm.camera.mode() if hasattr(arm.camera, "mode") else {}
+    valid = float(np.mean(frame.depth_m > 0.0))
+    median = float(np.median(frame.depth_m[frame.depth_m > 0.0])) if valid > 0 else float("nan")
+    report.line(
+        "ok" if valid > 0.2 else "FAIL",
+        "camera",
+        f"{frame.rgb.shape[1]}x{frame.rgb.shape[0]} {mode.get('depth', '')}, depth in metres "
+        f"(median {median:.3f} m), {100 * valid:.0f} % valid pixels",
+    )
+    pose = estimate_tag_pose(frame, HUMANOID_TAG)
+    where = "at the overview view" if move else "from the arm's current pose (--move: overview)"
+    if pose is None:
+        report.line("warn", "tag", f"NAO tag {HUMANOID_TAG.marker_id} not seen {where}")
+    else:
+        report.line("ok", "tag", f"NAO at ({pose.x:.2f}, {pose.y:.2f}) m, {where}")

@@ -1,0 +1,514 @@
+"""Recordings of a mission in Rerun: the tree and the 3D scene on one timeline.
+
+``bearchair run --record`` writes ``RUN_DIR/mission.rrd``; ``--live`` streams the same
+data to a viewer while the mission runs. Everything is logged from the tick loop's
+post-tick hook (:class:`MissionRecording` is one), on two timelines: ``tick`` (the
+tree's tick count) and ``robot`` (seconds on the robot's clock):
+
+* ``tree``: the tree as a graph, each node coloured by its status with its feedback
+  message, whenever a status or a message changes (``status`` and ``feedback`` are
+  also logged as plain strings per node, in the order of :func:`record.tree_nodes`);
+  ``tree/log`` has a line per status change;
+* ``blackboard/<key>``: each blackboard value as JSON text whenever it changes;
+* the scene: the skills' typed results drawn by :mod:`executive.recording_scene`
+  when they appear on the blackboard, and two skill calls the blackboard does not
+  keep (the tag's detections, the rotations asked for), seen by :class:`SkillCalls`.
+
+Skills hold no viewer code. Rerun (``rerun-sdk``) is the optional extra ``[viewer]``;
+without it this module imports, and asking for a recording raises
+:class:`RecordingUnavailable` with the install command.
+"""
+
+from __future__ import annotations
+
+import collections
+import importlib.util
+import json
+import logging
+import math
+import os
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+from urllib.parse import quote
+
+import py_trees
+from py_trees.common import Status
+
+from behaviours import keys
+from executive.jsonable import to_jsonable
+from executive.record import tree_nodes
+
+if TYPE_CHECKING:
+    from executive.runner import MissionRunner
+    from skills.geometry import SE2Pose
+
+logger = logging.getLogger(__name__)
+
+RECORDING_FILE = "mission.rrd"
+INSTALL_HINT = "pip install 'bearchair[viewer]' (the rerun-sdk viewer extra)"
+DEFAULT_VIEWER_PORT = 9876
+"""Rerun's own default gRPC port: a viewer started with ``rerun`` listens there."""
+DEFAULT_WEB_PORT = 9090
+STATUS_COLOURS = {
+    Status.SUCCESS.value: (60, 180, 75),
+    Status.FAILURE.value: (220, 50, 47),
+    Status.RUNNING.value: (245, 200, 40),
+    Status.INVALID.value: (170, 170, 170),
+}
+PATH_STEP_M = 0.02
+"""The NAO's walked path gets a point every 2 cm (the walk stops within 5 mm)."""
+POSE_STEP_M = 0.005
+POSE_STEP_RAD = math.radians(1.0)
+"""The NAO's pose is re-logged when it moved 5 mm or turned 1 degree since the last one."""
+FEEDBACK_PERIOD_S = 1.0
+"""Wall seconds between two logs of the tree when only feedback changed (a running
+leaf's message counts its seconds every tick); status changes are logged at their tick.
+Each log takes about 2 ms of the tick thread, more when the skills' threads hold the GIL."""
+FEEDBACK_LABEL_CHARS = 48
+"""Feedback shown in a node's label is cut here; the full text is in ``tree/log``."""
+
+
+class RecordingUnavailable(RuntimeError):
+    """A recording was asked for but cannot be made (no rerun-sdk, no display)."""
+
+
+def rerun_available() -> bool:
+    """True when the ``[viewer]`` extra (rerun-sdk) is installed."""
+    return importlib.util.find_spec("rerun") is not None
+
+
+def has_display() -> bool:
+    """True where a native window can open (always on macOS and Windows)."""
+    if not sys.platform.startswith("linux"):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def _rerun() -> Any:
+    if not rerun_available():
+        raise RecordingUnavailable(f"recording needs rerun-sdk: {INSTALL_HINT}")
+    import rerun
+
+    return rerun
+
+
+class SkillCalls:
+    """The mission's skills, passed through, remembering what some calls returned.
+
+    The blackboard keeps results, not every call: the walk looks for the humanoid's
+    tag many times and keeps only how it ended, and only the sentences of the
+    instructions are kept. This proxy queues ``(skill, result, robot seconds)`` for the
+    watched skills; the recording logs them at the next tick, from the tick's thread.
+
+    Args:
+        skills: the :class:`skills.toolbox.MissionSkills` the tree uses.
+        clock: the robot's clock (stamps each call).
+    """
+
+    WATCHED = ("locate_humanoid", "compose_instruction")
+
+    def __init__(self, skills: Any, clock: Any) -> None:
+        self._skills = skills
+        self._clock = clock
+        self._events: collections.deque[tuple[str, Any, float]] = collections.deque()
+
+    def __getattr__(self, name: str) -> Any:
+        attribute = getattr(self._skills, name)
+        if name not in self.WATCHED or not callable(attribute):
+            return attribute
+
+        def watched(*args: Any, **kwargs: Any) -> Any:
+            result = attribute(*args, **kwargs)
+            self._events.append((name, result, self._clock.now()))
+            return result
+
+        return watched
+
+    def drain(self) -> list[tuple[str, Any, float]]:
+        """The calls returned since the last drain, oldest first (thread-safe)."""
+        events = []
+        while self._events:
+            events.append(self._events.popleft())
+        return events
+
+
+class MissionRecording:
+    """Logs a mission to Rerun from the tick loop (a post-tick hook of MissionRunner).
+
+    Args:
+        root: the tree (its shape is logged once).
+        path: the ``.rrd`` file to write (None: stream only).
+        live: None (no viewer), ``"spawn"`` (start a native viewer), ``"web"`` (serve
+            the web viewer; its address is in :attr:`viewer_url`) or a Rerun URL
+            (``rerun+http://HOST:9876/proxy``: a viewer already running, e.g. on the
+            operator's laptop while the robots run).
+        web_port: the web viewer's HTTP port with ``live="web"``.
+        grpc_port: the port a spawned viewer or the web viewer's server listens on.
+
+    Raises:
+        RecordingUnavailable: rerun-sdk is missing, or a native viewer was asked for
+            where there is no display.
+    """
+
+    def __init__(
+        self,
+        root: py_trees.behaviour.Behaviour,
+        *,
+        path: Path | None,
+        live: str | None = None,
+        web_port: int = DEFAULT_WEB_PORT,
+        grpc_port: int = DEFAULT_VIEWER_PORT,
+    ) -> None:
+        rr = _rerun()
+        from executive import recording_scene
+
+        self._rr = rr
+        self._scene = recording_scene
+        self.path = None if path is None else Path(path)
+        self.viewer_url: str | None = None
+        self.seconds = 0.0
+        """Wall time spent in the hook so far (what recording costs the run)."""
+        self.cpu_seconds = 0.0
+        """CPU time of the hook's thread in the hook (its wall time less the waits for
+        the GIL and the skills' threads; Rerun encodes and writes in threads of its own)."""
+        self.seconds_by_part: dict[str, float] = collections.defaultdict(float)
+        """The same, per thing logged (``tree``, ``skill calls``, a blackboard key, ...)."""
+        self._stream = rr.RecordingStream("bearchair")
+        sinks = []
+        if self.path is not None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            sinks.append(rr.FileSink(str(self.path)))
+        if live:
+            sinks.append(self._live_sink(live, web_port, grpc_port))
+        if not sinks:
+            raise ValueError("a recording needs a file, a viewer or both")
+        self._stream.set_sinks(*sinks)
+        self._nodes = tree_nodes(root)
+        self._last_tree: list[tuple[str, str]] | None = None
+        self._last_tree_s = -math.inf
+        self._last_values: dict[str, Any] = {}
+        self._skill_calls: SkillCalls | None = None
+        self._walked: list[SE2Pose] = []
+        self._last_pose: SE2Pose | None = None
+        self._warned: set[str] = set()
+        self._lock = threading.Lock()
+        self._log_static()
+
+    # -- set-up ---------------------------------------------------------------------
+
+    def _live_sink(self, live: str, web_port: int, grpc_port: int) -> Any:
+        rr = self._rr
+        if live == "spawn":
+            if not has_display():
+                raise RecordingUnavailable(
+                    "no display for a native viewer: use --live web (a web viewer on a port)"
+                )
+            self._stream.spawn(port=grpc_port, connect=False)
+            self.viewer_url = f"rerun+http://127.0.0.1:{grpc_port}/proxy"
+            return rr.GrpcSink(self.viewer_url)
+        if live == "web":
+            server = rr.GrpcServerSink(port=grpc_port)
+            rr.serve_web_viewer(web_port=web_port, open_browser=False, connect_to=server.uri)
+            self.viewer_url = f"http://127.0.0.1:{web_port}?url={quote(server.uri, safe='')}"
+            return server
+        self.viewer_url = live
+        return rr.GrpcSink(live)
+
+    def _log_static(self) -> None:
+        rr = self._rr
+        self._scene.log_world_frame(self._stream)
+        paths = [path for path, _, _ in self._nodes]
+        edges = [(path.rsplit("/", 1)[0], path) for path in paths if "/" in path]
+        self._stream.log(
+            "tree",
+            rr.GraphEdges(edges, graph_type=rr.GraphType.Directed),
+            rr.GraphNodes(paths, positions=_tree_layout(self._nodes)),
+            static=True,
+        )
+
+    def watch_skills(self, skills: Any, clock: Any) -> SkillCalls:
+        """Wraps the tree's skills so that the watched calls are recorded too."""
+        self._skill_calls = SkillCalls(skills, clock)
+        return self._skill_calls
+
+    # -- the post-tick hook ------------------------------------------------------------
+
+    def __call__(self, runner: MissionRunner) -> None:
+        started, cpu_started = time.perf_counter(), time.thread_time()
+        with self._lock:
+            events = self._skill_calls.drain() if self._skill_calls is not None else []
+            tree = self._tree_to_log()
+            changed = self._changed_values()
+            # Most ticks change nothing: then nothing reaches Rerun, not even the time
+            # (each call into it hands the GIL to the skills' threads and waits for it back).
+            if events or tree is not None or changed:
+                self._stream.set_time("tick", sequence=int(runner.tree.count))
+                # The skill calls returned since the last tick, each at its own time.
+                self._guarded("skill calls", self._log_skill_calls, events)
+                self._stream.set_time("robot", duration=_robot_seconds(runner))
+                if tree is not None:
+                    self._guarded("tree", self._log_tree, *tree)
+                for key, value, previous in changed:
+                    self._guarded(key, self._log_value, key, value, previous)
+        self.seconds += time.perf_counter() - started
+        self.cpu_seconds += time.thread_time() - cpu_started
+
+    def cost(self) -> dict[str, Any]:
+        """What the recording cost the run so far: the hook's wall seconds, in all and
+        for the five most expensive things logged, and its CPU seconds
+        (``summary.json``'s ``recording``)."""
+        parts = sorted(self.seconds_by_part.items(), key=lambda kv: -kv[1])[:5]
+        return {
+            "file": None if self.path is None else self.path.name,
+            "seconds": round(self.seconds, 3),
+            "cpu_seconds": round(self.cpu_seconds, 3),
+            "seconds_by_part": {name: round(seconds, 3) for name, seconds in parts},
+        }
+
+    def log_summary(self, summary: dict[str, Any]) -> None:
+        """The run's summary (``summary.json``) as a text document at the end."""
+        text = json.dumps(to_jsonable(summary), indent=2)
+        self._guarded(
+            "summary",
+            lambda: self._stream.log(
+                "mission/summary", self._rr.TextDocument(text, media_type="text/plain")
+            ),
+        )
+
+    def close(self) -> None:
+        """Logs the tree's last feedback, flushes and closes the file (the viewer keeps
+        what it received)."""
+        with self._lock:
+            tree = self._tree_to_log(force=True)
+            if tree is not None:
+                self._guarded("tree", self._log_tree, *tree)
+        try:
+            self._stream.flush()
+            self._stream.disconnect()
+        except Exception as error:  # never lose the run record over the recording
+            logger.warning("could not close the recording: %s", error)
+
+    # -- what is logged ---------------------------------------------------------------
+
+    def _guarded(self, what: str, log: Callable[..., None], *args: Any) -> None:
+        # A recording that fails must never stop the mission: warn once and go on.
+        started = time.perf_counter()
+        try:
+            log(*args)
+        except Exception as error:
+            if what not in self._warned:
+                self._warned.add(what)
+                logger.warning("recording: could not log %s: %s", what, error)
+        finally:
+            self.seconds_by_part[what] += time.perf_counter() - started
+
+    def _tree_to_log(
+        self, force: bool = False
+    ) -> tuple[list[tuple[str, str]], list[tuple[str, str]]] | None:
+        """(state, previous state) when the tree is to be logged now, else None."""
+        state = [(node.status.value, node.feedback_message or "") for _, node, _ in self._nodes]
+        if state == self._last_tree:
+            return None
+        previous = self._last_tree or [(Status.INVALID.value, "")] * len(state)
+        now = time.monotonic()
+        statuses_changed = [s for s, _ in state] != [s for s, _ in previous]
+        if not (force or statuses_changed) and now - self._last_tree_s < FEEDBACK_PERIOD_S:
+            return None
+        self._last_tree, self._last_tree_s = state, now
+        return state, previous
+
+    def _log_tree(self, state: list[tuple[str, str]], previous: list[tuple[str, str]]) -> None:
+        rr = self._rr
+        for (_, node, _), (status, feedback), (old, _) in zip(
+            self._nodes, state, previous, strict=True
+        ):
+            if status != old:
+                self._stream.log(
+                    "tree/log",
+                    rr.TextLog(
+                        f"{node.name}: {old} -> {status}" + (f": {feedback}" if feedback else ""),
+                        level=_text_level(rr, status),
+                    ),
+                )
+        self._stream.log(
+            "tree",
+            rr.GraphNodes(
+                [path for path, _, _ in self._nodes],
+                labels=[
+                    _label(node.name, feedback)
+                    for (_, node, _), (_, feedback) in zip(self._nodes, state, strict=True)
+                ],
+                colors=[STATUS_COLOURS[status] for status, _ in state],
+            ),
+            rr.AnyValues(
+                status=[status for status, _ in state], feedback=[text for _, text in state]
+            ),
+        )
+
+    def _changed_values(self) -> list[tuple[str, Any, Any]]:
+        """(key, value, previous value) of the blackboard values replaced since the last
+        tick. Behaviours replace values, never mutate them, so identity says it."""
+        storage = py_trees.blackboard.Blackboard.storage
+        changed = []
+        for key in sorted(storage):
+            value = storage[key]
+            if key in self._last_values and self._last_values[key] is value:
+                continue
+            changed.append((key, value, self._last_values.get(key)))
+            self._last_values[key] = value
+        return changed
+
+    def _log_value(self, key: str, value: Any, previous: Any) -> None:
+        text = json.dumps(to_jsonable(value), indent=1, sort_keys=True)
+        self._stream.log(f"blackboard{key}", self._rr.TextDocument(text, media_type="text/plain"))
+        scene, stream = self._scene, self._stream
+        if value is None:
+            return
+        if key == keys.ARENA:
+            scene.log_arena(stream, value)
+        elif key == keys.CHAIR_SCAN:
+            scene.log_scan(stream, value)
+        elif key == keys.CHAIR_MESH:
+            scene.log_chair(stream, value)
+        elif key == keys.IMAGINATION:
+            scene.log_imagination(stream, value)
+        elif key == keys.SITTING_POSE:
+            scene.log_sitting_pose(stream, value)
+        elif key == keys.REACHABILITY:
+            scene.log_reachability(stream, value)
+        elif key == keys.ACCESSIBILITY:
+            scene.log_accessibility(stream, value)
+        elif key == keys.HUMANOID_POSE:
+            self._log_humanoid_pose(value)
+        elif key == keys.MEASURED_ROTATIONS:
+            for rotation in value[len(previous or []) :]:
+                scene.log_rotation(stream, rotation)
+        elif key == keys.WALK:
+            scene.log_walk(stream, value)
+        elif key == keys.SEATING_PLAN:
+            scene.log_seating_plan(stream, value)
+        elif key == keys.JUDGEMENT:
+            scene.log_judgement(stream, value)
+
+    def _log_skill_calls(self, events: list[tuple[str, Any, float]]) -> None:
+        for name, result, robot_s in events:
+            self._stream.set_time("robot", duration=robot_s)
+            if name == "locate_humanoid":
+                self._scene.log_tag_detection(self._stream, result)
+                if result is not None:
+                    self._log_humanoid_pose(result)
+            elif name == "compose_instruction":
+                self._scene.log_instruction(self._stream, result)
+
+    def _log_humanoid_pose(self, pose: SE2Pose) -> None:
+        """Moves the NAO to its tracked pose; its path gets a point every 2 cm."""
+        last = self._last_pose
+        if (
+            last is None
+            or last.distance_to(pose) >= POSE_STEP_M
+            or abs(math.remainder(pose.theta - last.theta, math.tau)) >= POSE_STEP_RAD
+        ):
+            self._last_pose = pose
+            self._scene.log_humanoid_pose(self._stream, pose)
+        if not self._walked or self._walked[-1].distance_to(pose) >= PATH_STEP_M:
+            self._walked.append(pose)
+            if len(self._walked) >= 2:
+                self._scene.log_walked_path(self._stream, self._walked)
+
+
+def open_recording(
+    root: py_trees.behaviour.Behaviour, out_dir: Path, *, record: bool, live: str | None
+) -> MissionRecording | None:
+    """The run's recording as asked for (``--record``, ``--live``), or None for neither."""
+    if not record and not live:
+        return None
+    return MissionRecording(root, path=out_dir / RECORDING_FILE if record else None, live=live)
+
+
+def read_entity(path: Path, entity_path: str) -> list[dict[str, Any]]:
+    """The rows logged to one entity of a recording, in tick order (for tests and tools).
+
+    Each row maps column names (``tick``, ``robot`` in seconds, ``GraphNodes:labels``,
+    ``status``, ...) to Python values; static rows have no ``tick``. The wall-clock
+    ``log_time`` column is left out.
+    """
+    from rerun.chunk import RrdReader
+
+    wanted = "/" + entity_path.strip("/")
+    rows: list[dict[str, Any]] = []
+    for chunk in RrdReader(str(path)).store().stream().to_chunks():
+        if chunk.entity_path != wanted:
+            continue
+        batch = chunk.to_record_batch()
+        names = [n for n in batch.schema.names if n not in ("log_time", "rerun.controls.RowId")]
+        columns = {name: _python_values(batch.column(name)) for name in names}
+        rows.extend(
+            {name: values[i] for name, values in columns.items()} for i in range(batch.num_rows)
+        )
+    rows.sort(key=lambda row: (row.get("tick") is not None, row.get("tick") or 0))
+    return rows
+
+
+def _python_values(column: Any) -> list[Any]:
+    """A column's values; durations (the ``robot`` timeline) as float seconds, since
+    nanoseconds do not fit Python's timedelta."""
+    import pyarrow as pa
+
+    if pa.types.is_duration(column.type):
+        nanoseconds = column.cast(pa.duration("ns")).cast(pa.int64()).to_pylist()
+        return [None if value is None else value / 1e9 for value in nanoseconds]
+    return column.to_pylist()
+
+
+def _robot_seconds(runner: MissionRunner) -> float:
+    try:
+        return float(runner.robot.clock.now())
+    except Exception:  # a real robot's clock may fail at shutdown
+        return runner.elapsed()
+
+
+def _label(name: str, feedback: str) -> str:
+    if not feedback:
+        return name
+    cut = (
+        feedback
+        if len(feedback) <= FEEDBACK_LABEL_CHARS
+        else feedback[: FEEDBACK_LABEL_CHARS - 1] + "…"
+    )
+    return f"{name}\n{cut}"
+
+
+def _text_level(rr: Any, status: str) -> Any:
+    if status == Status.FAILURE.value:
+        return rr.TextLogLevel.WARN
+    return rr.TextLogLevel.INFO
+
+
+def _tree_layout(
+    nodes: list[tuple[str, py_trees.behaviour.Behaviour, int]],
+) -> list[tuple[float, float]]:
+    """A top-down tree layout: leaves side by side, parents centred over their children
+    (graph units; rows 120 apart, leaves 220 apart so that labels fit)."""
+    x_of: dict[str, float] = {}
+    children: dict[str, list[str]] = collections.defaultdict(list)
+    for path, _, _ in nodes:
+        if "/" in path:
+            children[path.rsplit("/", 1)[0]].append(path)
+    next_leaf = 0.0
+
+    def place(path: str) -> float:
+        nonlocal next_leaf
+        if not children[path]:
+            x_of[path] = next_leaf
+            next_leaf += 220.0
+        else:
+            xs = [place(child) for child in children[path]]
+            x_of[path] = (xs[0] + xs[-1]) / 2.0
+        return x_of[path]
+
+    place(nodes[0][0])
+    return [(x_of[path], 120.0 * depth) for path, _, depth in nodes]

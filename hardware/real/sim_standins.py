@@ -1,0 +1,203 @@
+"""The simulated world behind the SDK stand-ins: the real backends drive the simulation.
+
+:class:`SimulatedNaoBody` moves the simulated NAO for :class:`~hardware.real.standins.NaoqiStandin`
+(walking, joint trajectories, hands, speech heard by the simulated helper);
+:class:`SimulatedPanda` is a :class:`~hardware.real.standins.FakePanda` whose joints are
+the simulated Panda's; :func:`simulated_carmine` renders the wrist camera for
+:class:`~hardware.real.standins.FakeOpenNI2`. :func:`robot_over_standins` puts the real
+backends (:mod:`hardware.real.nao`, :mod:`hardware.real.panda`,
+:mod:`hardware.real.camera`) on top, so the mission runs through qi networking, panda-py's
+call shapes and OpenNI's frames, with the simulation's clock, helper and judge.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from typing import Any
+
+import numpy as np
+
+from hardware.interfaces import Robot
+from hardware.real.standins import FRANKA_HAND_F_T_EE, FakeOpenNI2, FakePanda, NaoqiStandin
+from skills.geometry import SE2Pose, make_transform, rot_z
+
+T_FLANGE_HAND = make_transform(rot_z(-math.pi / 4), np.zeros(3))
+"""panda.urdf's ``panda_hand`` in the flange (``panda_link8``): -45 deg about z."""
+
+
+def _compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """SE(2) composition a ∘ b of [x, y, theta] poses."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return np.array([a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], a[2] + b[2]])
+
+
+def _inverse(a: np.ndarray) -> np.ndarray:
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return np.array([-(c * a[0] + s * a[1]), s * a[0] - c * a[1], -a[2]])
+
+
+class SimulatedNaoBody:
+    """The simulated NAO behind the NAOqi stand-in's services.
+
+    Args:
+        world: a :class:`hardware.sim.world.SimWorld`.
+        boot_odometry: what NAOqi's odometry reads at the start (not zero, as after a boot).
+    """
+
+    def __init__(self, world: Any, boot_odometry: tuple[float, float, float] = (3.0, -1.0, 0.7)):
+        self._world = world
+        self._nao = world.nao
+        self._clock = world.clock
+        self.joints: dict[str, float] = {}
+        start = self._nao.pose()
+        self._start_inverse = _inverse(np.array([start.x, start.y, start.theta]))
+        self._boot = np.asarray(boot_odometry, dtype=float)
+        self._walk_end_s: float | None = None
+        self._lock = threading.Lock()
+        self._clock.add_process(self._end_walk)
+
+    def odometry(self) -> np.ndarray:
+        pose = self._nao.pose()
+        since_start = _compose(self._start_inverse, np.array([pose.x, pose.y, pose.theta]))
+        return _compose(self._boot, since_start)
+
+    def walk(self, velocity: np.ndarray, duration_s: float) -> None:
+        with self._lock:
+            self._nao.set_velocity(*map(float, velocity))
+            self._walk_end_s = self._clock.now() + duration_s
+
+    def _end_walk(self, now_s: float, dt_s: float) -> None:
+        # A clock process: the walk command runs out in robot time, as on the NAO.
+        if self._walk_end_s is not None and now_s >= self._walk_end_s:
+            self._walk_end_s = None
+            self._nao.set_velocity(0.0, 0.0, 0.0)
+
+    def stop_walk(self) -> None:
+        with self._lock:
+            self._walk_end_s = None
+            self._nao.set_velocity(0.0, 0.0, 0.0)
+            self._nao.stop()
+
+    def walking(self) -> bool:
+        return self._walk_end_s is not None
+
+    def play(
+        self,
+        names: list[str],
+        angles: list[list[float]],
+        times: list[list[float]],
+        cancelled: threading.Event,
+    ) -> None:
+        if any(joint_times != times[0] for joint_times in times):
+            raise RuntimeError("the simulated NAO plays one time list for all joints")
+        positions = np.array(angles, dtype=float).T
+        self._nao.play_joint_trajectory(names, times[0], positions)
+
+    def hand(self, hand: str, open_hand: bool, cancelled: threading.Event) -> None:
+        self._nao.set_hands(open_hand)
+
+    def posture(self, name: str, cancelled: threading.Event) -> None:
+        """The simulated NAO already stands, carrying the bear."""
+
+    def cancel_motions(self) -> None:
+        self._nao.stop()
+
+    def say(self, sentence: str) -> None:
+        self._world.speaker.say(sentence)
+
+
+class SimulatedPanda(FakePanda):
+    """panda-py's calls on the simulated Panda (base at the world origin)."""
+
+    def __init__(self, world: Any) -> None:
+        super().__init__("simulated")
+        self._sim = world.panda
+
+    def get_state(self) -> Any:
+        state = super().get_state()
+        q = self._sim.joint_positions()
+        state.q = q.tolist()
+        T_base_hand = self._sim.T_world_camera() @ np.linalg.inv(_t_hand_camera())
+        O_T_EE = T_base_hand @ np.linalg.inv(T_FLANGE_HAND) @ FRANKA_HAND_F_T_EE
+        state.O_T_EE = O_T_EE.T.reshape(-1).tolist()
+        return state
+
+    def get_pose(self) -> np.ndarray:
+        return np.asarray(self.get_state().O_T_EE).reshape(4, 4).T
+
+    def stop_motion(self) -> None:
+        self._sim.emergency_stop()
+
+    def move_to_joint_position(
+        self,
+        positions: Any,
+        speed_factor: float = 0.2,
+        stiffness: Any = None,
+        damping: Any = None,
+        dq_threshold: float = 0.001,
+        success_threshold: float = 0.01,
+    ) -> bool:
+        self.calls.append(
+            ("move_to_joint_position", (np.asarray(positions).tolist(), speed_factor))
+        )
+        try:
+            self._sim.move_to(np.asarray(positions, dtype=float).reshape(7), timeout_s=30.0)
+        except (RuntimeError, TimeoutError) as error:
+            from hardware.real.standins import ControlException
+
+            self._last_error = ControlException(f"libfranka: Move command aborted: {error}")
+            return False
+        return True
+
+
+def _t_hand_camera() -> np.ndarray:
+    from hardware.sim.camera import T_HAND_CAMERA
+
+    return T_HAND_CAMERA
+
+
+def simulated_carmine(world: Any) -> FakeOpenNI2:
+    """OpenNI frames rendered by the simulated wrist camera (one render per robot instant)."""
+    cache: dict[str, Any] = {}
+    lock = threading.Lock()
+
+    def render(width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+        with lock:
+            now = world.clock.now()
+            if cache.get("stamp") != now:
+                frame = world.panda.capture()
+                depth_mm = np.round(np.nan_to_num(frame.depth_m) * 1000.0)
+                cache.update(stamp=now, rgb=frame.rgb, depth=np.clip(depth_mm, 0, 65535))
+            return cache["rgb"], cache["depth"].astype(np.uint16)
+
+    return FakeOpenNI2(render=render, stamp_us=lambda: int(world.clock.now() * 1e6))
+
+
+def robot_over_standins(world: Any, standin: NaoqiStandin) -> tuple[Robot, Any]:
+    """The real backends on the stand-ins, the simulation behind them (not yet activated).
+
+    Returns:
+        (the robot, the qi session: close it when done).
+    """
+    from hardware.real.camera import CarmineCamera
+    from hardware.real.nao import NaoHumanoid, NaoSpeaker, connect
+    from hardware.real.panda import PandaArm
+
+    session = connect(standin.url)
+    start = world.nao.pose()
+    arm = PandaArm(
+        SimulatedPanda(world),
+        CarmineCamera(simulated_carmine(world), intrinsics=world.panda.intrinsics),
+        T_world_base=np.eye(4),
+        T_flange_camera=T_FLANGE_HAND @ _t_hand_camera(),
+    )
+    robot = Robot(
+        arm=arm,
+        humanoid=NaoHumanoid(session, odom_origin=SE2Pose(start.x, start.y, start.theta)),
+        speaker=NaoSpeaker(session),
+        clock=world.clock,
+        helper=world.helper,
+        judge=world.judge,
+    )
+    return robot, session
