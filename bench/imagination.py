@@ -9,11 +9,16 @@ the tables found as chairs, the median error, the median time per chair (all, an
 Usage:
     .venv/bin/python bench/imagination.py [--workers 2] [--seed 0] [--only chair-synth]
         [--save raw.pkl] [--json summary.json] [--use-cache]
+    .venv/bin/python bench/imagination.py --generated 4 [--families round,armchair]
 
 The preparation of a mesh is cached on disk by its digest; unless ``--use-cache`` is
 given, the benchmark uses a fresh cache folder so every mesh is prepared from scratch,
 as a newly scanned chair is in a mission. The summary gives the median and the maximum
 of the time per mesh (preparation plus drops), tables included.
+
+``--generated N`` runs N chairs per family of ``skills.chairgen`` instead (families with a
+front only; seeds 0..N-1 shifted by ``--seed``), each turned by a seeded random yaw as the
+calibration meshes are, and prints the direction error per family.
 
 ``--save`` stores every drop's raw outcome so the SAM thresholds can be re-scored
 without simulating again (``--rescore raw.pkl``).
@@ -53,6 +58,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--use-cache", action="store_true", help="reuse prepared meshes from the disk cache"
     )
+    parser.add_argument(
+        "--generated", type=int, default=0, help="N generated chairs per family instead"
+    )
+    parser.add_argument(
+        "--families",
+        default="",
+        help="generated families (comma-separated; default: every family with a front)",
+    )
     args = parser.parse_args(argv)
     if not args.use_cache:
         import os
@@ -60,6 +73,8 @@ def main(argv: list[str] | None = None) -> int:
 
         # Before the skills are imported, so the workers inherit it too.
         os.environ["BEARCHAIR_CACHE"] = tempfile.mkdtemp(prefix="bearchair-bench-cache-")
+    if args.generated:
+        return _generated(args)
 
     if not CHAIRS_DIR.is_dir():
         print(f"skipped: {CHAIRS_DIR} is absent (calibration meshes not available)")
@@ -119,6 +134,7 @@ def main(argv: list[str] | None = None) -> int:
                 "steps": steps,
                 "physics_s": physics,
                 "reason": result.reason,
+                "split": bool(getattr(result, "vote", None) and result.vote.split),
             }
         )
         print(
@@ -126,6 +142,7 @@ def main(argv: list[str] | None = None) -> int:
             f"{'' if error is None else f'{error:6.1f}':>6s} {result.n_correct:4d} "
             f"{result.n_drops:5d} {result.seconds['prepare']:5.2f} "
             f"{result.seconds['simulate']:5.2f} {result.seconds['total']:5.2f}  {result.reason}"
+            + (f"{result.vote.describe()}" if getattr(result, "vote", None) else "")
         )
         sys.stdout.flush()
 
@@ -137,6 +154,80 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{key:40s} {value}")
     if args.json:
         args.json.write_text(json.dumps({"summary": summary, "rows": rows}, indent=1))
+    return 0
+
+
+def _generated_chairs(count: int, seed: int, families: list[str]):
+    """(name, mesh, front_yaw_deg, family, seat height) of generated chairs, each turned by a
+    seeded yaw (the calibration meshes come turned too, so the OBB is not axis-aligned)."""
+    import numpy as np
+    import trimesh
+
+    from skills.chairgen import generate_chair
+
+    for family in families:
+        for index in range(count):
+            chair = generate_chair(seed + index, family)
+            if chair.front_yaw_rad is None:
+                continue
+            yaw = float(np.random.default_rng([seed + index, 7]).uniform(-math.pi, math.pi))
+            mesh = chair.mesh.copy()
+            mesh.apply_transform(trimesh.transformations.rotation_matrix(yaw, (0, 0, 1)))
+            front = math.degrees(chair.front_yaw_rad + yaw)
+            yield chair.name, mesh, front, family, chair.seat_height_m
+
+
+def _generated(args: argparse.Namespace) -> int:
+    from skills.chairgen import FAMILIES
+    from skills.imagination import imagine_sitting_details, warm_up
+    from skills.imagination.imagine import choose_sitting_pose
+    from skills.imagination.sam import score_drop
+
+    families = [f for f in (args.families.split(",") if args.families else FAMILIES) if f]
+    saved: dict[str, tuple] = {}
+    if args.rescore:
+        saved = pickle.loads(args.rescore.read_bytes())
+    else:
+        warm_up(args.workers)
+    rows = []
+    print(f"{'chair':24s} {'seat':>5s} {'found':5s} {'err':>6s} {'ncor':>4s} {'drops':>5s}  vote")
+    for name, mesh, front, family, seat in _generated_chairs(args.generated, args.seed, families):
+        if args.rescore:
+            if name not in saved:
+                continue
+            prepared, raw, seconds = saved[name][:3]
+            drops = tuple(score_drop(d) for d in raw)
+            result = choose_sitting_pose(prepared, drops, seconds, list(raw))
+        else:
+            details = imagine_sitting_details(mesh, seed=args.seed, workers=args.workers)
+            result, raw = details.result, details.raw_drops
+            saved[name] = (details.prepared, raw, result.seconds)
+        error = _angle_error_deg(result.sitting_pose.yaw, front) if result.found else None
+        vote = getattr(result, "vote", None)
+        rows.append({"file": name, "family": family, "seat_m": seat, "error_deg": error})
+        print(
+            f"{name:24s} {seat:5.2f} {result.found!s:5s} "
+            f"{'' if error is None else f'{error:6.1f}':>6s} {result.n_correct:4d} "
+            f"{result.n_drops:5d}  {'' if vote is None else vote.describe()} {result.reason}"
+        )
+        sys.stdout.flush()
+    if args.save and not args.rescore:
+        args.save.write_bytes(pickle.dumps(saved))
+    print()
+    print(f"{'family':12s} {'chairs':>6s} {'found':>5s} {'<=30deg':>7s} {'median':>6s} {'max':>6s}")
+    for family in families:
+        mine = [r for r in rows if r["family"] == family]
+        if not mine:
+            continue
+        errors = [r["error_deg"] for r in mine if r["error_deg"] is not None]
+        within = sum(e <= 30.0 for e in errors)
+        print(
+            f"{family:12s} {len(mine):6d} {len(errors):5d} {within:7d} "
+            f"{statistics.median(errors) if errors else float('nan'):6.1f} "
+            f"{max(errors) if errors else float('nan'):6.1f}"
+        )
+    if args.json:
+        args.json.write_text(json.dumps({"rows": rows}, indent=1))
     return 0
 
 
@@ -155,6 +246,7 @@ def _summary(rows: list[dict]) -> dict:
         "fronted meshes within 30 deg": f"{len(within)}/{len(fronted)} "
         f"({100.0 * len(within) / max(len(fronted), 1):.1f}%)",
         "fronted meshes found": f"{len(errors)}/{len(fronted)}",
+        "split votes (fronted)": sum(r.get("split", False) for r in fronted),
         "tables found as chairs": f"{sum(r['found'] for r in tables)}/{len(tables)}",
         "median error (deg, found fronted)": round(statistics.median(errors), 1)
         if errors

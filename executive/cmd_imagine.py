@@ -3,9 +3,11 @@
 Prints the sitting position (metres) and yaw (degrees from +x about +z, the direction
 the sitter faces) in the mesh's frame, the number of correct sittings and the time; or
 ``--json`` one JSON object with the keys found, position, yaw_deg, n_correct, n_drops,
-seconds and, when not found, reason. A mesh that is not a chair gives ``found: false``
-and exit status 0; an unreadable or empty file, or an ``--image`` that cannot be written
-(checked before the simulation), gives one line on stderr and status 2.
+seconds, vote (how the correct sittings spread over the 8 rotations: counts, chosen_deg,
+runner_up_deg, share, split, resolved_by, extra_drops; null when none) and, when not
+found, reason. A mesh that is not a chair gives ``found: false`` and exit status 0; an
+unreadable or empty file, or an ``--image`` that cannot be written (checked before the
+simulation), gives one line on stderr and status 2.
 """
 
 from __future__ import annotations
@@ -72,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
             "n_correct": result.n_correct,
             "n_drops": result.n_drops,
             "seconds": round(seconds, 3),
+            "vote": result.vote.to_json() if result.vote is not None else None,
         }
         if not result.found:
             payload["reason"] = result.reason
@@ -84,6 +87,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(f"no sitting pose: {result.reason}")
     print(f"correct sittings: {result.n_correct} of {result.n_drops} drops")
+    if result.vote is not None:
+        print(f"rotation vote:    {result.vote.describe()}")
     print(
         f"time:             {seconds:.2f} s (prepare {result.seconds.get('prepare', 0.0):.2f} s, "
         f"simulate {result.seconds.get('simulate', 0.0):.2f} s)"

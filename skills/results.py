@@ -27,6 +27,7 @@ class ChairScan(NamedTuple):
         seconds: wall time per step (for example ``capture``, ``tsdf``, ``floor``).
         frames: the RGB-D views fused, each with its camera pose (for looking at the scan
             afterwards; empty when the scan did not keep them).
+        notes: scan views skipped or replaced to keep the arm clear of the chair.
     """
 
     chair_mesh: trimesh.Trimesh
@@ -34,10 +35,12 @@ class ChairScan(NamedTuple):
     views: int
     seconds: dict[str, float]
     frames: tuple[RGBDFrame, ...] = ()
+    notes: tuple[str, ...] = ()
 
     def summary(self) -> dict[str, Any]:
         return {
             "views": self.views,
+            "notes": list(self.notes),
             "points": len(self.chair_points),
             "faces": len(self.chair_mesh.faces),
             "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
@@ -75,6 +78,51 @@ class DropOutcome(NamedTuple):
     link_poses: np.ndarray | None = None
 
 
+class RotationVote(NamedTuple):
+    """How the correct sittings were spread over the chair rotations α_i = iπ/4.
+
+    Attributes:
+        counts: correct sittings per rotation (8 values).
+        chosen: the rotation whose sittings give the pose.
+        runner_up: the strongest other rotation (None when no other has a sitting).
+        share: the chosen rotation's share of all correct sittings (1: unanimous).
+        split: the vote was split (see ``skills.imagination.imagine``).
+        resolved_by: what decided a split vote (empty when it was not split).
+        extra_drops: drops added to settle a split vote.
+    """
+
+    counts: tuple[int, ...]
+    chosen: int
+    runner_up: int | None
+    share: float
+    split: bool
+    resolved_by: str = ""
+    extra_drops: int = 0
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "counts": list(self.counts),
+            "chosen_deg": 45 * self.chosen,
+            "runner_up_deg": None if self.runner_up is None else 45 * self.runner_up,
+            "share": round(self.share, 3),
+            "split": self.split,
+            "resolved_by": self.resolved_by,
+            "extra_drops": self.extra_drops,
+        }
+
+    def describe(self) -> str:
+        """One line, e.g. ``votes 0/3/3/2/0/0/0/0, chose 45 deg (share 0.38), split``."""
+        text = (
+            f"votes {'/'.join(str(c) for c in self.counts)}, chose {45 * self.chosen} deg "
+            f"(share {self.share:.2f})"
+        )
+        if self.split:
+            text += f", split: resolved by {self.resolved_by}"
+            if self.extra_drops:
+                text += f", after {self.extra_drops} more drops"
+        return text
+
+
 class ImaginationResult(NamedTuple):
     """The sitting pose found by physical simulation, or why none was found.
 
@@ -88,6 +136,7 @@ class ImaginationResult(NamedTuple):
         reason: why no sitting pose was found (empty when found).
         T_mesh_chair: 4x4 pose of the drops' chair frame (after g_obb) in the frame of
             the mesh given (None when no drop was simulated).
+        vote: how the correct sittings were spread over the rotations (None when none).
     """
 
     found: bool
@@ -98,6 +147,7 @@ class ImaginationResult(NamedTuple):
     seconds: dict[str, float]
     reason: str = ""
     T_mesh_chair: np.ndarray | None = None
+    vote: RotationVote | None = None
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -107,6 +157,7 @@ class ImaginationResult(NamedTuple):
             "n_drops": self.n_drops,
             "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
             "reason": self.reason,
+            "vote": None if self.vote is None else self.vote.to_json(),
         }
 
 
@@ -210,6 +261,8 @@ class ChairRotation(NamedTuple):
         fitness: ICP inlier ratio (0..1).
         inlier_rmse_m: ICP inlier RMSE in metres.
         chair_points: (N, 3) the chair as now seen, world frame: the next reference.
+        visible_fitness: share of the reference the new views saw where they could see
+            it (NaN when the fitness alone accepted the fit).
     """
 
     T_world_new_old: np.ndarray
@@ -217,6 +270,7 @@ class ChairRotation(NamedTuple):
     fitness: float
     inlier_rmse_m: float
     chair_points: np.ndarray
+    visible_fitness: float = math.nan
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -224,6 +278,9 @@ class ChairRotation(NamedTuple):
             "translation_m": [round(float(v), 4) for v in self.T_world_new_old[:3, 3]],
             "fitness": round(self.fitness, 3),
             "inlier_rmse_m": round(self.inlier_rmse_m, 4),
+            "visible_fitness": None
+            if math.isnan(self.visible_fitness)
+            else round(self.visible_fitness, 3),
         }
 
 

@@ -287,3 +287,108 @@ def test_cancel_stops_before_simulating(box_chair: trimesh.Trimesh) -> None:
     for workers in (1, 2):
         result = imagine_sitting(box_chair, seed=0, cancel=cancel, workers=workers)
         assert not result.found and result.reason == "cancelled"
+
+
+# --- the rotation vote (pure: scored drops made up, no simulation) --------------------
+
+
+def _prepared_identity():
+    """A PreparedChair stand-in with g_obb the identity (only its frame is used)."""
+    from types import SimpleNamespace
+
+    return SimpleNamespace(T_obb_mesh=np.eye(4), gamma_obb_rad=0.0)
+
+
+def _sitting(rotation: int, yaw_deg: float, jl: float, upper: int = 4, y: float = 0.0):
+    from skills.results import DropOutcome
+
+    return DropOutcome(
+        rotation_index=rotation,
+        offset_m=0.0,
+        position=np.array([0.02, y, 0.3]),
+        yaw=math.radians(yaw_deg),
+        joint_score=jl / 2.0,
+        link_score=jl / 2.0,
+        sitting_height_m=0.3,
+        upper_contacts=upper,
+        lower_contacts=6,
+        correct=True,
+    )
+
+
+def _failed(rotation: int):
+    return _sitting(rotation, 0.0, 3.0)._replace(correct=False)
+
+
+def _choose(drops):
+    from skills.imagination.imagine import choose_sitting_pose
+
+    return choose_sitting_pose(_prepared_identity(), tuple(drops), {"total": 0.0})
+
+
+def test_an_agreeing_vote_is_not_split_and_keeps_the_chosen_rotation() -> None:
+    # The front is rotation 0; one sitting at 45 degrees, the rest fail.
+    drops = [_sitting(0, -2.0, 0.5), _sitting(0, 1.0, 0.6), _sitting(0, 0.0, 0.4)]
+    drops += [_sitting(1, -40.0, 0.3)] + [_failed(i) for i in range(2, 8)]
+    result = _choose(drops)
+    assert result.found and not result.vote.split and result.vote.resolved_by == ""
+    assert result.vote.counts == (3, 1, 0, 0, 0, 0, 0, 0)
+    assert result.vote.chosen == 0 and result.vote.runner_up == 1
+    assert result.vote.share == pytest.approx(0.75)
+    assert result.n_correct == 3  # the pose averages the chosen rotation's own sittings
+    assert abs(math.degrees(result.sitting_pose.yaw)) < 2.0
+
+
+def test_a_tie_between_adjacent_rotations_is_split_and_goes_to_the_lowest_j_plus_l() -> None:
+    # The front (0) and a diagonal (1) sit equally often; the diagonal's sitters turned
+    # partway back toward the front, with a higher J + L.
+    drops = [_sitting(0, d, 0.3) for d in (-1.0, 0.0, 1.0)]
+    drops += [_sitting(1, d, 0.9) for d in (-25.0, -30.0, -20.0)]
+    drops += [_failed(i) for i in (2, 3, 4, 5, 6, 7)]
+    result = _choose(drops)
+    assert result.vote.split and result.vote.share == pytest.approx(0.5)
+    assert result.vote.resolved_by.startswith("mean J + L")
+    assert result.vote.chosen == 0 and result.n_correct == 3
+    assert abs(math.degrees(result.sitting_pose.yaw)) < 2.0
+
+
+def test_a_gap_whose_neighbours_turn_toward_it_gives_the_pose() -> None:
+    # A round seat whose front (rotation 2, facing -90 degrees) fails where it lands,
+    # while the sitters dropped at 45 degrees on either side turn toward it.
+    drops = [_sitting(1, d, 0.5, y=0.01) for d in (-60.0, -65.0)]
+    drops += [_sitting(3, d, 0.5, y=-0.01) for d in (-118.0,)]
+    drops += [_failed(i) for i in (0, 2, 4, 5, 6, 7)]
+    result = _choose(drops)
+    assert result.vote.split and result.vote.chosen == 2
+    assert result.vote.resolved_by.startswith("sitters on either side turning toward")
+    assert result.n_correct == 3
+    assert abs(math.degrees(wrap_angle(result.sitting_pose.yaw + math.pi / 2))) < 20.0
+
+
+def test_a_gap_between_two_steady_directions_keeps_the_chosen_rotation() -> None:
+    # Sitters at 90 and 180 degrees each kept the direction they were dropped in (an
+    # armchair sat on across an armrest and from the front): nothing pulls toward 135.
+    drops = [_sitting(2, -90.0, 0.9), _sitting(2, -90.5, 0.8)]
+    drops += [_sitting(4, 180.0, 0.5), _sitting(4, 179.5, 0.4), _sitting(4, -179.0, 0.6)]
+    drops += [_failed(i) for i in (0, 1, 3, 5, 6, 7)]
+    result = _choose(drops)
+    assert result.vote.split and result.vote.chosen == 4
+    assert result.vote.resolved_by.startswith("the chosen rotation")
+    assert abs(math.degrees(wrap_angle(result.sitting_pose.yaw - math.pi))) < 1.0
+
+
+def test_cli_json_reports_the_vote(tmp_path, capsys) -> None:
+    from executive import cmd_imagine
+
+    parser = argparse.ArgumentParser()
+    cmd_imagine.register(parser.add_subparsers())
+    chair_path = tmp_path / "box_chair.obj"
+    box_chair_mesh().export(chair_path)
+    args = parser.parse_args(["imagine", str(chair_path), "--json", "--workers", "2"])
+    assert args.func(args) == 0
+    payload = json.loads(capsys.readouterr().out)
+    vote = payload["vote"]
+    assert payload["found"] and len(vote["counts"]) == 8
+    assert sum(vote["counts"]) >= payload["n_correct"] > 0
+    assert 0.0 < vote["share"] <= 1.0 and isinstance(vote["split"], bool)
+    assert vote["chosen_deg"] in range(0, 360, 45)

@@ -18,6 +18,22 @@ The paper's procedure ("Sitting Imagination"):
 
    and the sitting pose in the mesh frame is p = g_obb⁻¹ ∘ p', γ = γ' − γ_obb.
 
+5. A split vote: another rotation has as many correct sittings of its own as the chosen
+   one (contested), or a rotation without a correct sitting of its own has more in its
+   window than the chosen one (a hole: the sitter fails facing it, yet sits turned 45
+   degrees to either side). On round or near-symmetric seats the diagonals sit as well
+   as the front, and the front itself may fail where the drop lands on an edge. Where
+   the votes disagree, every contested rotation and hole is dropped on again
+   (``SPLIT_SETTLE_REPEATS`` times at the first three positions, fresh jitter) and the
+   vote is taken again over all drops. A hole that remains takes the pose from the
+   sittings in its window, the agents on either side having turned toward it; a tie
+   that remains goes to the paper's lowest mean J + L. (Measured on the calibration
+   chairs' saved drops, 54 fronted meshes: where two or three adjacent rotations tie,
+   the rotation of lowest mean J + L was the front in all 13 cases, the lowest mean
+   sitting height in 12 and the most backrest contact points in fewer, while averaging
+   over the tied rotations put the pose 5-11 degrees off; so the tie-break stays the
+   paper's. The one chair the vote got 50 degrees wrong was a hole.)
+
 Drops run in worker processes (each with its own pybullet DIRECT client), grouped one
 rotation per physics world. Each drop's small start jitter is seeded from
 (seed, rotation, position), so a seed gives the same result for any number of workers.
@@ -49,7 +65,7 @@ from skills.imagination.simulation import (
     run_task,
     worker_initializer,
 )
-from skills.results import DropOutcome, ImaginationResult
+from skills.results import DropOutcome, ImaginationResult, RotationVote
 
 N_ROTATIONS = 8
 FIRST_POSITIONS = (0, -1, 1)
@@ -68,6 +84,12 @@ the simulated world (solid collision bodies): the paper's rule put 89 % of the t
 meshes within 30 degrees of the front, the vote with a three-rotation mean 93 % but only
 74 % of scans within 15 degrees of their true mesh, the vote with the centre's mean 91 %
 and 85 %."""
+SPLIT_SETTLE_REPEATS = 1
+"""A split vote (below) is settled by dropping again, this many more times, at the first
+three positions of every contested rotation, with fresh start jitter."""
+PULL_MIN_RAD = 2.0 * JITTER_YAW_RAD
+"""A sitter turned further than twice the start jitter toward a direction was turned by
+the chair, not by how it was dropped."""
 MORE_POSITIONS_MAX_CORRECT = 1
 """The paper: the four extra drop positions run when at most this many of the first 24
 drops were correct sittings."""
@@ -163,9 +185,37 @@ def imagine_sitting_details(
         n_correct = sum(score_drop(drop, thresholds).correct for drop in raw)
         if n_correct > MORE_POSITIONS_MAX_CORRECT:
             break
+    extra = 0
+    if not cancelled:
+        # A split vote: drop again where the votes disagree.
+        by_rotation = _correct_by_rotation(tuple(score_drop(d, thresholds) for d in raw))
+        if max(len(v) for v in by_rotation.values()) >= MIN_CORRECT:
+            _, contested, holes = _vote(by_rotation, WINDOW_HALF_WIDTH)
+            if len(contested) > 1 or holes:
+                tasks = [
+                    TaskSpec(
+                        prepared,
+                        urdf,
+                        _drop_specs(prepared, i, FIRST_POSITIONS, seed, repeat=repeat),
+                        settings,
+                    )
+                    for i in sorted(set(contested) | set(holes))
+                    for repeat in range(1, SPLIT_SETTLE_REPEATS + 1)
+                ]
+                outcomes, seconds, cancelled = runner(tasks, cancel)
+                physics_seconds += seconds
+                more = [drop for task_drops in outcomes for drop in task_drops]
+                raw.extend(more)
+                extra = len(more)
     simulated_at = time.perf_counter()
 
-    raw.sort(key=lambda d: (d.spec.rotation_index, _position_order(d.spec.position_index)))
+    raw.sort(
+        key=lambda d: (
+            d.spec.rotation_index,
+            d.spec.repeat,
+            _position_order(d.spec.position_index),
+        )
+    )
     drops = tuple(score_drop(drop, thresholds) for drop in raw)
     seconds = {
         "prepare": prepared_at - started,
@@ -176,7 +226,7 @@ def imagine_sitting_details(
     if cancelled:
         result = ImaginationResult(False, None, 0, len(drops), drops, seconds, "cancelled")
     else:
-        result = choose_sitting_pose(prepared, drops, seconds, raw)
+        result = choose_sitting_pose(prepared, drops, seconds, raw, extra_drops=extra)
     result = result._replace(T_mesh_chair=np.linalg.inv(prepared.T_obb_mesh))
     return ImaginationDetails(result, tuple(raw), steps, physics_seconds, prepared)
 
@@ -187,12 +237,14 @@ def choose_sitting_pose(
     seconds: dict[str, float],
     raw: list[RawDrop] | None = None,
     window_half_width: int = WINDOW_HALF_WIDTH,
+    extra_drops: int = 0,
 ) -> ImaginationResult:
     """The paper's choice of the best rotation and the weighted mean pose.
 
     With ``window_half_width`` w > 0, rotations are compared first by the correct
     sittings in the window α_{i-w} .. α_{i+w}, then by their own; the weighted means
     run over the chosen rotation's own correct sittings (``n_correct`` counts them).
+    A split vote is resolved over arcs of contested rotations (see the module doc).
 
     Args:
         prepared: the chair (for g_obb).
@@ -200,40 +252,48 @@ def choose_sitting_pose(
         seconds: timings to carry into the result.
         raw: the unscored drops, used to explain a failure.
         window_half_width: rotations on each side of α_i that vote with it (0: the paper).
+        extra_drops: how many of ``drops`` were added to settle a split vote.
     """
-    by_rotation: dict[int, list[DropOutcome]] = {i: [] for i in range(N_ROTATIONS)}
-    for drop in drops:
-        if drop.correct:
-            by_rotation[drop.rotation_index].append(drop)
+    by_rotation = _correct_by_rotation(drops)
     if max(len(v) for v in by_rotation.values()) < MIN_CORRECT:
         return ImaginationResult(
             False, None, 0, len(drops), drops, seconds, _failure_reason(drops, raw)
         )
-
-    def window(centre: int) -> list[DropOutcome]:
-        return [
+    best, contested, holes = _vote(by_rotation, window_half_width)
+    counts = tuple(len(by_rotation[i]) for i in range(N_ROTATIONS))
+    others = [i for i in range(N_ROTATIONS) if i != best and counts[i]]
+    runner_up = (
+        max(others, key=lambda i: (counts[i], -_mean_jl(by_rotation[i]), -i)) if others else None
+    )
+    share = counts[best] / sum(counts)
+    split = extra_drops > 0 or len(contested) > 1 or bool(holes)
+    resolved_by = ""
+    chosen = by_rotation[best]
+    hole = next((h for h in holes if _pulled_toward(h, by_rotation, window_half_width)), None)
+    if hole is not None:
+        # Both neighbours of a rotation sit, the rotation itself never does, and the
+        # sitters dropped beside it turned toward it: its window's sittings give the pose.
+        best = hole
+        chosen = [
             d
             for offset in range(-window_half_width, window_half_width + 1)
-            for d in by_rotation[(centre + offset) % N_ROTATIONS]
+            for d in by_rotation[(best + offset) % N_ROTATIONS]
         ]
+        resolved_by = "sitters on either side turning toward a rotation without its own"
+    elif holes:
+        resolved_by = "the chosen rotation (sitters beside the gap did not turn toward it)"
+    elif split:
 
-    def mean_jl(chosen: list[DropOutcome]) -> float:
-        return float(np.mean([_jl(d) for d in chosen])) if chosen else math.inf
+        def key(i: int) -> tuple[int, int]:
+            window = sum(
+                counts[(i + offset) % N_ROTATIONS]
+                for offset in range(-window_half_width, window_half_width + 1)
+            )
+            return window, counts[i]
 
-    # The paper: most correct sittings, ties to the lowest mean J + L. With a window,
-    # the neighbouring rotations (±45 degrees) vote too, among the rotations that have a
-    # correct sitting of their own; the centre still breaks ties.
-    best = min(
-        (i for i in by_rotation if by_rotation[i]),
-        key=lambda i: (
-            -len(window(i)),
-            -len(by_rotation[i]),
-            mean_jl(by_rotation[i]),
-            mean_jl(window(i)),
-            i,
-        ),
-    )
-    chosen = by_rotation[best]
+        tied = any(key(i) == key(best) for i in range(N_ROTATIONS) if i != best and counts[i])
+        resolved_by = "mean J + L (the paper's tie-break)" if tied else "the window vote"
+    vote = RotationVote(counts, best, runner_up, share, split, resolved_by, extra_drops)
     weights = np.array([1.0 / max(_jl(d), 1e-6) for d in chosen])
     position_chair = (weights[:, None] * np.array([d.position for d in chosen])).sum(
         0
@@ -245,7 +305,76 @@ def choose_sitting_pose(
     T_mesh_obb = np.linalg.inv(prepared.T_obb_mesh)
     position = transform_points(T_mesh_obb, position_chair[None, :])[0]
     pose = SittingPose(position, wrap_angle(yaw_chair - prepared.gamma_obb_rad))
-    return ImaginationResult(True, pose, len(chosen), len(drops), drops, seconds, "")
+    return ImaginationResult(True, pose, len(chosen), len(drops), drops, seconds, "", vote=vote)
+
+
+def _correct_by_rotation(drops: tuple[DropOutcome, ...]) -> dict[int, list[DropOutcome]]:
+    by_rotation: dict[int, list[DropOutcome]] = {i: [] for i in range(N_ROTATIONS)}
+    for drop in drops:
+        if drop.correct:
+            by_rotation[drop.rotation_index].append(drop)
+    return by_rotation
+
+
+def _mean_jl(chosen: list[DropOutcome]) -> float:
+    return float(np.mean([_jl(d) for d in chosen])) if chosen else math.inf
+
+
+def _vote(
+    by_rotation: dict[int, list[DropOutcome]], window_half_width: int
+) -> tuple[int, list[int], list[int]]:
+    """The best rotation, the contested ones (itself first) and the holes.
+
+    The paper: most correct sittings, ties to the lowest mean J + L. With a window, the
+    neighbouring rotations (±45 degrees) vote too, among the rotations that have a
+    correct sitting of their own; the centre still breaks ties. Contested: another
+    rotation with as many correct sittings of its own as the best (windows alone tie
+    whenever the sittings fall in two adjacent rotations). Holes: rotations without a
+    correct sitting of their own whose window holds more than the best's, best first."""
+
+    def window(centre: int) -> int:
+        return sum(
+            len(by_rotation[(centre + offset) % N_ROTATIONS])
+            for offset in range(-window_half_width, window_half_width + 1)
+        )
+
+    candidates = [i for i in by_rotation if by_rotation[i]]
+    best = min(
+        candidates,
+        key=lambda i: (
+            -window(i),
+            -len(by_rotation[i]),
+            _mean_jl(by_rotation[i]),
+            i,
+        ),
+    )
+    contested = [best] + [
+        i for i in candidates if i != best and len(by_rotation[i]) >= len(by_rotation[best])
+    ]
+    holes = sorted(
+        (i for i in by_rotation if not by_rotation[i] and window(i) > window(best)),
+        key=lambda i: (-window(i), i),
+    )
+    return best, contested, holes
+
+
+def _pulled_toward(
+    hole: int, by_rotation: dict[int, list[DropOutcome]], window_half_width: int
+) -> bool:
+    """True when the sittings in the hole's window turned, on their 1 / (J + L) weighted
+    mean, more than ``PULL_MIN_RAD`` from the way they were dropped toward the hole's
+    direction (in the chair frame, where rotation i drops the agent facing −iπ/4)."""
+    progress, weights = [], []
+    for offset in range(-window_half_width, window_half_width + 1):
+        if offset == 0:
+            continue
+        rotation = (hole + offset) % N_ROTATIONS
+        for drop in by_rotation[rotation]:
+            # Dropped facing −rotation·π/4; the hole lies at +offset·π/4 from there.
+            turned = wrap_angle(drop.yaw + rotation * math.pi / 4.0)
+            progress.append(math.copysign(1.0, offset) * turned)
+            weights.append(1.0 / max(_jl(drop), 1e-6))
+    return bool(weights) and float(np.average(progress, weights=weights)) > PULL_MIN_RAD
 
 
 def _jl(drop: DropOutcome) -> float:
@@ -272,19 +401,28 @@ def _position_order(k: int) -> int:
 
 
 def _drop_specs(
-    prepared: PreparedChair, rotation_index: int, positions: tuple[int, ...], seed: int
+    prepared: PreparedChair,
+    rotation_index: int,
+    positions: tuple[int, ...],
+    seed: int,
+    repeat: int = 0,
 ) -> tuple[DropSpec, ...]:
-    """The drops of one rotation: the agent faces −α_i in the chair frame."""
+    """The drops of one rotation: the agent faces −α_i in the chair frame.
+
+    ``repeat`` > 0 draws fresh start jitter for drops repeated to settle a split vote."""
     l_sit = L_SIT_RATIO * float(np.mean(prepared.extents_m[:2]))
     specs = []
     for k in positions:
-        rng = np.random.default_rng([seed & 0xFFFFFFFF, rotation_index, k + 16])
+        key = [seed & 0xFFFFFFFF, rotation_index, k + 16] + ([repeat] if repeat else [])
+        rng = np.random.default_rng(key)
         yaw = wrap_angle(-rotation_index * math.pi / 4.0 + rng.uniform(-1, 1) * JITTER_YAW_RAD)
         facing = np.array(
             [math.cos(-rotation_index * math.pi / 4.0), math.sin(-rotation_index * math.pi / 4.0)]
         )
         xy = k * l_sit * facing + rng.uniform(-1, 1, size=2) * JITTER_POSITION_M
-        specs.append(DropSpec(rotation_index, k, k * l_sit, (float(xy[0]), float(xy[1])), yaw))
+        specs.append(
+            DropSpec(rotation_index, k, k * l_sit, (float(xy[0]), float(xy[1])), yaw, repeat)
+        )
     return tuple(specs)
 
 

@@ -74,6 +74,7 @@ class DropSpec(NamedTuple):
         offset_m: k * L_sit.
         xy_m: (2,) pelvis start position in the chair frame.
         yaw_rad: agent start yaw in the chair frame.
+        repeat: 0 for the paper's drops, 1.. for drops repeated to settle a split vote.
     """
 
     rotation_index: int
@@ -81,6 +82,7 @@ class DropSpec(NamedTuple):
     offset_m: float
     xy_m: tuple[float, float]
     yaw_rad: float
+    repeat: int = 0
 
 
 class TaskSpec(NamedTuple):

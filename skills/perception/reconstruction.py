@@ -30,7 +30,7 @@ from skills.arena import DEFAULT_ARENA, Box2D
 from skills.perception.camera import clean_depth, depth_to_world, validate_frame
 from skills.perception.determinism import one_open3d_thread
 from skills.perception.errors import PerceptionError
-from skills.perception.views import CHAIR_MARGIN_M
+from skills.perception.views import MAX_CHAIR_HEIGHT_M, MAX_CHAIR_REACH_M
 from skills.results import ChairScan
 
 
@@ -56,8 +56,8 @@ class ReconstructionConfig:
     sdf_trunc_voxels: float = 4.0
     depth_max_m: float = 2.0
     chair_area: Box2D = field(default_factory=lambda: DEFAULT_ARENA.chair_area)
-    chair_margin_m: float = CHAIR_MARGIN_M + 0.05
-    volume_z_m: tuple[float, float] = (-0.06, 0.75)
+    chair_margin_m: float = MAX_CHAIR_REACH_M + 0.05
+    volume_z_m: tuple[float, float] = (-0.06, MAX_CHAIR_HEIGHT_M + 0.05)
     floor_band_m: float = 0.012
     floor_ransac_iterations: int = 300
     min_chair_points: int = 300

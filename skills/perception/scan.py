@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import threading
-import time
 
 from hardware.interfaces import ScanningArm
+from skills.perception.clearance import MIN_SCAN_VIEWS, capture_views
 from skills.perception.errors import PerceptionError
 from skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
-from skills.perception.views import HOME_CONFIGURATION, SCAN_CONFIGURATIONS
+from skills.perception.views import SCAN_CONFIGURATIONS
 from skills.results import ChairScan
 
 
@@ -25,7 +25,10 @@ def scan_chair(
 ) -> ChairScan:
     """Captures RGB-D at each of :data:`SCAN_CONFIGURATIONS` and reconstructs the chair.
 
-    The arm goes HOME, through the 9 configurations in order, and back HOME.
+    The arm goes HOME and looks at the chair area from there; views whose motion would
+    pass within 3 cm of the chair it sees are visited through HOME, replaced by a view
+    higher up, or skipped (``skills.perception.clearance``); then through the views in
+    order, and back HOME.
 
     Args:
         arm: the scanning arm (camera poses come from its forward kinematics).
@@ -39,30 +42,19 @@ def scan_chair(
 
     Raises:
         ScanCancelled: ``cancel`` was set.
-        PerceptionError: bad frames or no chair found.
+        PerceptionError: bad frames, no chair found, or fewer than ``MIN_SCAN_VIEWS``
+            views could be captured.
     """
     config = config or ReconstructionConfig()
     config = ReconstructionConfig(**{**config.__dict__, "seed": seed})
-    frames = []
-    motion_s = capture_s = 0.0
-    # HOME first: every checked motion into the scan sequence starts there.
-    tick = time.perf_counter()
-    arm.move_to(HOME_CONFIGURATION)
-    motion_s += time.perf_counter() - tick
-    for joints in SCAN_CONFIGURATIONS:
-        if cancel is not None and cancel.is_set():
-            raise ScanCancelled("chair scan cancelled")
-        tick = time.perf_counter()
-        arm.move_to(joints)
-        motion_s += time.perf_counter() - tick
-        tick = time.perf_counter()
-        frames.append(arm.capture())
-        capture_s += time.perf_counter() - tick
-    tick = time.perf_counter()
-    arm.move_to(HOME_CONFIGURATION)
-    motion_s += time.perf_counter() - tick
+    frames, notes, timing = capture_views(arm, SCAN_CONFIGURATIONS, cancel, ScanCancelled)
+    if len(frames) < MIN_SCAN_VIEWS:
+        raise PerceptionError(
+            f"chair scan: only {len(frames)} of {len(SCAN_CONFIGURATIONS)} views could be "
+            f"captured clear of the chair (need {MIN_SCAN_VIEWS}): " + "; ".join(notes)
+        )
     if cancel is not None and cancel.is_set():
         raise ScanCancelled("chair scan cancelled")
     scan = reconstruct_chair(frames, config)
-    seconds = {"motion": motion_s, "capture": capture_s, **scan.seconds}
-    return scan._replace(seconds=seconds, frames=tuple(frames))
+    seconds = {**timing, **scan.seconds}
+    return scan._replace(seconds=seconds, notes=tuple(notes), frames=tuple(frames))

@@ -4,10 +4,13 @@ The joint vectors were chosen offline by ``bench/perception_views.py``: for each
 camera pose (an eye looking at a target in the chair area) it solved the Panda's IK in
 pybullet (panda.urdf, base at the world origin, camera along the hand's approach axis),
 and checked by forward kinematics the optical axis (within 3 degrees), the eye (within
-2 cm), joint limits, self-collision and 5 cm clearance to the floor and 3 cm to
-:data:`CHAIR_VOLUME`. The camera pose of every capture still comes from the arm's own
-forward kinematics (``RGBDFrame.T_world_camera``), so a different hand-eye extrinsic
-only shifts the views by a few centimetres.
+2 cm), joint limits, self-collision and 5 cm clearance to the floor and 3 cm to the
+chair volume of that time (the chair area widened by 0.25 m, 0.58 m high). A larger
+chair can reach into some of them: before every scan the views are checked again
+against the chair's extent as seen from HOME, inside :data:`CHAIR_VOLUME`, and routed,
+replaced or skipped (``skills.perception.clearance``). The camera pose of every capture
+still comes from the arm's own forward kinematics (``RGBDFrame.T_world_camera``), so a
+different hand-eye extrinsic only shifts the views by a few centimetres.
 """
 
 from __future__ import annotations
@@ -16,20 +19,40 @@ import numpy as np
 
 from skills.arena import DEFAULT_ARENA, Arena
 
-CHAIR_MARGIN_M = 0.25
-"""How far a chair centred in the chair area may reach beyond it (half its footprint)."""
+MAX_CHAIR_REACH_M = 0.45
+"""How far (metres) any part of a chair reaches horizontally from its centre, whatever
+its yaw: the widest children's seat planned for is a 0.8 m bench 0.4 m deep (half its
+diagonal, 0.45 m); chairs 0.4 x 0.4 m reach 0.28 m. The chair's centre lies in the
+arena's chair area, so this margin around the area bounds every placement."""
 
-CHAIR_HEIGHT_MAX_M = 0.58
-"""The tallest chair the scan volume allows for (the calibration chairs are 0.535 m)."""
+MAX_CHAIR_HEIGHT_M = 0.8
+"""The tallest chair planned for (metres): the highest children's seat (0.45 m, beyond the
+NAO's reach, refused later but still scanned) under a 0.32 m backrest; children's chairs
+stand 0.45-0.62 m overall."""
+
+VIEW_CLEARANCE_M = 0.03
+"""A scan view, and the straight joint-space motion into it, keeps the arm's links this
+far (metres) from the chair's possible extent; closer, the view is replaced or skipped
+(``skills.perception.clearance``)."""
 
 
-def chair_volume(arena: Arena = DEFAULT_ARENA) -> tuple[np.ndarray, np.ndarray]:
-    """The world box (min corner, max corner) any chair in the chair area lies in (metres)."""
+def chair_volume(
+    arena: Arena = DEFAULT_ARENA,
+    reach_m: float = MAX_CHAIR_REACH_M,
+    height_m: float = MAX_CHAIR_HEIGHT_M,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The world box (min corner, max corner) any chair in the chair area lies in (metres).
+
+    Args:
+        arena: the workspace (its chair area holds the chair's centre).
+        reach_m: how far a chair reaches from its centre (:data:`MAX_CHAIR_REACH_M`).
+        height_m: how tall a chair is (:data:`MAX_CHAIR_HEIGHT_M`).
+    """
     area = arena.chair_area
-    # Nothing reaches into the arm's base footprint (x below 0.15 m + 2 cm).
-    x_min = max(area.x_min - CHAIR_MARGIN_M, max(b.x_max for b in arena.obstacles) + 0.02)
-    lower = np.array([x_min, area.y_min - CHAIR_MARGIN_M, 0.0])
-    upper = np.array([area.x_max + CHAIR_MARGIN_M, area.y_max + CHAIR_MARGIN_M, CHAIR_HEIGHT_MAX_M])
+    # Nothing reaches into the arm's base footprint (the obstacle boxes, + 2 cm).
+    x_min = max(area.x_min - reach_m, max(b.x_max for b in arena.obstacles) + 0.02)
+    lower = np.array([x_min, area.y_min - reach_m, 0.0])
+    upper = np.array([area.x_max + reach_m, area.y_max + reach_m, height_m])
     return lower, upper
 
 

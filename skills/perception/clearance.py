@@ -1,0 +1,328 @@
+"""Scan views that keep the arm clear of the chair: checked, replaced or skipped.
+
+The scan configurations were chosen offline against a chair volume of a fixed size;
+a larger or taller chair can stand where a view, or the motion into it, passes. Before
+the scan the arm looks down from HOME (high above the chair area) and bounds what it
+sees above the floor inside :func:`skills.perception.views.chair_volume` (the chair
+area widened by the largest chair's reach, up to the tallest chair): that box, grown
+by a margin for parts the high view cannot see, is the chair's possible extent. Each
+view is then checked by forward kinematics (pybullet closest points between the
+Panda's links and the box, along the straight joint-space motion into it):
+
+* clear from the previous configuration: visited as planned;
+* clear only from HOME: visited through HOME;
+* neither: replaced by the configuration partway from HOME to it (the camera higher
+  and farther, still looking at the chair) that is clear, or skipped.
+
+Where nothing is seen (an empty frame), the whole volume is the extent. A motion that
+still stops short (``TimeoutError``) skips that view after backing out; the scan fails
+only when fewer than :data:`MIN_SCAN_VIEWS` views were captured.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numpy as np
+
+from hardware.interfaces import RGBDFrame, ScanningArm
+from skills.perception.camera import clean_depth, depth_to_world
+from skills.perception.errors import PerceptionError
+from skills.perception.views import (
+    CHAIR_VOLUME,
+    HOME_CONFIGURATION,
+    VIEW_CLEARANCE_M,
+)
+
+log = logging.getLogger(__name__)
+
+MIN_SCAN_VIEWS = 5
+"""Fewest captured views a scan accepts: the tracking views alone are 5, and 5 views
+from around the arm's side still cover the seat and backrest."""
+
+HIDDEN_MARGIN_M = 0.05
+"""Growth (metres) of the box seen from HOME for what the high view cannot see: parts
+under the seat's overhang and depth noise."""
+
+FLOOR_MARGIN_M = 0.03
+"""Points less than this above the floor (metres) are floor, not chair."""
+
+VOXEL_M = 0.02
+"""Cell size (metres) of the occupancy count that ignores single stray depth pixels."""
+
+MIN_POINTS_PER_VOXEL = 4
+"""A cell needs this many depth points to count as chair (stray pixels have one or two)."""
+
+REPLACEMENT_FRACTIONS = (0.8, 0.6, 0.4)
+"""Where a replacement view sits on the joint-space line from HOME to a blocked view."""
+
+MAX_AIM_ERROR_DEG = 20.0
+"""A replacement's optical axis passes within this of the chair box's centre."""
+
+PATH_STEP_RAD = 0.05
+"""Largest joint step between two collision checks along a motion."""
+
+
+class ChairExtent(NamedTuple):
+    """An axis-aligned world box (metres) the chair lies in, and how it was found."""
+
+    lower: np.ndarray
+    upper: np.ndarray
+    source: str  # "seen" (from the HOME view) or "volume" (nothing seen: the whole volume)
+
+
+def chair_extent(
+    frame: RGBDFrame | None,
+    volume: tuple[np.ndarray, np.ndarray] = CHAIR_VOLUME,
+    margin_m: float = HIDDEN_MARGIN_M,
+) -> ChairExtent:
+    """The box holding what ``frame`` sees above the floor inside ``volume``, grown by
+    ``margin_m`` (the floor stays the bottom); the whole volume when nothing is seen."""
+    lower, upper = (np.asarray(v, float) for v in volume)
+    if frame is None:
+        return ChairExtent(lower, upper, "volume")
+    points = depth_to_world(frame, clean_depth(frame)).reshape(-1, 3)
+    points = points[np.all(np.isfinite(points), axis=1)]
+    inside = np.all((points >= lower) & (points <= upper), axis=1)
+    points = points[inside & (points[:, 2] > lower[2] + FLOOR_MARGIN_M)]
+    if len(points) == 0:
+        return ChairExtent(lower, upper, "volume")
+    cells, counts = np.unique(
+        np.floor(points / VOXEL_M).astype(np.int64), axis=0, return_counts=True
+    )
+    cells = cells[counts >= MIN_POINTS_PER_VOXEL]
+    if len(cells) == 0:
+        return ChairExtent(lower, upper, "volume")
+    seen_lower = cells.min(axis=0) * VOXEL_M - margin_m
+    seen_upper = (cells.max(axis=0) + 1) * VOXEL_M + margin_m
+    seen_lower[2] = lower[2]
+    return ChairExtent(seen_lower, seen_upper, "seen")
+
+
+class ArmClearance:
+    """Distances between the Panda's links and a box, by forward kinematics in pybullet.
+
+    The arm's base stands at the world origin (as in :data:`skills.arena.DEFAULT_ARENA`).
+    Owns a DIRECT pybullet client: call :meth:`close` (or use ``with``).
+    """
+
+    def __init__(self) -> None:
+        from skills.perception.synthetic import PandaKinematics
+
+        self._kinematics = PandaKinematics()
+        self._box: int | None = None
+
+    def __enter__(self) -> ArmClearance:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Disconnects the pybullet client."""
+        self._kinematics.close()
+
+    def set_box(self, lower: np.ndarray, upper: np.ndarray) -> None:
+        """The obstacle (world box, metres) the following queries measure against."""
+        import pybullet
+
+        client = self._kinematics.client
+        if self._box is not None:
+            pybullet.removeBody(self._box, physicsClientId=client)
+        half = np.maximum((np.asarray(upper) - np.asarray(lower)) / 2.0, 1e-3)
+        shape = pybullet.createCollisionShape(
+            pybullet.GEOM_BOX, halfExtents=half.tolist(), physicsClientId=client
+        )
+        centre = (np.asarray(upper) + np.asarray(lower)) / 2.0
+        self._box = pybullet.createMultiBody(
+            0, shape, basePosition=centre.tolist(), physicsClientId=client
+        )
+
+    def clearance(self, joints_rad: Sequence[float], reach_m: float = 0.3) -> float:
+        """Smallest distance (metres, negative inside) from the arm's links to the box;
+        ``reach_m`` when farther than that."""
+        import pybullet
+
+        assert self._box is not None, "set_box first"
+        kin = self._kinematics
+        kin.set_joints(joints_rad)
+        closest = pybullet.getClosestPoints(
+            kin.robot, self._box, reach_m, physicsClientId=kin.client
+        )
+        # The base link (-1) and link 0 stand on the floor beside the chair area.
+        distances = [c[8] for c in closest if c[3] >= 1]
+        return min(distances, default=reach_m)
+
+    def path_clearance(self, start_rad: Sequence[float], end_rad: Sequence[float]) -> float:
+        """Smallest clearance along the straight joint-space motion from start to end."""
+        start, end = np.asarray(start_rad, float), np.asarray(end_rad, float)
+        steps = max(2, math.ceil(float(np.max(np.abs(end - start))) / PATH_STEP_RAD) + 1)
+        return min(self.clearance(start + f * (end - start)) for f in np.linspace(0.0, 1.0, steps))
+
+    def aim_error_deg(self, joints_rad: Sequence[float], target: np.ndarray) -> float:
+        """Angle between the camera's optical axis and the ray from its eye to ``target``."""
+        T = self._kinematics.camera_pose(joints_rad)
+        ray = np.asarray(target, float) - T[:3, 3]
+        cosine = float(T[:3, 2] @ ray / max(np.linalg.norm(ray), 1e-9))
+        return math.degrees(math.acos(max(-1.0, min(1.0, cosine))))
+
+
+class PlannedView(NamedTuple):
+    """One scan view as it will be visited.
+
+    Attributes:
+        index: the view's index in the list planned.
+        joints: the configuration visited (the view's own, or its replacement).
+        via_home: move to HOME first (the direct motion would pass too close).
+        status: ``kept``, ``via_home``, ``replaced`` or ``skipped``.
+        clearance_m: the smallest clearance of the motion into it (metres).
+    """
+
+    index: int
+    joints: tuple[float, ...]
+    via_home: bool
+    status: str
+    clearance_m: float
+
+
+def plan_views(
+    views: Sequence[Sequence[float]],
+    extent: ChairExtent,
+    clearance: ArmClearance,
+    min_clearance_m: float = VIEW_CLEARANCE_M,
+    home: Sequence[float] = HOME_CONFIGURATION,
+) -> list[PlannedView]:
+    """Checks every view (in visiting order, starting at HOME) against the chair's extent."""
+    clearance.set_box(extent.lower, extent.upper)
+    home = tuple(float(v) for v in home)
+    target = (extent.lower + extent.upper) / 2.0
+    planned: list[PlannedView] = []
+    current = home
+    for index, view in enumerate(views):
+        view = tuple(float(v) for v in view)
+        direct = clearance.path_clearance(current, view)
+        if direct >= min_clearance_m:
+            planned.append(PlannedView(index, view, False, "kept", direct))
+            current = view
+            continue
+        from_home = clearance.path_clearance(home, view) if current != home else direct
+        if from_home >= min_clearance_m:
+            planned.append(PlannedView(index, view, True, "via_home", from_home))
+            current = view
+            continue
+        replacement = None
+        for fraction in REPLACEMENT_FRACTIONS:
+            joints = tuple(h + fraction * (v - h) for h, v in zip(home, view, strict=True))
+            path = clearance.path_clearance(home, joints)
+            if (
+                path >= min_clearance_m
+                and clearance.aim_error_deg(joints, target) <= MAX_AIM_ERROR_DEG
+            ):
+                replacement = PlannedView(index, joints, True, "replaced", path)
+                break
+        if replacement is not None:
+            planned.append(replacement)
+            current = replacement.joints
+        else:
+            planned.append(PlannedView(index, view, False, "skipped", min(direct, from_home)))
+    return planned
+
+
+def capture_planned(
+    arm: ScanningArm,
+    planned: Sequence[PlannedView],
+    cancel: threading.Event | None,
+    cancelled: type[Exception] = PerceptionError,
+    home: Sequence[float] = HOME_CONFIGURATION,
+) -> tuple[list[RGBDFrame], list[str], dict[str, float]]:
+    """Visits the planned views and captures a frame at each one not skipped.
+
+    A motion that stops short (``TimeoutError``: something in the way that the plan did
+    not foresee) is backed out of, to the last configuration reached and then HOME, and
+    that view is skipped. Ends at HOME.
+
+    Returns:
+        (frames, notes, seconds): one note per view not captured as planned; wall time in
+        ``motion`` and ``capture``.
+    """
+    frames: list[RGBDFrame] = []
+    notes: list[str] = []
+    seconds = {"motion": 0.0, "capture": 0.0}
+    current: Sequence[float] = home
+    for view in planned:
+        if cancel is not None and cancel.is_set():
+            raise cancelled("chair scan cancelled")
+        if view.status == "skipped":
+            notes.append(
+                f"view {view.index} skipped: the arm would pass {100 * view.clearance_m:.0f} cm "
+                "from the chair's extent"
+            )
+            continue
+        if view.status == "replaced":
+            notes.append(f"view {view.index} replaced by a higher view clear of the chair")
+        tick = time.perf_counter()
+        try:
+            if view.via_home and tuple(current) != tuple(home):
+                arm.move_to(home)
+                current = home
+            arm.move_to(view.joints)
+        except TimeoutError as error:
+            notes.append(f"view {view.index} skipped: {error}")
+            log.warning("scan view %d not reached (%s): backing out", view.index, error)
+            _back_out(arm, current, home)
+            current = home
+            continue
+        finally:
+            seconds["motion"] += time.perf_counter() - tick
+        current = view.joints
+        tick = time.perf_counter()
+        frames.append(arm.capture())
+        seconds["capture"] += time.perf_counter() - tick
+    tick = time.perf_counter()
+    if tuple(current) != tuple(home):
+        arm.move_to(home)
+    seconds["motion"] += time.perf_counter() - tick
+    return frames, notes, seconds
+
+
+def _back_out(arm: ScanningArm, last: Sequence[float], home: Sequence[float]) -> None:
+    """Returns to the last configuration reached, then HOME, after a blocked motion."""
+    for joints in (last, home):
+        try:
+            arm.move_to(joints)
+        except TimeoutError as error:
+            raise PerceptionError(
+                f"the arm is stuck after a blocked scan motion: {error}"
+            ) from error
+
+
+def capture_views(
+    arm: ScanningArm,
+    views: Sequence[Sequence[float]],
+    cancel: threading.Event | None,
+    cancelled: type[Exception] = PerceptionError,
+) -> tuple[list[RGBDFrame], list[str], dict[str, float]]:
+    """Frames from ``views`` (from and back to HOME), each checked against the chair's
+    extent as seen from HOME first (``skills.perception.clearance``).
+
+    Returns:
+        (frames, notes on views skipped or replaced, wall time: ``motion``, ``capture``
+        and ``plan`` (the HOME look and the clearance checks)).
+    """
+    tick = time.perf_counter()
+    arm.move_to(HOME_CONFIGURATION)
+    motion_s = time.perf_counter() - tick
+    tick = time.perf_counter()
+    extent = chair_extent(arm.capture())
+    with ArmClearance() as clearance:
+        planned = plan_views(views, extent, clearance)
+    plan_s = time.perf_counter() - tick
+    frames, notes, seconds = capture_planned(arm, planned, cancel, cancelled)
+    for note in notes:
+        log.warning("%s", note)
+    return frames, notes, {**seconds, "motion": seconds["motion"] + motion_s, "plan": plan_s}

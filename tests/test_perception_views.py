@@ -1,0 +1,225 @@
+"""Scan views kept clear of large chairs, and registration judged by what the views saw.
+
+Frames come from skills.perception.synthetic (no simulated world); chairs from
+skills.chairgen and the box chair.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from skills.chairgen import generate_chair
+from skills.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
+from skills.meshes import box_chair_mesh
+from skills.perception import PerceptionError, ReconstructionConfig, reconstruct_chair
+from skills.perception.clearance import (
+    MIN_SCAN_VIEWS,
+    ArmClearance,
+    ChairExtent,
+    capture_planned,
+    chair_extent,
+    plan_views,
+)
+from skills.perception.registration import RegistrationConfig, register_chair, visible_fitness
+from skills.perception.scan import scan_chair
+from skills.perception.synthetic import SyntheticArm, SyntheticScene
+from skills.perception.views import (
+    CHAIR_VOLUME,
+    HOME_CONFIGURATION,
+    MAX_CHAIR_HEIGHT_M,
+    SCAN_CONFIGURATIONS,
+    TRACKING_VIEWS,
+    VIEW_CLEARANCE_M,
+)
+
+T_WORLD_CHAIR = yaw_transform(0.6, np.array([0.58, 0.08, 0.0]))
+
+
+def frames_of(mesh, T_world_chair, views, seed=3):
+    scene = SyntheticScene(seed=seed)
+    scene.add_mesh(mesh, T_world_chair)
+    arm = SyntheticArm(scene)
+    try:
+        frames = []
+        for joints in views:
+            arm.move_to(joints)
+            frames.append(arm.capture())
+        return frames
+    finally:
+        arm.close()
+        scene.close()
+
+
+@pytest.fixture(scope="module")
+def clearance():
+    with ArmClearance() as checker:
+        yield checker
+
+
+def test_the_chair_volume_holds_the_tallest_chair_anywhere_in_the_chair_area():
+    upper = CHAIR_VOLUME[1]
+    assert upper[2] == MAX_CHAIR_HEIGHT_M
+    # A wide generated bench at a corner of the chair area, turned 45 degrees.
+    bench = max((generate_chair(seed, "bench") for seed in range(10)), key=lambda c: c.seat_width_m)
+    corner = yaw_transform(math.radians(45.0), np.array([0.85, 0.25, 0.0]))
+    vertices = transform_points(corner, np.asarray(bench.mesh.vertices))
+    assert np.all(vertices[:, 1:] <= upper[1:] + 1e-9)
+    assert np.all(vertices[:, 0] <= upper[0] + 1e-9)
+
+
+def test_the_extent_seen_from_home_holds_the_chair_and_stays_in_the_volume():
+    mesh = box_chair_mesh()
+    (frame,) = frames_of(mesh, T_WORLD_CHAIR, [HOME_CONFIGURATION])
+    extent = chair_extent(frame)
+    assert extent.source == "seen"
+    vertices = transform_points(T_WORLD_CHAIR, np.asarray(mesh.vertices))
+    # What the high view sees, grown by the hidden-parts margin, holds the whole chair.
+    assert np.all(vertices.min(axis=0)[:2] >= extent.lower[:2])
+    assert np.all(vertices.max(axis=0) <= extent.upper)
+    # ... and is far smaller than the volume any chair might fill.
+    volume = np.prod(CHAIR_VOLUME[1] - CHAIR_VOLUME[0])
+    assert np.prod(extent.upper - extent.lower) < 0.5 * volume
+
+
+def test_nothing_seen_means_the_whole_volume():
+    extent = chair_extent(None)
+    assert extent.source == "volume"
+    assert np.array_equal(extent.lower, CHAIR_VOLUME[0])
+
+
+def test_views_too_close_to_a_large_chair_are_routed_replaced_or_skipped(clearance):
+    # A chair as tall and wide as the volume allows, filling the whole volume.
+    extent = ChairExtent(*CHAIR_VOLUME, "volume")
+    planned = plan_views(SCAN_CONFIGURATIONS, extent, clearance)
+    assert [view.index for view in planned] == list(range(len(SCAN_CONFIGURATIONS)))
+    statuses = {view.status for view in planned}
+    assert statuses - {"kept"}, "the full volume blocks some views (the test would not test)"
+    current = tuple(HOME_CONFIGURATION)
+    for view in planned:
+        if view.status == "skipped":
+            continue
+        start = HOME_CONFIGURATION if view.via_home else current
+        # Checked again independently: every motion planned keeps its clearance.
+        assert clearance.path_clearance(start, view.joints) >= VIEW_CLEARANCE_M
+        if view.status == "replaced":
+            assert view.joints != tuple(SCAN_CONFIGURATIONS[view.index])
+        current = view.joints
+
+
+def test_a_small_chair_keeps_every_view(clearance):
+    (frame,) = frames_of(box_chair_mesh(), T_WORLD_CHAIR, [HOME_CONFIGURATION])
+    planned = plan_views(SCAN_CONFIGURATIONS, chair_extent(frame), clearance)
+    assert [view.status for view in planned] == ["kept"] * len(SCAN_CONFIGURATIONS)
+
+
+class BlockedArm(SyntheticArm):
+    """Times out on the configurations in ``blocked`` (a chair in the way)."""
+
+    def __init__(self, scene, blocked):
+        super().__init__(scene)
+        self.blocked = [np.asarray(b) for b in blocked]
+        self.visited = []
+
+    def move_to(self, joint_positions_rad, timeout_s: float = 10.0) -> None:
+        target = np.asarray(joint_positions_rad, float)
+        if any(np.allclose(target, b) for b in self.blocked):
+            raise TimeoutError(
+                "Panda did not reach its target in 10.0 s (largest joint error 48 deg)"
+            )
+        super().move_to(target)
+        self.visited.append(target)
+
+
+def test_a_motion_that_stops_short_skips_the_view_and_the_scan_goes_on():
+    scene = SyntheticScene(seed=3)
+    scene.add_mesh(box_chair_mesh(), T_WORLD_CHAIR)
+    arm = BlockedArm(scene, [SCAN_CONFIGURATIONS[2]])
+    try:
+        planned = plan_views(SCAN_CONFIGURATIONS, ChairExtent(*_tiny_box(), "seen"), _checker())
+        frames, notes, seconds = capture_planned(arm, planned, None)
+    finally:
+        arm.close()
+        scene.close()
+    assert len(frames) == len(SCAN_CONFIGURATIONS) - 1
+    assert len(notes) == 1 and "view 2 skipped" in notes[0] and "48 deg" in notes[0]
+    assert np.allclose(arm.visited[-1], HOME_CONFIGURATION)
+    assert seconds["capture"] > 0.0
+
+
+def test_a_scan_with_too_few_reachable_views_fails_with_the_reason():
+    scene = SyntheticScene(seed=3)
+    scene.add_mesh(box_chair_mesh(), T_WORLD_CHAIR)
+    blocked = SCAN_CONFIGURATIONS[: len(SCAN_CONFIGURATIONS) - MIN_SCAN_VIEWS + 1]
+    arm = BlockedArm(scene, blocked)
+    try:
+        with pytest.raises(PerceptionError, match=r"only \d of 9 views .*48 deg"):
+            scan_chair(arm, seed=0)
+    finally:
+        arm.close()
+        scene.close()
+
+
+def _tiny_box():
+    return np.array([0.55, -0.05, 0.0]), np.array([0.65, 0.05, 0.1])
+
+
+_shared_checker = None
+
+
+def _checker() -> ArmClearance:
+    global _shared_checker
+    if _shared_checker is None:
+        _shared_checker = ArmClearance()
+    return _shared_checker
+
+
+@pytest.fixture(scope="module")
+def turned_chair():
+    """A generated armchair scanned, then turned 150 degrees and seen from the tracking views."""
+    mesh = generate_chair(1, "armchair").mesh
+    config = ReconstructionConfig(with_mesh=False)
+    reference = reconstruct_chair(frames_of(mesh, T_WORLD_CHAIR, SCAN_CONFIGURATIONS), config)
+    centre = T_WORLD_CHAIR[:3, 3]
+    motion = (
+        yaw_transform(0.0, centre + np.array([0.01, -0.005, 0.0]))
+        @ yaw_transform(math.radians(150.0))
+        @ yaw_transform(0.0, -centre)
+    )
+    frames = frames_of(
+        mesh, motion @ T_WORLD_CHAIR, [SCAN_CONFIGURATIONS[i] for i in TRACKING_VIEWS]
+    )
+    new = reconstruct_chair(frames, config).chair_points
+    return reference.chair_points, new, frames, motion
+
+
+def test_visible_fitness_tells_a_right_fit_from_a_turned_one(turned_chair):
+    reference, _, frames, motion = turned_chair
+    centre = T_WORLD_CHAIR[:3, 3]
+    right = visible_fitness(transform_points(motion, reference[::2]), frames)
+    assert right > 0.9
+    for error_deg in (30.0, -30.0, 90.0):
+        off = (
+            yaw_transform(0.0, centre)
+            @ yaw_transform(math.radians(error_deg))
+            @ yaw_transform(0.0, -centre)
+        )
+        assert visible_fitness(transform_points(off @ motion, reference[::2]), frames) < 0.7
+
+
+def test_a_turn_showing_sides_the_reference_never_saw_is_accepted_by_what_the_views_saw(
+    turned_chair,
+):
+    reference, new, frames, motion = turned_chair
+    # The reference lacks the half of the chair that faces away from the arm now: the
+    # right fit explains few of the new points.
+    carried = transform_points(motion, reference)
+    half = reference[carried[:, 0] > np.median(carried[:, 0])]
+    with pytest.raises(Exception, match="fitness"):
+        register_chair(new, half)
+    fit = register_chair(new, half, None, frames)
+    assert fit.fitness < 0.6
+    assert fit.visible_fitness >= RegistrationConfig().min_visible_fitness
+    assert abs(math.degrees(wrap_angle(yaw_of(fit.T_world_new_old) - yaw_of(motion)))) < 3.0
