@@ -239,9 +239,10 @@ def choose_stance(
             _blocked_above_reason(chair, ray),
             seat_height_m=float(ray.seat_heights_m[0]),
         )
+    seat_under_p0 = float(ray.seat_heights_m[0])
     ray = SeatRay(ray.slides_m[clear_of_above], ray.seat_heights_m[clear_of_above])
     front = chair.front_m
-    none = StanceChoice(None, sitting_pose, "", seat_height_m=float(ray.seat_heights_m[0]))
+    none = StanceChoice(None, sitting_pose, "", seat_height_m=seat_under_p0)
     chair_clear, _ = _first_clear(checker, sitting_pose, 0.0, scene=False)
     if math.isnan(chair_clear):
         return none._replace(reason="no spot on the sitting ray clear of the chair")
@@ -277,7 +278,7 @@ def choose_stance(
             continue
         moved = p0.copy()
         moved[:2] += slide * u
-        moved[2] += height - ray.seat_heights_m[0]
+        moved[2] += height - seat_under_p0
         pose = SittingPose(moved, sitting_pose.yaw)
         goal = goal_on_ray(sitting_pose, stance)
         if scene and (checker.collides_with_walls(goal) or checker.collides_with_obstacles(goal)):
