@@ -98,12 +98,20 @@ def _scan_views(robot: Robot) -> None:
         robot.arm.move_to(configuration)
 
 
+def _overview_and_back(robot: Robot) -> None:
+    # To the overview pose and back, repeatedly: the stop lands mid-motion however fast
+    # the simulated world steps.
+    for _ in range(5):
+        robot.arm.move_to(SCAN_CONFIGURATIONS[0])
+        robot.arm.move_to(HOME_CONFIGURATION)
+
+
 STAGE_MOTIONS = {
     "ScanChair": lambda world, robot, stop: _scan_views(robot),
     "ImagineSitting": lambda world, robot, stop: robot.clock.sleep(3.0),
     "MakeChairAccessible": lambda world, robot, stop: robot.arm.move_to(SCAN_CONFIGURATIONS[3]),
     "WalkToChair": _walk,
-    "WalkToChair-overview": lambda world, robot, stop: robot.arm.move_to(SCAN_CONFIGURATIONS[0]),
+    "WalkToChair-overview": lambda world, robot, stop: _overview_and_back(robot),
     "SeatBear": lambda world, robot, stop: _seat_trajectory(world, robot),
     "ReleaseAndStand": lambda world, robot, stop: _hands(robot),
 }
