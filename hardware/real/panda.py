@@ -84,6 +84,10 @@ def _mode_name(mode: Any) -> str:
     return getattr(mode, "name", str(mode).rsplit(".", 1)[-1])
 
 
+STOP_POLL_S = 0.005
+"""How often (seconds) a running move checks whether a stop must be repeated."""
+
+
 class PandaArm:
     """:class:`hardware.interfaces.ScanningArm` on a real Panda.
 
@@ -184,7 +188,8 @@ class PandaArm:
         worker.start()
         deadline = time.monotonic() + timeout_s
         while worker.is_alive() and time.monotonic() < deadline:
-            worker.join(min(0.05, max(0.0, deadline - time.monotonic())))
+            # Polled at 200 Hz: a stop that lands between two moves is repeated within 5 ms.
+            worker.join(min(STOP_POLL_S, max(0.0, deadline - time.monotonic())))
             if self._stopped and worker.is_alive():
                 # A stop sent just before the move began has nothing to stop: repeat it.
                 self._stop_robot()

@@ -54,6 +54,12 @@ class SimClock:
         self.timers = WorldTimers()
         bullet.setTimeStep(self._dt_s)
 
+    def pace_to_wall_clock(self, paced: bool = True) -> None:
+        """Paces ``sleep`` to wall-clock time (robot time no faster than real time), as
+        in GUI mode: a reaction measured in robot time to a command from another thread
+        (an emergency stop) then means what it would on the real robot."""
+        self._realtime = paced
+
     @property
     def dt_s(self) -> float:
         """The physics step in seconds."""
