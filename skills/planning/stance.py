@@ -229,18 +229,13 @@ def choose_stance(
     chair = chair_along_ray(
         chair_mesh, sitting_pose, planner_seat_top(chair_mesh, sitting_pose, ray)
     )
-    # The bear's back must clear whatever stands on the seat in the band (backrest,
-    # armrests): the planar planner holds everything below that block's top as solid.
-    clear_of_above = ray.slides_m >= chair.above_seat_m + BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M
-    if not clear_of_above.any():
-        return StanceChoice(
-            None,
-            sitting_pose,
-            _blocked_above_reason(chair, ray),
-            seat_height_m=float(ray.seat_heights_m[0]),
-        )
     seat_under_p0 = float(ray.seat_heights_m[0])
-    ray = SeatRay(ray.slides_m[clear_of_above], ray.seat_heights_m[clear_of_above])
+    # Something standing on the seat in the band (armrests, a backrest) in front of the
+    # bear's back: the planar planner may still find its way (its seat top is the highest
+    # horizontal surface near p), so it only names the refusal when the pre-plan finds none.
+    blocked_above = not np.any(
+        ray.slides_m >= chair.above_seat_m + BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M
+    )
     front = chair.front_m
     none = StanceChoice(None, sitting_pose, "", seat_height_m=seat_under_p0)
     chair_clear, _ = _first_clear(checker, sitting_pose, 0.0, scene=False)
@@ -311,6 +306,10 @@ def choose_stance(
         else:
             out_of_reach[slide] = -math.inf
         last = none._replace(sitting_pose=pose, reason=check.reason, check=check, slide_m=slide)
+    if blocked_above and not last.depends_on_scene:
+        return last._replace(
+            reason=f"{_blocked_above_reason(chair, ray)} ({last.reason})", preplans=preplans
+        )
     return last._replace(preplans=preplans)
 
 
