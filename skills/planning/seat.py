@@ -171,12 +171,15 @@ def seat_map(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatMap:
 
 
 def _seat_height_under(heights: np.ndarray, distance_m: np.ndarray, p_z: float) -> float:
-    """h₀ (metres): the median surface height within ``SUPPORT_RADIUS_M`` of p; where the
+    """h₀ (metres): the median of the top surface within ``SUPPORT_RADIUS_M`` of p; where the
     scan lost the seat there, the median of the surfaces within ``SEAT_MAP_BEHIND_M`` that
     lie where a seat under a sitting child's pelvis can (1 to 12 cm below p). NaN: none."""
     disc = (distance_m <= SUPPORT_RADIUS_M) & ~np.isnan(heights)
     if disc.sum() >= 0.2 * (distance_m <= SUPPORT_RADIUS_M).sum():
-        return float(np.median(heights[disc]))
+        # The seat is the top surface: rays through a slatted seat's gaps meet the frame
+        # below it, which is not what the bear sits on.
+        hits = heights[disc]
+        return float(np.median(hits[hits >= hits.max() - SEAT_HEIGHT_TOLERANCE_M]))
     near = (distance_m <= SEAT_MAP_BEHIND_M) & (heights <= p_z - 0.01) & (heights >= p_z - 0.12)
     return float(np.median(heights[near])) if near.any() else math.nan
 

@@ -226,9 +226,8 @@ def choose_stance(
     ray = seat_ray(chair_mesh, sitting_pose)
     if len(ray.slides_m) == 0:
         return StanceChoice(None, sitting_pose, "no seat under the sitting position")
-    chair = chair_along_ray(
-        chair_mesh, sitting_pose, planner_seat_top(chair_mesh, sitting_pose, ray)
-    )
+    seat_top = planner_seat_top(chair_mesh, sitting_pose, ray)
+    chair = chair_along_ray(chair_mesh, sitting_pose, seat_top)
     seat_under_p0 = float(ray.seat_heights_m[0])
     # Something standing on the seat in the band (armrests, a backrest) in front of the
     # bear's back: the planar planner may still find its way (its seat top is the highest
@@ -238,6 +237,10 @@ def choose_stance(
     )
     front = chair.front_m
     none = StanceChoice(None, sitting_pose, "", seat_height_m=seat_under_p0)
+    # The planner lets the bear go over its own seat top (a dished seat's rim, rails):
+    # the reach model is asked about that height.
+    planner_ray = SeatRay(ray.slides_m, np.maximum(ray.seat_heights_m, seat_top))
+    true_height = dict(zip(map(float, ray.slides_m), map(float, ray.seat_heights_m), strict=True))
     chair_clear, _ = _first_clear(checker, sitting_pose, 0.0, scene=False)
     if math.isnan(chair_clear):
         return none._replace(reason="no spot on the sitting ray clear of the chair")
@@ -250,12 +253,12 @@ def choose_stance(
     walk_stances = np.arange(walk_in, walk_in + STANCE_SEARCH_M + 1e-9, STEP_M)
     nearest = max(front + float(model.seat_fronts_m[0]), 0.0)
     step_stances = np.arange(walk_in - STEP_M, nearest - 1e-9, -STEP_M)
-    pairs = _model_pairs(ray, front, walk_stances, model)
-    pairs += _model_pairs(ray, front, step_stances, model)
+    pairs = _model_pairs(planner_ray, front, walk_stances, model)
+    pairs += _model_pairs(planner_ray, front, step_stances, model)
     if not pairs:
         return none._replace(
             reason=_out_of_reach_reason(
-                ray, front, np.concatenate([walk_stances, step_stances]), model
+                planner_ray, front, np.concatenate([walk_stances, step_stances]), model
             ),
             depends_on_scene=scene and walk_in > chair_clear + 1e-9,
         )
@@ -266,14 +269,14 @@ def choose_stance(
     preplans = 0
     too_close_within = -math.inf  # stances at or nearer than this put the NAO in the chair
     out_of_reach: dict[float, float] = {}  # slide -> its stances from here on fall short
-    for slide, height, stance in pairs:
+    for slide, _, stance in pairs:
         if preplans == MAX_PREPLANS:
             break
         if stance <= too_close_within + 1e-9 or stance >= out_of_reach.get(slide, math.inf) - 1e-9:
             continue
         moved = p0.copy()
         moved[:2] += slide * u
-        moved[2] += height - seat_under_p0
+        moved[2] += true_height[slide] - seat_under_p0
         pose = SittingPose(moved, sitting_pose.yaw)
         goal = goal_on_ray(sitting_pose, stance)
         if scene and (checker.collides_with_walls(goal) or checker.collides_with_obstacles(goal)):
