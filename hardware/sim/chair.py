@@ -6,11 +6,10 @@ frame's z axis (kinematically: :mod:`hardware.sim.helper` sets its pose every st
 
 Why static: pybullet collides with a concave triangle mesh exactly only when the body is
 static. A dynamic chair needs convex pieces, and V-HACD's pieces of open, thin chair
-meshes grew the chair by centimetres where the NAO works to a centimetre: the hull of
-chair-chairgen-09's seat and rails stood 2-4 cm above its seat (the bear was released on
-it and tipped off), and hulls around seat fronts caught the carried bear that the
-planner, working from the scan of the true surface, kept clear (chairgen-06's chair was
-shoved 9 cm). Of 7 trials lost that way, 6 succeeded with the exact surface. What a static
+meshes grew the chair by centimetres where the NAO works to a centimetre: the hull of a
+seat between higher rails stood 2-4 cm above the seat (the bear was released on it and
+tipped off), and hulls around seat fronts caught the carried bear that the planner,
+working from the scan of the true surface, kept clear. What a static
 chair cannot do is slide when pushed: nothing dynamic that touches it (the 0.2 kg bear)
 could push a 2 kg chair far, and the NAO is kinematic in this world, so contacts between
 the NAO and the chair are recorded (:mod:`hardware.sim.contacts`) instead of moving it.

@@ -17,7 +17,7 @@ MAX_TILT_DEG = 30.0
 MAX_RECLINE_DEG = 45.0
 """How far a bear leaning back against the chair may recline. The paper counts a trial by
 asking annotators whether the robot seated the bear; a bear whose head rests on a
-reclined backrest (chair-chairgen-10, a garden chair: 35 deg) is seated, as a child on it
+reclined backrest (garden and lounge chairs recline 30-40 deg) is seated, as a child on it
 would be. Leaning forward or sideways, or back into nothing, the limit stays 30 deg."""
 BACK_SUPPORT_HEIGHT_M = 0.12
 """A contact with the chair this high up the bear (from its seat point along its torso;

@@ -37,12 +37,12 @@ surface overestimates the volume."""
 CHAIR_MASS_RANGE_KG = (1.5, 12.0)
 SOLID_PITCH_M = 0.006
 """Voxel edge of the solid the box pieces are taken from (metres). Every surface
-grows by half a cell on average: at 1 cm the gap between an armchair's armrests shrank
-enough that no drop fitted on the scans of chairgen-06 (found at 6 mm)."""
+grows by half a cell on average, so a gap between armrests narrows by about one cell:
+the agent's hips (about 0.2 m wide) must still fit between a child's armchair's
+armrests on a scan."""
 SOLID_TOP_TOLERANCE_CELLS = 2
-"""Columns whose tops differ by up to this many cells merge into one box: over the 22
-chairgen meshes, 2 instead of 1 simulated 11 % faster (fewer pieces) with every
-direction still within 30 degrees."""
+"""Columns whose tops differ by up to this many cells (1.2 cm) merge into one box: fewer
+pieces simulate faster, and 1.2 cm is below the agent's contact resolution."""
 
 
 class PreparedChair(NamedTuple):
