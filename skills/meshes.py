@@ -107,7 +107,7 @@ UP_AXIS_RATIO = 0.5
 """Warn of a mesh lying on its side when the area of its surfaces facing ±z in the
 middle of its height is below this fraction of another axis's. Measured over the 69
 calibration meshes (``tests/test_faults.py`` reruns it when they are present): none of
-the 55 upright chairs, sofa and stool is warned (chairgen-10, reclined, scores lowest,
+the 55 upright chairs, sofa and stool is warned (the lowest, a reclined chair, scores
 0.71); the same meshes turned x-up or y-up are warned in 103 of 110 cases; 4 of the 14
 upright tables are warned (a table is not a chair)."""
 
