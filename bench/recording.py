@@ -2,7 +2,7 @@
 
     python bench/recording.py              # box chair, seed 0: one run without, one with
     python bench/recording.py --runs 3     # three of each, alternating; medians
-    python bench/recording.py --chair ../shared/chairs/chairgen-01.obj
+    python bench/recording.py --chair MESH
 
 Runs the whole mission in the simulated world (``executive.mission.run_in_simulation``)
 alternately without and with ``--record``, same seed, and prints each run's wall time,
