@@ -67,6 +67,27 @@ def signal_later(signum: int, after_s: float) -> threading.Timer:
     return timer
 
 
+def signal_once_called(signum: int, calls: dict, skill: str) -> list[float]:
+    """Sends `signum` to this process once `skill` has been called (the tree is ticking
+    and the skill's worker is blocked), however long start-up took on a loaded machine.
+
+    Returns:
+        A list that receives the monotonic time the signal was sent.
+    """
+    sent_at: list[float] = []
+
+    def wait_then_signal() -> None:
+        deadline = time.monotonic() + 60.0
+        while not calls.get(skill) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        time.sleep(0.1)
+        sent_at.append(time.monotonic())
+        os.kill(os.getpid(), signum)
+
+    threading.Thread(target=wait_then_signal, daemon=True).start()
+    return sent_at
+
+
 def read_summary(run_dir: Path) -> dict:
     return json.loads((run_dir / "summary.json").read_text())
 
@@ -81,11 +102,9 @@ def test_a_signal_while_ticking_stops_tree_and_robots_and_keeps_the_summary(
     fake = FakeMission(delays_s={"scan_chair": 30.0})
     monkeypatch.setattr(mission, "run_in_simulation", fake)
     out = tmp_path / "run"
-    timer = signal_later(signum, 0.6)
-    start = time.monotonic()
+    sent_at = signal_once_called(signum, fake.skills.calls, "scan_chair")
     assert cli.main(["run", "--mute", "--out", str(out)]) == status
-    timer.cancel()
-    assert time.monotonic() - start < 5  # the 30 s skill was cancelled, not waited for
+    assert sent_at and time.monotonic() - sent_at[0] < 5  # the 30 s skill was not waited for
     summary = read_summary(out)
     assert summary["interrupted"] is True and summary["signal"] == name
     assert summary["outcome"] == "failure" and summary["failed_stage"] == "ScanChair"
