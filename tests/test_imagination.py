@@ -229,6 +229,55 @@ def test_a_one_metre_cube_is_not_a_chair() -> None:
     assert "no correct sitting" in result.reason
 
 
+@pytest.mark.parametrize("family", ["stool", "bench"])
+def test_a_seat_without_a_backrest_is_sat_on_by_upright_sitters(family: str) -> None:
+    from skills.chairgen import generate_chair
+
+    chair = generate_chair(3, family)  # a 0.20 m seat, within the sitting heights
+    result = imagine_sitting(chair.mesh, seed=0)
+    assert result.found, result.reason
+    correct = [d for d in result.drops if d.correct]
+    # The 56 drops leaning back found no backrest; the upright round (24 drops and any
+    # repeated to settle a split vote) sat.
+    assert result.n_drops >= 56 + 24
+    assert correct and all(d.upper_contacts == 0 for d in correct)
+    seat_top_m = chair.seat_height_m
+    assert seat_top_m < result.sitting_pose.position[2] < seat_top_m + 0.12
+
+
+def test_a_table_top_gets_no_upright_sitters() -> None:
+    # A 0.5 m high top: a pelvis on it would rest above the sitting heights.
+    table = trimesh.creation.box(extents=(0.6, 0.5, 0.5))
+    table.apply_translation((0.0, 0.0, 0.25))
+    result = imagine_sitting(table, seed=0)
+    assert not result.found
+    assert result.n_drops == 56
+
+
+def test_the_righting_torque_balances_on_a_stool_but_not_on_a_post() -> None:
+    from skills.chairgen import generate_chair
+    from skills.imagination.sam import score_drop
+    from skills.imagination.simulation import DropSpec, SimulationSettings, TaskSpec, run_task
+
+    # A 6 cm post with its top at sitting height: the agent's weight falls outside it
+    # by more than the righting torque's lean.
+    post = trimesh.creation.box(extents=(0.06, 0.06, 0.3))
+    post.apply_translation((0.0, 0.0, 0.15))
+    base = trimesh.creation.box(extents=(0.4, 0.4, 0.02))
+    base.apply_translation((0.0, 0.0, 0.01))
+    stool = generate_chair(3, "stool").mesh
+
+    def upright_drop_sits(mesh: trimesh.Trimesh) -> bool:
+        drops = tuple(DropSpec(0, 0, 0.0, (0.0, 0.0), 0.0, upright=up) for up in (False, True))
+        task = TaskSpec(prepare_chair(mesh), str(agent_urdf_path()), drops, SimulationSettings())
+        passive, upright = run_task(task)[0]
+        assert not score_drop(passive).correct  # nothing to lean back against
+        return score_drop(upright).correct
+
+    assert upright_drop_sits(stool)
+    assert not upright_drop_sits(trimesh.util.concatenate([post, base]))
+
+
 def test_same_seed_same_result_and_worker_count_does_not_matter(
     box_chair: trimesh.Trimesh,
 ) -> None:

@@ -130,6 +130,22 @@ JOINT_NAMES: tuple[str, ...] = tuple(joint.name for joint in JOINTS)
 LINK_NAMES: tuple[str, ...] = tuple(link.name for link in LINKS)
 TOTAL_MASS_KG = sum(link.mass_kg for link in LINKS)
 
+BALANCE_LEAN_M = 0.05
+"""How far a sitter without a backrest shifts its centre of mass to stay upright
+(metres): a young child on a stool leans its trunk a few centimetres and braces its
+feet and hands; 5 cm is about half the depth of the agent's pelvis (0.10 m)."""
+BALANCE_TORQUE_MAX_NM = TOTAL_MASS_KG * 9.81 * BALANCE_LEAN_M
+"""The largest righting torque of an upright sitter (N m): its weight times
+``BALANCE_LEAN_M``, about 6.4 N m for the 13.1 kg agent."""
+BALANCE_FULL_TILT_RAD = math.radians(5.0)
+"""Pelvis tilt at which the righting torque reaches its maximum (radians)."""
+
+
+def upright_targets() -> list[float]:
+    """Joint targets of a sitter without a backrest: the pre-sitting posture with the
+    torso upright instead of reclined (nothing to lean back against), in JOINTS order."""
+    return [0.0 if joint.name == "chest_pitch" else joint.pre_sitting_rad for joint in JOINTS]
+
 
 def agent_urdf_text() -> str:
     """The agent's URDF as a string (primitives only, inertias of the primitives)."""

@@ -140,6 +140,21 @@ def prepare_chair(mesh: trimesh.Trimesh) -> PreparedChair:
     return prepared
 
 
+def horizontal_area_m2(prepared: PreparedChair, low_m: float, high_m: float) -> float:
+    """Area (m²) of the solid's tops at heights low_m..high_m above the floor.
+
+    Every piece is a box, so its top is horizontal: this is the area a seat at those
+    heights offers, from above (stretchers and rails count too, with their small area).
+    """
+    area = 0.0
+    for corners in prepared.pieces:
+        top_m = float(corners[:, 2].max()) + float(prepared.com_obb_m[2]) - prepared.z_min_m
+        if low_m <= top_m <= high_m:
+            extent = corners.max(axis=0) - corners.min(axis=0)
+            area += float(extent[0] * extent[1])
+    return area
+
+
 def _to_cache(prepared: PreparedChair) -> dict[str, np.ndarray]:
     """The cache entry's arrays (npz, no pickle: see ``skills.meshes.read_cached_arrays``)."""
     arrays = {name: np.asarray(value) for name, value in prepared._asdict().items()}

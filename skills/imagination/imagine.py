@@ -34,6 +34,13 @@ The paper's procedure ("Sitting Imagination"):
    over the tied rotations put the pose 5-11 degrees off; so the tie-break stays the
    paper's. The one chair the vote got 50 degrees wrong was a hole.)
 
+6. Beyond the paper, a seat without a backrest (a stool, a bench): when no drop of
+   steps 2-5 is a correct sitting, the sitter leaning back has found nothing to lean
+   on, so upright sitters, which hold their torso upright and balance with a bounded
+   righting torque, are dropped at the first three positions of every rotation, and
+   the vote of step 4 runs over them, if the chair has horizontal tops at sitting
+   height at least as large as the pelvis's footprint (a table's top is too high).
+
 Drops run in worker processes (each with its own pybullet DIRECT client), grouped one
 rotation per physics world. Each drop's small start jitter is seeded from
 (seed, rotation, position), so a seed gives the same result for any number of workers.
@@ -53,8 +60,13 @@ import numpy as np
 import trimesh
 
 from skills.geometry import SittingPose, transform_points, wrap_angle
-from skills.imagination.agent import agent_urdf_path
-from skills.imagination.chair import ChairPreparationError, PreparedChair, prepare_chair
+from skills.imagination.agent import LINKS, agent_urdf_path
+from skills.imagination.chair import (
+    ChairPreparationError,
+    PreparedChair,
+    horizontal_area_m2,
+    prepare_chair,
+)
 from skills.imagination.sam import DEFAULT_THRESHOLDS, SamThresholds, failed_criteria, score_drop
 from skills.imagination.simulation import (
     DropSpec,
@@ -185,6 +197,23 @@ def imagine_sitting_details(
         n_correct = sum(score_drop(drop, thresholds).correct for drop in raw)
         if n_correct > MORE_POSITIONS_MAX_CORRECT:
             break
+    upright = False
+    if not cancelled and n_correct == 0 and _offers_seat(prepared, thresholds):
+        # No sitter leaning back found a backrest: is it a seat without one (a stool,
+        # a bench)? Drop upright sitters, which balance instead of leaning back.
+        upright = True
+        tasks = [
+            TaskSpec(
+                prepared,
+                urdf,
+                _drop_specs(prepared, i, FIRST_POSITIONS, seed, upright=True),
+                settings,
+            )
+            for i in range(N_ROTATIONS)
+        ]
+        outcomes, seconds, cancelled = runner(tasks, cancel)
+        physics_seconds += seconds
+        raw.extend(drop for task_drops in outcomes for drop in task_drops)
     extra = 0
     if not cancelled:
         # A split vote: drop again where the votes disagree.
@@ -196,7 +225,9 @@ def imagine_sitting_details(
                     TaskSpec(
                         prepared,
                         urdf,
-                        _drop_specs(prepared, i, FIRST_POSITIONS, seed, repeat=repeat),
+                        _drop_specs(
+                            prepared, i, FIRST_POSITIONS, seed, repeat=repeat, upright=upright
+                        ),
                         settings,
                     )
                     for i in sorted(set(contested) | set(holes))
@@ -211,6 +242,7 @@ def imagine_sitting_details(
 
     raw.sort(
         key=lambda d: (
+            d.spec.upright,
             d.spec.rotation_index,
             d.spec.repeat,
             _position_order(d.spec.position_index),
@@ -306,6 +338,20 @@ def choose_sitting_pose(
     position = transform_points(T_mesh_obb, position_chair[None, :])[0]
     pose = SittingPose(position, wrap_angle(yaw_chair - prepared.gamma_obb_rad))
     return ImaginationResult(True, pose, len(chosen), len(drops), drops, seconds, "", vote=vote)
+
+
+def _offers_seat(prepared: PreparedChair, thresholds: SamThresholds) -> bool:
+    """True when the chair has horizontal tops where a pelvis would rest within the
+    sitting heights (H_min..H_max less the pelvis's half height), at least as large as
+    the pelvis's footprint: an upright sitter could sit there. A table's top is above."""
+    pelvis = LINKS[0]
+    half_height_m = pelvis.size[2] / 2.0
+    area_m2 = horizontal_area_m2(
+        prepared,
+        thresholds.height_min_m - half_height_m,
+        thresholds.height_max_m - half_height_m,
+    )
+    return area_m2 >= pelvis.size[0] * pelvis.size[1]
 
 
 def _correct_by_rotation(drops: tuple[DropOutcome, ...]) -> dict[int, list[DropOutcome]]:
@@ -406,10 +452,12 @@ def _drop_specs(
     positions: tuple[int, ...],
     seed: int,
     repeat: int = 0,
+    upright: bool = False,
 ) -> tuple[DropSpec, ...]:
     """The drops of one rotation: the agent faces −α_i in the chair frame.
 
-    ``repeat`` > 0 draws fresh start jitter for drops repeated to settle a split vote."""
+    ``repeat`` > 0 draws fresh start jitter for drops repeated to settle a split vote;
+    ``upright`` drops an upright sitter (no backrest to lean on)."""
     l_sit = L_SIT_RATIO * float(np.mean(prepared.extents_m[:2]))
     specs = []
     for k in positions:
@@ -421,7 +469,9 @@ def _drop_specs(
         )
         xy = k * l_sit * facing + rng.uniform(-1, 1, size=2) * JITTER_POSITION_M
         specs.append(
-            DropSpec(rotation_index, k, k * l_sit, (float(xy[0]), float(xy[1])), yaw, repeat)
+            DropSpec(
+                rotation_index, k, k * l_sit, (float(xy[0]), float(xy[1])), yaw, repeat, upright
+            )
         )
     return tuple(specs)
 

@@ -24,6 +24,10 @@ the scans too (the 53 calibration chairs scanned in the simulated world, and the
 meshes placed the same way, raw drops re-scored): L_max 0.5 agreed within 15 degrees
 between scan and true mesh on 46 of 53 chairs, 0.8 to 1.0 on 50 of 53, with every scan
 within 30 degrees of the truth and still no table or stool sat on; L_max = 0.9.
+
+Beyond the paper, an *upright* drop (``DropSpec.upright``: a sitter balancing without a
+backrest, see ``skills.imagination.simulation``) needs no upper-body contact: it holds
+itself upright, within its bounded righting torque, so the other criteria judge it.
 """
 
 from __future__ import annotations
@@ -115,7 +119,7 @@ def failed_criteria(
         failed.append("posture bent")
     if link_score(raw.link_z, raw.yaw) >= thresholds.link_max:
         failed.append("torso tilted")
-    if not raw.contacts[_UPPER].any():
+    if not raw.contacts[_UPPER].any() and not raw.spec.upright:
         failed.append("back unsupported")
     if not raw.contacts[_LOWER].any():
         failed.append("seat unsupported")
@@ -135,7 +139,7 @@ def score_drop(raw: RawDrop, thresholds: SamThresholds = DEFAULT_THRESHOLDS) -> 
         and link < thresholds.link_max
         and thresholds.height_min_m < raw.sitting_height_m < thresholds.height_max_m
         and int(raw.contacts.sum()) >= thresholds.contacts_min
-        and upper > 0
+        and (upper > 0 or raw.spec.upright)
         and lower > 0
     )
     return DropOutcome(

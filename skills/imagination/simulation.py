@@ -26,7 +26,13 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from skills.imagination.agent import JOINTS, LINK_NAMES
+from skills.imagination.agent import (
+    BALANCE_FULL_TILT_RAD,
+    BALANCE_TORQUE_MAX_NM,
+    JOINTS,
+    LINK_NAMES,
+    upright_targets,
+)
 from skills.imagination.chair import PreparedChair
 
 
@@ -75,6 +81,9 @@ class DropSpec(NamedTuple):
         xy_m: (2,) pelvis start position in the chair frame.
         yaw_rad: agent start yaw in the chair frame.
         repeat: 0 for the paper's drops, 1.. for drops repeated to settle a split vote.
+        upright: an upright sitter (beyond the paper): the torso held upright and a
+            bounded righting torque on the pelvis (``agent.BALANCE_TORQUE_MAX_NM``),
+            as a child balances on a seat without a backrest.
     """
 
     rotation_index: int
@@ -83,6 +92,7 @@ class DropSpec(NamedTuple):
     xy_m: tuple[float, float]
     yaw_rad: float
     repeat: int = 0
+    upright: bool = False
 
 
 class TaskSpec(NamedTuple):
@@ -204,7 +214,6 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
     spacing = float(max(chair.extents_m[:2])) + 2.5
     agent_joint_indices: list[int] = []
     link_indices: list[int] = []
-    pre_sitting = [joint.pre_sitting_rad for joint in JOINTS]
     torques = [joint.max_torque_nm for joint in JOINTS]
 
     active: list[dict[str, Any]] = []
@@ -241,7 +250,8 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
         if not agent_joint_indices:
             agent_joint_indices, link_indices = _index_maps(p, cid, agent)
             trunk = {link_indices[LINK_NAMES.index(name)] for name in TRUNK_LINKS}
-        for index, angle in zip(agent_joint_indices, pre_sitting, strict=True):
+        targets = upright_targets() if drop.upright else [joint.pre_sitting_rad for joint in JOINTS]
+        for index, angle in zip(agent_joint_indices, targets, strict=True):
             p.resetJointState(agent, index, angle, physicsClientId=cid)
         # Raise the agent until it starts clear of the chair: the legs hang below the
         # pelvis and would otherwise start inside a tall backrest.
@@ -263,7 +273,7 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
             agent,
             agent_joint_indices,
             p.POSITION_CONTROL,
-            targetPositions=pre_sitting,
+            targetPositions=targets,
             forces=torques,
             physicsClientId=cid,
         )
@@ -287,7 +297,10 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
     step = 0
     started = time.perf_counter()
     while active and step < max_steps:
+        upright = [item["agent"] for item in active if item["spec"].upright]
         for _ in range(settings.check_every_steps):
+            for agent in upright:
+                _apply_righting_torque(p, cid, agent)
             p.stepSimulation(physicsClientId=cid)
         step += settings.check_every_steps
         still: list[dict[str, Any]] = []
@@ -302,6 +315,29 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
         active = still
     seconds = time.perf_counter() - started
     return [r for r in results if r is not None], seconds
+
+
+def _apply_righting_torque(p: Any, cid: int, agent: int) -> None:
+    """An upright sitter's balance: a torque on the pelvis about a horizontal axis that
+    turns its z axis back toward vertical, τ = −k θ n − c ω_h (θ the tilt, n the tilt
+    axis, ω_h the horizontal angular velocity), saturated at ``BALANCE_TORQUE_MAX_NM``
+    (N m), so a sitter whose weight is more than ``BALANCE_LEAN_M`` outside what supports
+    it still falls. pybullet clears external forces after every step."""
+    _, quat = p.getBasePositionAndOrientation(agent, physicsClientId=cid)
+    z_pelvis = np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)[:, 2]
+    _, angular = p.getBaseVelocity(agent, physicsClientId=cid)
+    # z_pelvis × z_world is the axis that rights the pelvis; its norm is sin θ.
+    axis = np.array([z_pelvis[1], -z_pelvis[0], 0.0])
+    sin_tilt = float(np.linalg.norm(axis))
+    tilt = math.atan2(sin_tilt, float(z_pelvis[2]))
+    stiffness = BALANCE_TORQUE_MAX_NM / BALANCE_FULL_TILT_RAD
+    torque = -0.2 * stiffness * np.array([angular[0], angular[1], 0.0])
+    if sin_tilt > 1e-9:
+        torque += stiffness * tilt * axis / sin_tilt
+    norm = float(np.linalg.norm(torque))
+    if norm > BALANCE_TORQUE_MAX_NM:
+        torque *= BALANCE_TORQUE_MAX_NM / norm
+    p.applyExternalTorque(agent, -1, torque.tolist(), p.WORLD_FRAME, physicsClientId=cid)
 
 
 def _index_maps(p: Any, cid: int, agent: int) -> tuple[list[int], list[int]]:
