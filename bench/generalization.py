@@ -56,6 +56,7 @@ class Outcome(NamedTuple):
     reason: str
     seconds: float  # the accessibility check's wall time
     seated: bool | None = None  # with --seat: the judge's verdict in the simulated world
+    in_workspace: bool = True  # the reach check passes on the true mesh and sitting pose
 
 
 def ground_truth_pose(chair: GeneratedChair) -> SittingPose:
@@ -91,6 +92,12 @@ def seat_in_simulation(chair: GeneratedChair, seed: int) -> tuple[bool, str]:
 
 
 def run_chair(chair: GeneratedChair, seed: int, imagine: bool, seat: bool = False) -> Outcome:
+    outcome = _run_stages(chair, seed, imagine, seat)
+    truth = check_seat_reachable(chair.mesh, ground_truth_pose(chair))
+    return outcome._replace(in_workspace=truth.reachable)
+
+
+def _run_stages(chair: GeneratedChair, seed: int, imagine: bool, seat: bool) -> Outcome:
     rng = np.random.default_rng(seed)
     if imagine:
         sitting, direction_ok = imagined_pose(chair, seed)
@@ -123,17 +130,16 @@ def _percent(part: int, whole: int) -> str:
 
 
 def workspace_split(outcomes: list[Outcome]) -> None:
-    """Chairs whose true seat height the reach model covers must pass; the others must be
-    stopped with a reason (refused, or no sitting imagined on them)."""
-    from skills.planning.wholebody.reach_model import reach_model
-
-    model = reach_model()
-    low, high = model.min_seat_height_m(), model.max_seat_height_m()
-    inside = [o for o in outcomes if low <= o.chair.seat_height_m <= high]
-    beyond = [o for o in outcomes if not low <= o.chair.seat_height_m <= high]
+    """Chairs within the NAO's workspace must pass; the others must be stopped with a
+    reason (refused, or no sitting imagined on them). Within the workspace: the reach
+    check (the reach model and the stance search, chair alone) passes on the true mesh
+    with the true sitting pose, so the seat's height, depth and what stands in front
+    of it (footrests, bases) all count."""
+    inside = [o for o in outcomes if o.in_workspace]
+    beyond = [o for o in outcomes if not o.in_workspace]
     passed = [o for o in inside if o.imagined and o.accessible]
     print(
-        f"within the workspace (seat {low:.2f}-{high:.2f} m): {len(inside)} chairs, pass "
+        f"within the workspace (true seat reachable): {len(inside)} chairs, pass "
         f"{_percent(len(passed), len(inside))}, refused {sum(bool(o.refused) for o in inside)}"
     )
     for family in FAMILIES:
@@ -141,6 +147,13 @@ def workspace_split(outcomes: list[Outcome]) -> None:
         if group:
             ok = sum(o.imagined and o.accessible for o in group)
             print(f"  {family:<11} {_percent(ok, len(group))}")
+    for o in inside:
+        if not (o.imagined and o.accessible):
+            why = o.reason or "direction more than 30 deg off the front"
+            print(
+                f"    failed {o.chair.name} (seat {o.chair.seat_height_m:.2f} m high, "
+                f"{o.chair.seat_depth_m:.2f} m deep): {why[:150]}"
+            )
     stopped = [o for o in beyond if not o.accessible and o.reason]
     print(
         f"beyond the workspace: {len(beyond)} chairs, stopped with a reason "
@@ -266,6 +279,7 @@ def main(argv: list[str] | None = None) -> int:
         outcomes.append(outcome)
         if args.verbose:
             status = "refused" if outcome.refused else ("ok" if outcome.accessible else "FAIL")
+            status += "" if outcome.in_workspace else " (beyond the workspace)"
             if outcome.seated is not None:
                 status += ", seated" if outcome.seated else ", NOT SEATED"
             print(
