@@ -294,8 +294,8 @@ def test_seat_of_slats_is_found_under_a_gap_and_ends_at_its_front_edge() -> None
     assert np.isnan(seat_support_heights(seat, np.array([[0.25, 0.0]]), 0.3)[0])
     p = SittingPose(np.array([-0.105, 0.0, 0.29]), 0.0)
     moved, slide_m = slide_on_seat(seat, p, 1.0)
-    # Slides to BEAR_EDGE_MARGIN_M behind the front edge (within a step), not past it.
-    assert 0.12 - BEAR_EDGE_MARGIN_M - 0.02 <= moved.position[0] <= 0.12 - BEAR_EDGE_MARGIN_M
+    # Slides to BEAR_EDGE_MARGIN_M behind the front edge (to its 1 mm), not past it.
+    assert 0.12 - BEAR_EDGE_MARGIN_M - 0.002 <= moved.position[0] <= 0.12 - BEAR_EDGE_MARGIN_M
     assert moved.position[2] == pytest.approx(0.29)
     assert slide_m == pytest.approx(moved.position[0] - p.position[0])
 
@@ -393,7 +393,7 @@ def test_a_hole_in_the_scanned_seat_is_seat_when_the_seat_encloses_it() -> None:
     p = SittingPose(np.array([-0.02, 0.0, 0.29]), 0.0)
     moved, _ = slide_on_seat(_seat_with_hole(0.07, open_to_front=False), p, 1.0)
     # The hole (14 cm wide) is filled: p slides to the bear's margin behind the front edge.
-    assert 0.15 - BEAR_EDGE_MARGIN_M - 0.02 <= moved.position[0] <= 0.15 - BEAR_EDGE_MARGIN_M
+    assert 0.15 - BEAR_EDGE_MARGIN_M - 0.002 <= moved.position[0] <= 0.15 - BEAR_EDGE_MARGIN_M
     assert moved.position[2] == pytest.approx(0.29)
 
 
@@ -405,3 +405,34 @@ def test_a_sitting_point_over_a_lost_seat_top_stays_where_it_was_imagined() -> N
     assert seat_ray(seat, p).seat_heights_m == pytest.approx([0.24])
     nothing = check_seat_reachable(seat, SittingPose(np.array([1.0, 1.0, 0.29]), 0.0))
     assert not nothing.reachable and nothing.reason == "no seat under the sitting position"
+
+
+def test_a_ray_turned_about_p_is_searched_when_the_imagined_one_fails() -> None:
+    from skills.geometry import wrap_angle
+    from skills.planning.stance import MAX_PREPLANS, PREPLANS_PER_TURN, TURNS_RAD
+
+    chair_mesh, sitting_pose = _placed_chair(0.6, 0.1, 30.0)
+    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
+    asked: list[float] = []
+
+    def off_the_imagined_ray_only(chair, pose, se2_goal) -> SeatingCheck:
+        turned = wrap_angle(pose.yaw - sitting_pose.yaw)
+        asked.append(turned)
+        if abs(turned) < math.radians(4.0):
+            return SeatingCheck("bear placement: out of reach", bear_placement=True)
+        return SeatingCheck()
+
+    choice = choose_stance(chair_mesh, sitting_pose, checker, off_the_imagined_ray_only)
+    assert choice.se2_goal is not None, choice.reason
+    assert choice.turned_rad == pytest.approx(TURNS_RAD[0])
+    assert choice.sitting_pose.yaw == pytest.approx(wrap_angle(sitting_pose.yaw + TURNS_RAD[0]))
+    assert math.cos(choice.se2_goal.theta - (choice.sitting_pose.yaw + math.pi)) > 0.9999
+    assert asked[0] == pytest.approx(0.0) and choice.preplans == len(asked)
+
+    asked.clear()
+    nowhere = choose_stance(
+        chair_mesh, sitting_pose, checker, lambda *_: SeatingCheck("chair collision: knee")
+    )
+    assert nowhere.se2_goal is None and nowhere.turned_rad == 0.0
+    assert nowhere.reason == "chair collision: knee"  # the imagined ray's reason
+    assert nowhere.preplans <= MAX_PREPLANS + PREPLANS_PER_TURN * len(TURNS_RAD)

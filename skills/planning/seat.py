@@ -208,13 +208,51 @@ def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
     if not on_seat[0]:
         # The scan lost the seat's top here, yet the imagined child sat on it: p stays.
         return SeatRay(np.zeros(1), np.full(1, h0))
-    seat_ends_m = along[int(np.argmin(on_seat))] if not on_seat.all() else math.inf
-    limit = min(MAX_SLIDE_M, seat_ends_m - STEP_M - BEAR_EDGE_MARGIN_M)
+    if on_seat.all():
+        limit = MAX_SLIDE_M
+    else:
+        end = int(np.argmin(on_seat))
+        edge_m = _seat_edge_between(chair_mesh, sitting_pose, along[end - 1], along[end], h0)
+        limit = min(MAX_SLIDE_M, edge_m - BEAR_EDGE_MARGIN_M)
     # p stays where it was imagined when that is already within the margin: the
     # imagination's p is where the child sat, so the seat holds the bear there.
     supported = (along <= max(limit, 0.0) + 1e-9) & on_seat
     supported &= np.cumprod(supported).astype(bool)
-    return SeatRay(along[supported], row_heights[supported])
+    slides, slide_heights = along[supported], row_heights[supported]
+    if limit > slides[-1] + EDGE_RESOLUTION_M:
+        # The last grid point may lie up to a step short of the margin: add the margin's.
+        slides = np.append(slides, limit)
+        slide_heights = np.append(slide_heights, slide_heights[-1])
+    return SeatRay(slides, slide_heights)
+
+
+EDGE_RESOLUTION_M = 0.001
+"""The seat's front edge is located to this (metres) between the grid's last seat row and
+its first row past the edge: a centimetre of seat is a centimetre of the NAO's reach."""
+
+
+def _seat_edge_between(
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    last_seat_m: float,
+    past_edge_m: float,
+    h0: float,
+) -> float:
+    """Where along the ray (metres from p) the seat's top ends, between a grid row that
+    is seat and the next that is not: the farthest row at ``EDGE_RESOLUTION_M`` spacing
+    where at least half of the band across the ray (``SUPPORT_RADIUS_M`` either side)
+    meets the seat's height h₀ within ``SEAT_HEIGHT_TOLERANCE_M``."""
+    p = np.asarray(sitting_pose.position, dtype=float)
+    u = sitting_pose.direction()
+    v = np.array([-u[1], u[0]])
+    rows = np.arange(last_seat_m, past_edge_m, EDGE_RESOLUTION_M)
+    across = np.arange(-SUPPORT_RADIUS_M, SUPPORT_RADIUS_M + 1e-9, STEP_M)
+    a, c = np.meshgrid(rows, across, indexing="ij")
+    xy = p[:2] + a.reshape(-1, 1) * u + c.reshape(-1, 1) * v
+    heights = _first_surface_below(chair_mesh, xy, float(p[2]) + 0.02).reshape(a.shape)
+    seat = np.abs(np.nan_to_num(heights, nan=-1.0) - h0) <= SEAT_HEIGHT_TOLERANCE_M
+    on_seat = np.flatnonzero(seat.mean(axis=1) >= 0.5)
+    return float(rows[on_seat[-1]]) if len(on_seat) else float(last_seat_m)
 
 
 def slide_on_seat(

@@ -25,6 +25,11 @@ come first; then nearer ones, down to the front of its feet at the chair's front
 it reaches by stepping straight in from the first clear one (the pre-plan checks its
 feet, shins, body and the carried bear against the chair).
 
+When no pair on the imagined ray works, rays turned about p₀ by a few degrees
+(``TURNS_RAD``) are searched the same way, with a smaller pre-plan budget each: the
+sitting direction is uncertain by that much, and the chosen pair's sitting direction is
+the turned one (the NAO faces it, so the bear does).
+
 :func:`check_seat_reachable` runs the search with the chair alone (no walls, no
 obstacles): when it finds nothing, no orientation of the chair can help, and the mission
 refuses before anyone is asked to turn the chair.
@@ -60,7 +65,18 @@ stance a little farther back gives the knees room in front of the seat."""
 MAX_STANCE_M = 1.2
 """No stance farther than this (metres) from p₀ is considered."""
 MAX_PREPLANS = 6
-"""The whole-body pre-plan confirms at most this many candidate pairs."""
+"""The whole-body pre-plan confirms at most this many candidate pairs on the imagined ray."""
+TURNS_RAD = tuple(math.radians(d) for d in (5.0, -5.0, 10.0, -10.0))
+"""When no pair on the imagined ray works, the ray is turned about p₀ by these angles
+(radians, nearest first) and searched again: the sitting direction imagined from drops
+is itself uncertain by a few degrees (the drops' start jitter is 2 deg, and the vote's
+weighted mean moves with them), a front bar or a rail may cross the band a few
+centimetres nearer on one side, and a wall may leave room for a slanted approach. 10 deg
+stays well within the planner's facing tolerance (``seating.FACING_TOLERANCE_RAD``, 20
+deg) and the seating judge's 45 deg."""
+PREPLANS_PER_TURN = 2
+"""Pre-plans each turned ray may ask for: the reach model's first pairs are right when
+the seat is reachable from there at all."""
 
 
 class SeatingCheck(NamedTuple):
@@ -101,6 +117,8 @@ class StanceChoice(NamedTuple):
             NAO's ellipsoid allows: the NAO steps straight in from there (None: it
             walks to s_goal).
         seat_height_m: the seat's height under the imagined p, metres (NaN: no seat).
+        turned_rad: how far the sitting direction was turned from the imagined one
+            (``TURNS_RAD``) for the chosen pair, radians.
     """
 
     se2_goal: SE2Pose | None
@@ -112,6 +130,7 @@ class StanceChoice(NamedTuple):
     depends_on_scene: bool = False
     approach: SE2Pose | None = None
     seat_height_m: float = math.nan
+    turned_rad: float = 0.0
 
 
 def goal_on_ray(sitting_pose: SittingPose, distance_m: float) -> SE2Pose:
@@ -208,7 +227,54 @@ def choose_stance(
     scene: bool = True,
     model: ReachModel | None = None,
 ) -> StanceChoice:
-    """Searches stance and sitting point together (see the module doc).
+    """Searches stance and sitting point together on the imagined ray, then on rays
+    turned about p₀ by ``TURNS_RAD`` (see :func:`choose_stance_on_ray`).
+
+    Returns:
+        The first pair found, or the imagined ray's failure with its reason.
+    """
+    model = model or reach_model()
+    first = choose_stance_on_ray(
+        chair_mesh, sitting_pose, checker, validator, scene=scene, model=model
+    )
+    if first.se2_goal is not None or not _turning_may_help(first, model):
+        return first
+    preplans = first.preplans
+    p0 = np.asarray(sitting_pose.position, dtype=float)
+    for turn in TURNS_RAD:
+        turned = SittingPose(p0, wrap_angle(sitting_pose.yaw + turn))
+        choice = choose_stance_on_ray(
+            chair_mesh,
+            turned,
+            checker,
+            validator,
+            scene=scene,
+            model=model,
+            max_preplans=PREPLANS_PER_TURN,
+        )
+        preplans += choice.preplans
+        if choice.se2_goal is not None:
+            return choice._replace(preplans=preplans, turned_rad=turn)
+    return first._replace(preplans=preplans)
+
+
+def _turning_may_help(choice: StanceChoice, model: ReachModel) -> bool:
+    """False when the seat under p is outside every posture's heights (or absent)."""
+    height = choice.seat_height_m
+    return model.min_seat_height_m() <= height <= model.max_seat_height_m()
+
+
+def choose_stance_on_ray(
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    checker: NaoCollisionChecker,
+    validator: SeatingValidator,
+    *,
+    scene: bool = True,
+    model: ReachModel | None = None,
+    max_preplans: int = MAX_PREPLANS,
+) -> StanceChoice:
+    """Searches stance and sitting point together on one ray (see the module doc).
 
     Stances where the walking NAO's ellipsoid is clear come first (it walks there);
     then stances nearer the chair, down to the front of the feet at the chair's front,
@@ -221,6 +287,7 @@ def choose_stance(
         validator: the seating pre-plan, asked about the model's best pairs in turn.
         scene: also keep the stance clear of walls and obstacles inside the arena.
         model: the reach model (default: the shipped one).
+        max_preplans: how many pairs the pre-plan may be asked about.
     """
     model = model or reach_model()
     ray = seat_ray(chair_mesh, sitting_pose)
@@ -270,7 +337,7 @@ def choose_stance(
     too_close_within = -math.inf  # stances at or nearer than this put the NAO in the chair
     out_of_reach: dict[float, float] = {}  # slide -> its stances from here on fall short
     for slide, _, stance in pairs:
-        if preplans == MAX_PREPLANS:
+        if preplans == max_preplans:
             break
         if stance <= too_close_within + 1e-9 or stance >= out_of_reach.get(slide, math.inf) - 1e-9:
             continue
