@@ -127,7 +127,7 @@ def bench_accessible(chairs: list[Chair], arena: Arena, runs: int, seed: int) ->
             f"max {max(timed) * 1000:.1f} ms"
         )
     print(
-        f"  whole check (goal, validity, planning; V-HACD cached): "
+        f"  whole check (stance search, pre-plans, path): "
         f"median {statistics.median(total_s) * 1000:.1f} ms, max {max(total_s) * 1000:.1f} ms"
     )
     for reason in reasons[:5]:

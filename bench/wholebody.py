@@ -32,7 +32,7 @@ import trimesh
 
 from skills.geometry import SE2Pose, SittingPose, make_transform, rot_z, wrap_angle
 from skills.meshes import box_chair_mesh, load_mesh
-from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
+from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from skills.planning.se2 import default_seating_validator
 from skills.planning.seat import seat_support_heights
 from skills.planning.stance import choose_stance, open_floor_arena
@@ -128,7 +128,7 @@ def feasible_stance(
     """The stance, sitting point and raising pose (None: no raise) the mission's search
     chooses with the chair alone (:func:`skills.planning.stance.choose_stance`: reach
     model, then the pre-plan)."""
-    checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_convex_pieces(chair_mesh))
+    checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_solid_boxes(chair_mesh))
     choice = choose_stance(
         chair_mesh, sitting_pose, checker, default_seating_validator(), scene=False
     )

@@ -1,8 +1,7 @@
-"""Chair meshes: loading, hashing, convex decomposition and a chair made of boxes.
+"""Chair meshes: loading, checking, hashing, the solid under a surface, and a box chair.
 
-Every mesh here is z up, in metres. Convex decomposition (V-HACD, built into pybullet)
-is slow compared with everything that uses it, so its pieces are cached on disk by the
-mesh's digest: a second run on the same chair skips it.
+Every mesh here is z up, in metres. Caches of what is derived from a mesh are ``.npz``
+files under :func:`cache_dir`, named by the mesh's digest.
 """
 
 from __future__ import annotations
@@ -13,7 +12,6 @@ import logging
 import math
 import os
 import tempfile
-import threading
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
@@ -27,8 +25,6 @@ from skills.errors import MeshError, one_line
 logger = logging.getLogger(__name__)
 
 SUPPORTED_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
-
-_decomposition_lock = threading.Lock()
 
 
 class MeshLoadError(MeshError, ValueError):
@@ -198,46 +194,6 @@ def mesh_digest(mesh: trimesh.Trimesh) -> str:
     return digest.hexdigest()
 
 
-def convex_pieces(mesh: trimesh.Trimesh, max_vertices_per_piece: int = 64) -> list[trimesh.Trimesh]:
-    """Splits a (possibly open, non-manifold) mesh into convex pieces with V-HACD.
-
-    The pieces are cached as OBJ files under ``cache_dir()/convex`` by digest.
-
-    Args:
-        mesh: the surface to decompose, in any frame; pieces come back in that frame.
-        max_vertices_per_piece: V-HACD's hull vertex limit.
-
-    Returns:
-        Convex meshes whose union approximates the mesh's volume.
-    """
-    digest = mesh_digest(mesh)
-    cached = cache_dir() / "convex" / f"{digest}-{max_vertices_per_piece}.obj"
-    with _decomposition_lock:
-        decomposed = _read_cached_mesh(cached)
-        if decomposed is None:
-            _run_vhacd(mesh, cached, max_vertices_per_piece)
-            decomposed = trimesh.load(cached, force="mesh", process=False)
-    pieces = [piece.convex_hull for piece in decomposed.split(only_watertight=False)]
-    return [piece for piece in pieces if len(piece.vertices) >= 4 and piece.volume > 1e-9]
-
-
-def _read_cached_mesh(path: Path) -> trimesh.Trimesh | None:
-    """A cached mesh, or None when it is missing or damaged (then it is deleted)."""
-    if not path.is_file():
-        return None
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            loaded = trimesh.load(path, force="mesh", process=False)
-        if isinstance(loaded, trimesh.Trimesh) and len(loaded.faces) > 0:
-            return loaded
-    except Exception as error:  # any parse error: the entry is rebuilt
-        logger.info("rebuilding damaged cache entry %s: %s", path, one_line(error))
-    with contextlib.suppress(OSError):
-        path.unlink()
-    return None
-
-
 def read_cached_arrays(path: Path) -> dict[str, np.ndarray] | None:
     """The arrays of a cache entry written by :func:`write_cached_arrays`.
 
@@ -277,33 +233,6 @@ def write_cached_arrays(path: Path, arrays: dict[str, np.ndarray]) -> None:
         logger.warning("could not write cache entry %s: %s", path, one_line(error))
         with contextlib.suppress(OSError, UnboundLocalError):
             os.unlink(scratch)
-
-
-def _run_vhacd(mesh: trimesh.Trimesh, output: Path, max_vertices_per_piece: int) -> None:
-    import pybullet
-
-    output.parent.mkdir(parents=True, exist_ok=True)
-    client = pybullet.connect(pybullet.DIRECT)
-    try:
-        with tempfile.TemporaryDirectory() as scratch:
-            source = Path(scratch) / "in.obj"
-            mesh.export(source)
-            partial = Path(scratch) / "out.obj"
-            # V-HACD prints its progress to stdout; send it to a log file instead.
-            with _stdout_to(Path(scratch) / "stdout.txt"):
-                pybullet.vhacd(
-                    str(source),
-                    str(partial),
-                    str(Path(scratch) / "vhacd.log"),
-                    resolution=100000,
-                    maxNumVerticesPerCH=max_vertices_per_piece,
-                    physicsClientId=client,
-                )
-            if not partial.exists() or partial.stat().st_size == 0:
-                raise RuntimeError("V-HACD produced no convex pieces")
-            os.replace(partial, output)
-    finally:
-        pybullet.disconnect(client)
 
 
 def solid_below_surface_boxes(
@@ -483,26 +412,6 @@ def _sliver_samples(triangles: np.ndarray, sides: np.ndarray, spacing_m: float) 
 
 
 _CHUNK_POINTS = 1 << 15
-
-
-class _stdout_to:
-    """Redirects the process's file descriptor 1 (C libraries write there) to a file."""
-
-    def __init__(self, path: Path) -> None:
-        self._path = path
-
-    def __enter__(self) -> None:
-        import sys
-
-        sys.stdout.flush()
-        self._saved = os.dup(1)
-        self._file = open(self._path, "wb")
-        os.dup2(self._file.fileno(), 1)
-
-    def __exit__(self, *exc: object) -> None:
-        os.dup2(self._saved, 1)
-        os.close(self._saved)
-        self._file.close()
 
 
 def box_chair_mesh(

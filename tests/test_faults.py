@@ -437,16 +437,6 @@ def test_the_imagination_cache_survives_a_damaged_entry(tmp_path, monkeypatch):
     assert np.allclose(np.stack(cached.pieces), np.stack(first.pieces))
 
 
-def test_a_damaged_convex_cache_entry_is_deleted(tmp_path):
-    from skills.meshes import _read_cached_mesh
-
-    entry = tmp_path / "pieces.obj"
-    entry.write_bytes(b"\x00\x01 not an obj \xff")
-    assert _read_cached_mesh(entry) is None and not entry.exists()
-    trimesh.creation.box((1, 1, 1)).export(entry)
-    assert _read_cached_mesh(entry) is not None
-
-
 # --- campaign databases and processes -----------------------------------------------------
 
 

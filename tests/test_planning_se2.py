@@ -12,7 +12,7 @@ from skills.arena import DEFAULT_ARENA, Arena, Box2D
 from skills.geometry import SE2Pose, SittingPose, yaw_transform
 from skills.meshes import box_chair_mesh
 from skills.planning import collision
-from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
+from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from skills.planning.se2 import (
     AccessibilityError,
     SeatingCheck,
@@ -57,7 +57,7 @@ def test_chair_facing_the_humanoid_is_accessible(yaw_deg: float) -> None:
     assert result.accessible, result.reason
     assert result.seconds < 1.0
     assert result.path[0] == START and result.path[-1] == result.se2_goal
-    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
+    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_solid_boxes(chair_mesh))
     for a, b in zip(result.path, result.path[1:], strict=False):
         for t in np.linspace(0.0, 1.0, 6):
             x, y = a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)
@@ -122,7 +122,7 @@ def _anywhere(chair_mesh, pose, se2_goal) -> SeatingCheck:
 
 def test_goal_is_the_first_spot_on_the_ray_clear_of_the_chair() -> None:
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.1, 40.0)
-    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
+    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_solid_boxes(chair_mesh))
     choice = choose_stance(chair_mesh, sitting_pose, checker, _anywhere, scene=False)
     goal = choice.se2_goal
     assert not checker.collides_with_chair(goal) and choice.approach is None
@@ -132,8 +132,9 @@ def test_goal_is_the_first_spot_on_the_ray_clear_of_the_chair() -> None:
     assert abs(offset @ [-direction[1], direction[0]]) < 1e-9  # on the ray from the first p
     # One step closer collides: the walk ends at the first free spot.
     assert checker.collides_with_chair(goal_on_ray(sitting_pose, along - STEP_M))
-    # The seat's front edge is 0.14 m ahead of p; the ellipsoid reaches ~0.20 m forward.
-    assert 0.32 <= along <= 0.36
+    # The seat's front edge is 0.14 m ahead of p; the ellipsoid reaches ~0.20 m forward;
+    # the chair's solid stands up to a cell's diagonal outside its surface.
+    assert 0.32 <= along <= 0.36 + collision.CHAIR_CELL_M
     # p slid just far enough for the reach model (the seat is 0.24 m high, the seat front
     # 0.19 m ahead of the NAO: d_max about 0.32 m).
     model = reach_model()
@@ -147,7 +148,7 @@ def test_goal_in_the_wall_behind_a_chair_at_the_arena_edge_is_pushed_clear() -> 
     # At the arm-side edge, turned 34 degrees: the first spot clear of the chair puts the
     # NAO's front in the wall; the goal moves on along the ray and p slides to reach.
     chair_mesh, sitting_pose = _placed_chair(0.36, 0.16, -34.0, seat_depth_m=0.36)
-    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
+    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_solid_boxes(chair_mesh))
     chair_clear_along = 0.0
     while checker.collides_with_chair(goal_on_ray(sitting_pose, chair_clear_along)):
         chair_clear_along += STEP_M
@@ -195,7 +196,7 @@ def test_a_short_footrest_is_stepped_over_from_the_walking_stance() -> None:
         transform=trimesh.transformations.translation_matrix((0.6 + 0.14 + 0.08, 0.0, 0.12)),
     )
     chair_mesh = trimesh.util.concatenate([chair_mesh, footrest])
-    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
+    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_solid_boxes(chair_mesh))
     result = _check(chair_mesh, sitting_pose)
     assert result.accessible, result.reason
     assert result.step_in_from is not None and result.raise_at is None
@@ -207,20 +208,26 @@ def test_a_short_footrest_is_stepped_over_from_the_walking_stance() -> None:
     assert result.se2_goal.x - 0.10 >= bar_front_x - 1e-6
 
 
-def test_moved_chair_reuses_its_decomposition(monkeypatch: pytest.MonkeyPatch) -> None:
-    chair_mesh, _ = _placed_chair(0.6, 0.0, 0.0)
-    pieces = chair_convex_pieces(chair_mesh)
-    T = yaw_transform(math.radians(70.0), np.array([0.1, -0.05, 0.0]))
-    moved = chair_mesh.copy().apply_transform(T)
+def test_chair_solid_holds_the_surface_and_closes_the_space_under_the_seat() -> None:
+    chair_mesh, _ = _placed_chair(0.6, 0.1, 35.0)
+    boxes = np.array(chair_solid_boxes(chair_mesh))
+    lower, upper = boxes[:, 0], boxes[:, 1]
 
-    def no_vhacd(mesh):
-        raise AssertionError("V-HACD should not run for a rigidly moved chair")
+    # The solid is built from surface samples half a cell apart: a sliver of the surface
+    # between them may stand out by a millimetre.
+    def inside(points: np.ndarray, tolerance_m: float = 0.002) -> np.ndarray:
+        within = (points[:, None] >= lower - tolerance_m) & (points[:, None] <= upper + tolerance_m)
+        return np.any(np.all(within, axis=2), axis=1)
 
-    monkeypatch.setattr(collision, "convex_pieces", no_vhacd)
-    moved_pieces = chair_convex_pieces(moved)
-    assert len(moved_pieces) == len(pieces)
-    expected = np.vstack([p.copy().apply_transform(T).vertices for p in pieces])
-    assert np.allclose(np.vstack([p.vertices for p in moved_pieces]), expected, atol=1e-6)
+    surface = trimesh.sample.sample_surface(chair_mesh, 2000, seed=0)[0]
+    assert inside(surface).all()
+    # Under the seat (between the legs) is solid; beside the chair, a cell away, is not.
+    under_seat = np.array([[0.6, 0.1, 0.05]])
+    beside = chair_mesh.bounds[1] + np.array([collision.CHAIR_CELL_M + 0.005, 0.0, 0.0])
+    beside[2] = 0.1
+    assert inside(under_seat).all() and not inside(beside[None]).any()
+    checker = NaoCollisionChecker(DEFAULT_ARENA, list(boxes))
+    assert checker.collides_with_chair(SE2Pose(0.6, 0.1, 0.0))
 
 
 def test_bad_inputs_raise_one_line_errors() -> None:
@@ -412,7 +419,7 @@ def test_a_ray_turned_about_p_is_searched_when_the_imagined_one_fails() -> None:
     from skills.planning.stance import MAX_PREPLANS, PREPLANS_PER_TURN, TURNS_RAD
 
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.1, 30.0)
-    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_convex_pieces(chair_mesh))
+    checker = NaoCollisionChecker(DEFAULT_ARENA, chair_solid_boxes(chair_mesh))
     asked: list[float] = []
 
     def off_the_imagined_ray_only(chair, pose, se2_goal) -> SeatingCheck:

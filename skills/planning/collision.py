@@ -2,8 +2,8 @@
 
 The paper (section "Motion Planning") encloses the walking NAO in an ellipsoid and checks
 it with FCL against the scene. Here the scene is the planning arena's walls (boxes just
-outside its edges), its fixed obstacles (the arm's base) and the chair as its convex
-pieces (V-HACD, :func:`skills.meshes.convex_pieces`), all in the world frame.
+outside its edges), its fixed obstacles (the arm's base) and the chair as the solid
+under its surface (:func:`chair_solid_boxes`), all in the world frame.
 
 The NAO ellipsoid (body frame: x forward, y left, z up) has semi-axes
 :data:`NAO_SEMI_AXES_M` and its centre :data:`NAO_CENTRE_FORWARD_M` ahead of the robot's
@@ -21,7 +21,6 @@ vertical axis, :data:`NAO_CENTRE_HEIGHT_M` above the floor:
 from __future__ import annotations
 
 import math
-from collections import OrderedDict
 
 import fcl
 import numpy as np
@@ -29,7 +28,7 @@ import trimesh
 
 from skills.arena import Arena, Box2D
 from skills.geometry import SE2Pose, rot_z
-from skills.meshes import convex_pieces, mesh_digest
+from skills.meshes import solid_below_surface_boxes
 
 NAO_SEMI_AXES_M = (0.165, 0.14, 0.29)
 """Semi-axes (forward, lateral, vertical) of the NAO's enclosing ellipsoid, metres."""
@@ -43,10 +42,10 @@ NAO_CENTRE_HEIGHT_M = 0.29
 WALL_THICKNESS_M = 0.2
 WALL_HEIGHT_M = 1.0
 
-_PIECES_CACHE_SIZE = 8
-# faces digest -> (vertices (N, 3), convex pieces): lets a rigidly moved copy of a chair
-# (the same mesh after the helper turned it) reuse its decomposition without V-HACD.
-_pieces_cache: OrderedDict[str, tuple[np.ndarray, list[trimesh.Trimesh]]] = OrderedDict()
+CHAIR_CELL_M = 0.01
+"""Column size of the chair's solid, metres: the spacing of the validity checks along a
+motion (``se2.CHECK_RESOLUTION_M``). The solid's outline lies at most one cell outside
+the chair's surface, so a stance is judged at most this much too near."""
 
 
 def nao_geometry() -> fcl.Ellipsoid:
@@ -63,53 +62,28 @@ def nao_transform(pose: SE2Pose) -> fcl.Transform:
     return fcl.Transform(rot_z(pose.theta), centre)
 
 
-def chair_convex_pieces(chair_mesh: trimesh.Trimesh) -> list[trimesh.Trimesh]:
-    """Convex pieces of a chair, reusing an earlier decomposition of the same chair moved.
+def chair_solid_boxes(chair_mesh: trimesh.Trimesh) -> list[np.ndarray]:
+    """The chair as the walking NAO meets it: every column under its surface, as boxes.
 
-    When a mesh with identical faces was decomposed before and the vertices differ only by
-    a rigid motion (residual below 0.1 mm), that motion is applied to the cached pieces;
-    otherwise :func:`skills.meshes.convex_pieces` (disk-cached V-HACD) runs.
+    The NAO's ellipsoid reaches the floor, so the space under a seat is as closed to it
+    as the seat itself; a scanned chair is an open surface with no inside, which only a
+    solid can stand for. :func:`skills.meshes.solid_below_surface_boxes` fills each
+    :data:`CHAIR_CELL_M` column from its highest surface point to the floor and merges
+    the columns into a few boxes (tens to a few hundred on a chair, in about 0.1 s),
+    with no decomposition to run or cache.
+
+    Args:
+        chair_mesh: the chair, world frame, z up, metres.
+
+    Returns:
+        One (2, 3) array of (lower, upper) corners per box, world frame, metres.
     """
-    faces_key = mesh_digest(trimesh.Trimesh(np.zeros((0, 3)), chair_mesh.faces, process=False))
-    faces_key += f"-{len(chair_mesh.vertices)}"
-    vertices = np.asarray(chair_mesh.vertices, dtype=np.float64)
-    cached = _pieces_cache.get(faces_key)
-    if cached is not None:
-        transform = _rigid_fit(cached[0], vertices)
-        if transform is not None:
-            _pieces_cache.move_to_end(faces_key)
-            return [piece.copy().apply_transform(transform) for piece in cached[1]]
-    pieces = convex_pieces(chair_mesh)
-    _pieces_cache[faces_key] = (vertices.copy(), pieces)
-    while len(_pieces_cache) > _PIECES_CACHE_SIZE:
-        _pieces_cache.popitem(last=False)
-    return pieces
+    return solid_below_surface_boxes(chair_mesh, pitch_m=CHAIR_CELL_M)
 
 
-def _rigid_fit(
-    source: np.ndarray, target: np.ndarray, tolerance_m: float = 1e-4
-) -> np.ndarray | None:
-    """The 4x4 rigid motion mapping ``source`` onto ``target`` (Kabsch), or None if none fits."""
-    if source.shape != target.shape or len(source) < 3:
-        return None
-    source_centre, target_centre = source.mean(axis=0), target.mean(axis=0)
-    covariance = (source - source_centre).T @ (target - target_centre)
-    u, _, vt = np.linalg.svd(covariance)
-    sign = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
-    rotation = vt.T @ np.diag([1.0, 1.0, sign]) @ u.T
-    translation = target_centre - rotation @ source_centre
-    residual = np.abs(source @ rotation.T + translation - target).max()
-    if residual > tolerance_m:
-        return None
-    transform = np.eye(4)
-    transform[:3, :3], transform[:3, 3] = rotation, translation
-    return transform
-
-
-def _convex(piece: trimesh.Trimesh) -> fcl.Convex:
-    faces = np.asarray(piece.faces, dtype=np.int64)
-    flat = np.hstack([np.full((len(faces), 1), 3, dtype=np.int64), faces]).ravel()
-    return fcl.Convex(np.asarray(piece.vertices, dtype=np.float64), len(faces), flat)
+def _corner_box_object(corners: np.ndarray) -> fcl.CollisionObject:
+    lower, upper = np.asarray(corners, dtype=np.float64)
+    return fcl.CollisionObject(fcl.Box(*(upper - lower)), fcl.Transform((lower + upper) / 2.0))
 
 
 def _box_object(box: Box2D) -> fcl.CollisionObject:
@@ -156,20 +130,19 @@ class NaoCollisionChecker:
         arena: the planning arena (walls and fixed obstacles).
     """
 
-    def __init__(self, arena: Arena, chair_pieces: list[trimesh.Trimesh]) -> None:
+    def __init__(self, arena: Arena, chair_boxes: list[np.ndarray]) -> None:
         """Builds the FCL scene.
 
         Args:
             arena: walls and fixed obstacles, world frame.
-            chair_pieces: the chair's convex pieces in the world frame.
+            chair_boxes: the chair's solid (:func:`chair_solid_boxes`): (2, 3) arrays of
+                lower and upper corners, world frame, metres.
         """
         self.arena = arena
         self._nao = fcl.CollisionObject(nao_geometry(), fcl.Transform())
         self._walls = _ObjectGroup([_box_object(box) for box in wall_boxes(arena)])
         self._obstacles = _ObjectGroup([_box_object(box) for box in arena.obstacles])
-        self._chair = _ObjectGroup(
-            [fcl.CollisionObject(_convex(p), fcl.Transform()) for p in chair_pieces]
-        )
+        self._chair = _ObjectGroup([_corner_box_object(box) for box in chair_boxes])
         self.checks = 0
 
     def _placed(self, pose: SE2Pose) -> fcl.CollisionObject:

@@ -35,7 +35,7 @@ from ompl import util as ou
 
 from skills.arena import Arena
 from skills.geometry import SE2Pose, SittingPose, wrap_angle
-from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
+from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from skills.planning.seat import seat_support_heights
 from skills.planning.stance import (
     SeatingCheck,
@@ -309,7 +309,7 @@ def check_accessibility(
     if not all(math.isfinite(v) for v in humanoid_pose):
         raise AccessibilityError("the humanoid's pose is not finite")
 
-    checker = NaoCollisionChecker(arena, chair_convex_pieces(chair_mesh))
+    checker = NaoCollisionChecker(arena, chair_solid_boxes(chair_mesh))
     validator = seating_validator or default_seating_validator()
     choice = choose_stance(chair_mesh, sitting_pose, checker, validator, scene=True)
     if choice.se2_goal is None:

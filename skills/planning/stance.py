@@ -47,7 +47,7 @@ import trimesh
 
 from skills.arena import Arena, Box2D
 from skills.geometry import SE2Pose, SittingPose, wrap_angle
-from skills.planning.collision import NaoCollisionChecker, chair_convex_pieces
+from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from skills.planning.seat import STEP_M, SeatRay, seat_ray
 from skills.planning.wholebody.chair_profile import (
     BAND_HALF_WIDTH_M,
@@ -476,7 +476,7 @@ def check_seat_reachable(
     if len(seat_ray(chair_mesh, sitting_pose).slides_m) == 0:
         p_z = float(sitting_pose.position[2])
         return SeatReachability(False, "no seat under the sitting position", p_z)
-    checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_convex_pieces(chair_mesh))
+    checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_solid_boxes(chair_mesh))
     validator = seating_validator or default_seating_validator()
     choice = choose_stance(chair_mesh, sitting_pose, checker, validator, scene=False)
     p0 = np.asarray(sitting_pose.position, dtype=float)
