@@ -21,14 +21,16 @@ Prints the success rate per stage and per family, the refusals with their reason
 the worst families. Usage::
 
     .venv/bin/python bench/generalization.py [--chairs 200] [--seed 0] [--imagine]
-        [--seat] [--family sled] [--verbose]
+        [--seat] [--family sled] [--workers 2] [--verbose]
     .venv/bin/python bench/generalization.py --calibration 24
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
+import multiprocessing
 import statistics
 import sys
 import time
@@ -252,6 +254,33 @@ def calibration_reach(limit: int | None) -> None:
     print(f"calibration chairs refused: {refused}/{len(chairs)}")
 
 
+def _run_job(job: tuple[int, str, argparse.Namespace]) -> Outcome:
+    seed, family, args = job
+    return run_chair(generate_chair(seed, family), seed, args.imagine, args.seat)
+
+
+def _status_line(outcome: Outcome) -> str:
+    chair = outcome.chair
+    status = "refused" if outcome.refused else ("ok" if outcome.accessible else "FAIL")
+    status += "" if outcome.in_workspace else " (beyond the workspace)"
+    if outcome.seated is not None:
+        status += ", seated" if outcome.seated else ", NOT SEATED"
+    return (
+        f"{chair.name}: seat {chair.seat_height_m:.2f} h {chair.seat_depth_m:.2f} d "
+        f"{status} {outcome.reason[:140]}"
+    )
+
+
+@contextlib.contextmanager
+def _pool(workers: int):
+    """``map`` over the jobs in order: in this process, or in ``workers`` processes."""
+    if workers <= 1:
+        yield map
+        return
+    with multiprocessing.get_context("spawn").Pool(workers) as pool:
+        yield lambda function, jobs: pool.imap(function, jobs)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--chairs", type=int, default=200)
@@ -260,6 +289,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seat", action="store_true", help="seat the bear in simulation")
     parser.add_argument("--family", choices=FAMILIES, help="only this family")
     parser.add_argument("--verbose", action="store_true", help="a line per chair")
+    parser.add_argument("--workers", type=int, default=1, help="processes (chairs are independent)")
     parser.add_argument(
         "--calibration",
         type=int,
@@ -271,27 +301,19 @@ def main(argv: list[str] | None = None) -> int:
         calibration_reach(args.calibration)
         return 0
     families = (args.family,) if args.family else FAMILIES
+    jobs = [(args.seed + i, families[i % len(families)], args) for i in range(args.chairs)]
     outcomes = []
     began = time.perf_counter()
-    for i in range(args.chairs):
-        chair = generate_chair(args.seed + i, families[i % len(families)])
-        outcome = run_chair(chair, args.seed + i, args.imagine, args.seat)
-        outcomes.append(outcome)
-        if args.verbose:
-            status = "refused" if outcome.refused else ("ok" if outcome.accessible else "FAIL")
-            status += "" if outcome.in_workspace else " (beyond the workspace)"
-            if outcome.seated is not None:
-                status += ", seated" if outcome.seated else ", NOT SEATED"
-            print(
-                f"{chair.name}: seat {chair.seat_height_m:.2f} h {chair.seat_depth_m:.2f} d "
-                f"{status} {outcome.reason[:140]}",
-                flush=True,
-            )
-        elif (i + 1) % 20 == 0:
-            print(
-                f"  {i + 1}/{args.chairs} chairs, {time.perf_counter() - began:.0f} s",
-                file=sys.stderr,
-            )
+    with _pool(args.workers) as pool:
+        for outcome in pool(_run_job, jobs):
+            outcomes.append(outcome)
+            if args.verbose:
+                print(_status_line(outcome), flush=True)
+            elif len(outcomes) % 20 == 0:
+                print(
+                    f"  {len(outcomes)}/{args.chairs} chairs, {time.perf_counter() - began:.0f} s",
+                    file=sys.stderr,
+                )
     report(outcomes)
     return 0
 
