@@ -67,10 +67,14 @@ def ground_truth_pose(chair: GeneratedChair) -> SittingPose:
     return SittingPose(np.array([x, 0.0, chair.seat_height_m + PELVIS_ABOVE_SEAT_M]), 0.0)
 
 
-def imagined_pose(chair: GeneratedChair, seed: int) -> tuple[SittingPose | None, bool]:
+def imagined_pose(
+    chair: GeneratedChair, seed: int, workers: int = 2
+) -> tuple[SittingPose | None, bool]:
+    """The imagined sitting pose, and whether its direction is within the tolerance
+    (``workers``: the imagination's processes; a seed gives the same pose for any)."""
     from skills.imagination import imagine_sitting
 
-    result = imagine_sitting(chair.mesh, seed=seed)
+    result = imagine_sitting(chair.mesh, seed=seed, workers=workers)
     pose = result.sitting_pose
     if pose is None:
         return None, False
@@ -93,16 +97,20 @@ def seat_in_simulation(chair: GeneratedChair, seed: int) -> tuple[bool, str]:
         return sim_run(path, 0.0, seed)
 
 
-def run_chair(chair: GeneratedChair, seed: int, imagine: bool, seat: bool = False) -> Outcome:
-    outcome = _run_stages(chair, seed, imagine, seat)
+def run_chair(
+    chair: GeneratedChair, seed: int, imagine: bool, seat: bool = False, workers: int = 2
+) -> Outcome:
+    outcome = _run_stages(chair, seed, imagine, seat, workers)
     truth = check_seat_reachable(chair.mesh, ground_truth_pose(chair))
     return outcome._replace(in_workspace=truth.reachable)
 
 
-def _run_stages(chair: GeneratedChair, seed: int, imagine: bool, seat: bool) -> Outcome:
+def _run_stages(
+    chair: GeneratedChair, seed: int, imagine: bool, seat: bool, workers: int
+) -> Outcome:
     rng = np.random.default_rng(seed)
     if imagine:
-        sitting, direction_ok = imagined_pose(chair, seed)
+        sitting, direction_ok = imagined_pose(chair, seed, workers)
         if sitting is None:
             return Outcome(chair, False, "", False, "imagination found no sitting pose", 0.0)
     else:
@@ -256,7 +264,9 @@ def calibration_reach(limit: int | None) -> None:
 
 def _run_job(job: tuple[int, str, argparse.Namespace]) -> Outcome:
     seed, family, args = job
-    return run_chair(generate_chair(seed, family), seed, args.imagine, args.seat)
+    # The bench's own processes take the cores: each imagination runs in its process.
+    workers = 1 if args.workers > 1 else 2
+    return run_chair(generate_chair(seed, family), seed, args.imagine, args.seat, workers)
 
 
 def _status_line(outcome: Outcome) -> str:
