@@ -19,8 +19,8 @@ Seat height: the chair seen from above as a height map of 1 cm columns (the high
 (normal within 25 degrees of straight up), the 1 cm height band between 0.12 m and
 0.5 m above the floor holding the most columns is the seat, and its mean height the
 seat's top. Hidden faces are left out because closed modelled meshes have upward faces
-inside them (chair-synth-02's seat frame under its cushion, 5 cm below the top), which
-a camera never sees.
+inside them (a seat frame under a modelled cushion, a few centimetres below its top),
+which a camera never sees.
 
 The machine is shared: wall times are inflated by other processes.
 """
