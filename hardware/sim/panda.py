@@ -237,62 +237,6 @@ class SimPanda:
         timers.noise_s += time.perf_counter() - started
         return RGBDFrame(rgb, depth, intrinsics, T_world_camera, stamp_s)
 
-    def joints_looking_at(
-        self,
-        eye: Sequence[float],
-        target: Sequence[float],
-        rest_joints: Sequence[float] | None = None,
-        starts: int = 8,
-        seed: int = 0,
-    ) -> tuple[np.ndarray, float]:
-        """Joint angles putting the camera at ``eye`` looking at ``target``, image about upright.
-
-        Bounded nonlinear least squares over the 7 joints on forward kinematics (pybullet
-        link state): residuals are the camera position error (m), 0.3 x the optical-axis
-        error, 0.05 x the error of the image's down axis against the upright one and
-        0.003 x the distance from ``rest_joints`` (soft preferences), from ``rest_joints`` and ``starts - 1`` seeded random starts. Does
-        not move the arm (its state is restored). A helper for choosing scan configurations.
-
-        Returns:
-            (joint angles (7,), camera position error in metres).
-        """
-        from scipy.optimize import least_squares
-
-        desired = look_at(np.asarray(eye, float), np.asarray(target, float))
-        rng = np.random.default_rng(seed)
-        rest = np.asarray(PANDA_READY_RAD if rest_joints is None else rest_joints, dtype=float)
-        with self._bullet.lock:
-            saved = self.joint_positions()
-
-            def residual(joints: np.ndarray) -> np.ndarray:
-                for joint, angle in enumerate(joints):
-                    self._bullet.resetJointState(self.body, joint, float(angle))
-                T_world_camera = self.T_world_camera()
-                return np.concatenate(
-                    [
-                        T_world_camera[:3, 3] - desired[:3, 3],
-                        0.3 * (T_world_camera[:3, 2] - desired[:3, 2]),
-                        0.05 * (T_world_camera[:3, 1] - desired[:3, 1]),
-                        0.003 * (joints - rest),
-                    ]
-                )
-
-            best = None
-            for index in range(starts):
-                initial = rest if index == 0 else rng.uniform(self.lower_limits, self.upper_limits)
-                initial = np.clip(initial, self.lower_limits + 1e-3, self.upper_limits - 1e-3)
-                result = least_squares(
-                    residual, initial, bounds=(self.lower_limits, self.upper_limits), diff_step=1e-4
-                )
-                if best is None or result.cost < best.cost:
-                    best = result
-            joints = np.asarray(best.x)
-            residual(joints)
-            error = float(np.linalg.norm(self.T_world_camera()[:3, 3] - desired[:3, 3]))
-            for joint, angle in enumerate(saved):
-                self._bullet.resetJointState(self.body, joint, float(angle))
-        return joints, error
-
     def _command(self, target: np.ndarray) -> None:
         with self._bullet.lock:
             for joint in range(ARM_JOINTS):

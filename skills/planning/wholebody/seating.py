@@ -237,17 +237,6 @@ def _radius_of(label: str) -> float:
     raise KeyError(label)
 
 
-def solve_goal_posture(problems: SeatingProblems, scene: SeatingScene) -> tuple[np.ndarray, float]:
-    """q_goal (eq. 12-16) and its solve time in seconds: the first feasible candidate.
-
-    Raises:
-        InfeasibleSeating: naming the violated constraint.
-    """
-    started = time.perf_counter()
-    q_goal = next(goal_posture_candidates(problems, scene))
-    return q_goal, time.perf_counter() - started
-
-
 def goal_posture_candidates(problems: SeatingProblems, scene: SeatingScene) -> Iterator[np.ndarray]:
     """Feasible goal postures (eq. 12-16), one per initial guess that reaches one.
 
