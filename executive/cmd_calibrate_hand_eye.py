@@ -19,8 +19,10 @@ as ``T_world_base @ O_T_EE @ inv(F_T_EE) @ T_flange_camera`` with the cell file'
 
 Exit status: 0 solved, the board's pose agreeing over the views within
 :data:`~skills.perception.hand_eye.MAX_SPREAD_MM` and
-:data:`~skills.perception.hand_eye.MAX_SPREAD_DEG`; 1 solved but the views disagree more
-(the answer is printed, marked not to use); 2 a wrong cell file or views file, the
+:data:`~skills.perception.hand_eye.MAX_SPREAD_DEG`, and the depth camera's distance to the
+board within :data:`~skills.perception.hand_eye.MAX_SCALE_ERROR` of what the printed
+size gives (the residuals cannot see a wrong square size); 1 solved but one of those
+fails (the answer is printed, marked not to use); 2 a wrong cell file or views file, the
 operator said no, too few views with the board, rotations too alike.
 """
 
@@ -95,6 +97,8 @@ class View(NamedTuple):
         T_base_flange: the flange in the arm's base frame (4x4, metres).
         detection: the board's pose in the camera frame, None when it was not seen.
         note: why the board was not seen.
+        depth_ratio: the depth image's distance to the board over its pose's
+            (:func:`skills.perception.hand_eye.board_depth_ratio`), None without depth.
     """
 
     name: str
@@ -102,6 +106,7 @@ class View(NamedTuple):
     T_base_flange: np.ndarray
     detection: Any | None
     note: str = ""
+    depth_ratio: float | None = None
 
 
 def _error(message: str) -> Exception:
@@ -153,7 +158,8 @@ def _rescaled(view: View, factor: float) -> View:
         return view
     T = view.detection.T_camera_board.copy()
     T[:3, 3] *= factor
-    return view._replace(detection=view.detection._replace(T_camera_board=T))
+    ratio = None if view.depth_ratio is None else view.depth_ratio / factor
+    return view._replace(detection=view.detection._replace(T_camera_board=T), depth_ratio=ratio)
 
 
 def _write_board(args: argparse.Namespace) -> int:
@@ -184,7 +190,7 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     from executive.cli import _ask
     from executive.cmd_check_hardware import MOVE_SPEED_FACTOR, _within
     from executive.interrupts import emergency_stop_on_second_signal
-    from hardware.real import robots
+    from hardware.real import BackendUnavailable, robots
     from skills.perception.hand_eye import BOARD_CENTRE_BASE_XY_M, CALIBRATION_CONFIGURATIONS
     from skills.perception.views import HOME_CONFIGURATION
 
@@ -214,10 +220,12 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     T_base_world = np.linalg.inv(cell.T_world_base)
     T_camera_flange = np.linalg.inv(cell.T_flange_camera)
     views: list[View] = []
+    where = "HOME"
     with emergency_stop_on_second_signal(arm.emergency_stop):
         try:
             arm.move_to(HOME_CONFIGURATION, timeout_s=MOVE_TIMEOUT_S)
             for index, joints in enumerate(CALIBRATION_CONFIGURATIONS[:count]):
+                where = f"view calib{index}"
                 arm.move_to(joints, timeout_s=MOVE_TIMEOUT_S)
                 time.sleep(SETTLE_S)
                 _within(args.timeout, arm.capture)  # a frame buffered during the motion
@@ -226,8 +234,14 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
                 view = _detect(f"calib{index}", arm.joint_positions(), T_base_flange, frame, board)
                 _print_view(view)
                 views.append(view)
+                where = f"HOME after view calib{index}"
                 arm.move_to(HOME_CONFIGURATION, timeout_s=MOVE_TIMEOUT_S)
-        except BaseException:  # a fault, a timeout, Ctrl-C: stop the arm, then report
+        except Exception as error:  # a fault, a timeout, a camera error: stop, one line
+            arm.emergency_stop()
+            raise BackendUnavailable(
+                f"calibrate-hand-eye: stopped the Panda on the way to {where}: {error}"
+            ) from error
+        except BaseException:  # Ctrl-C, SIGTERM: stop the arm, then let it through
             arm.emergency_stop()
             raise
     return views
@@ -237,14 +251,15 @@ def _detect(
     name: str, joints: Sequence[float], T_base_flange: np.ndarray, frame: Any, board: Any
 ) -> View:
     from skills.perception.errors import BoardNotSeenError
-    from skills.perception.hand_eye import detect_board
+    from skills.perception.hand_eye import board_depth_ratio, detect_board
 
     configuration = tuple(round(float(q), 4) for q in joints)
     try:
         detection = detect_board(frame.rgb, frame.intrinsics, board)
     except BoardNotSeenError as error:
         return View(name, configuration, T_base_flange, None, str(error))
-    return View(name, configuration, T_base_flange, detection)
+    ratio = board_depth_ratio(detection, frame.depth_m, frame.intrinsics, board)
+    return View(name, configuration, T_base_flange, detection, depth_ratio=ratio)
 
 
 def _print_view(view: View) -> None:
@@ -252,16 +267,23 @@ def _print_view(view: View) -> None:
         print(f"[warn] view {view.name}: {view.note}", flush=True)
         return
     distance = float(np.linalg.norm(view.detection.T_camera_board[:3, 3]))
+    depth = "no depth on it" if view.depth_ratio is None else f"depth/board {view.depth_ratio:.3f}"
     print(
         f"[  ok] view {view.name}: board {distance:.3f} m away, {view.detection.corners} "
-        f"corners, {view.detection.reprojection_rms_px:.2f} px RMS",
+        f"corners, {view.detection.reprojection_rms_px:.2f} px RMS, {depth}",
         flush=True,
     )
 
 
 def _solve_and_report(views: list[View], board: Any, out: Path | None) -> int:
     from skills.perception.errors import HandEyeError
-    from skills.perception.hand_eye import MAX_SPREAD_DEG, MAX_SPREAD_MM, MIN_VIEWS, solve_hand_eye
+    from skills.perception.hand_eye import (
+        MAX_SCALE_ERROR,
+        MAX_SPREAD_DEG,
+        MAX_SPREAD_MM,
+        MIN_VIEWS,
+        solve_hand_eye,
+    )
 
     seen = [view for view in views if view.detection is not None]
     if len(seen) < MIN_VIEWS:
@@ -283,18 +305,34 @@ def _solve_and_report(views: list[View], board: Any, out: Path | None) -> int:
         f"{residuals.max_mm:.2f} mm (RMS {residuals.rms_mm:.2f}) and {residuals.max_deg:.3f} deg "
         f"(RMS {residuals.rms_deg:.3f})"
     )
+    ratios = [view.depth_ratio for view in seen if view.depth_ratio is not None]
+    scale = float(np.median(ratios)) if ratios else None
+    if scale is None:
+        print("calibrate-hand-eye: no depth on the board: its printed size is not checked")
+    else:
+        print(
+            f"calibrate-hand-eye: the depth camera puts the board at {scale:.3f} of the "
+            f"distance its {board.square_m * 1000:g} mm squares give (median of {len(ratios)} views)"
+        )
     print("T_flange_camera for the cell file:")
     print(json.dumps(result.cell_entry()))
     if out is not None:
         _write_views(out, views, board, result)
         print(f"views and answer: {out}")
-    if residuals.acceptable():
+    problems = []
+    if not residuals.acceptable():
+        problems.append(
+            f"the views disagree by more than {MAX_SPREAD_MM:g} mm or {MAX_SPREAD_DEG:g} deg "
+            "(a board that moved, wrong intrinsics?)"
+        )
+    if scale is not None and abs(scale - 1.0) > MAX_SCALE_ERROR:
+        problems.append(
+            f"the depth camera measures the board {100 * (scale - 1):+.1f} % from its printed "
+            f"size (at most {100 * MAX_SCALE_ERROR:g} %): measure a square and give --square-mm"
+        )
+    if not problems:
         return 0
-    print(
-        f"calibrate-hand-eye: NOT GOOD ENOUGH: the views disagree by more than {MAX_SPREAD_MM:g} mm "
-        f"or {MAX_SPREAD_DEG:g} deg (a moved board, a wrong --square-mm, wrong intrinsics?): "
-        "do not use this answer"
-    )
+    print(f"calibrate-hand-eye: NOT GOOD ENOUGH: {'; '.join(problems)}: do not use this answer")
     return 1
 
 
@@ -318,6 +356,7 @@ def _write_views(path: Path, views: list[View], board: Any, result: Any) -> None
                 "reprojection_rms_px": None
                 if view.detection is None
                 else round(view.detection.reprojection_rms_px, 4),
+                "depth_ratio": None if view.depth_ratio is None else round(view.depth_ratio, 5),
                 "note": view.note,
             }
             for view in views
@@ -351,6 +390,7 @@ def _load_views(path: Path) -> tuple[Any, list[View]]:
                     np.asarray(entry["T_base_flange"], dtype=float),
                     detection,
                     str(entry.get("note", "")),
+                    None if entry.get("depth_ratio") is None else float(entry["depth_ratio"]),
                 )
             )
     except (KeyError, TypeError, ValueError) as error:
