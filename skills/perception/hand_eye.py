@@ -143,9 +143,10 @@ CALIBRATION_CONFIGURATIONS: tuple[tuple[float, ...], ...] = (
     # the camera 0.5 m from the board's centre, looking at it, tilted from vertical by
     # `tilt`, from the side `azimuth` (0 = beyond the board, 180 = from the arm), turned
     # about the optical axis by `roll`; joints 0.05 rad inside panda-py's walls, close to
-    # HOME. The straight joint-space motion from HOME to each keeps every link above
-    # link 1 at least 0.26 m above the floor. tests/test_hand_eye.py checks all of that
-    # and that the board is in view from each.
+    # HOME. Along the straight joint-space motion from HOME to each, every link from
+    # panda_link2 on (the base and panda_link1 stand on the floor) stays 0.26 m above the
+    # floor. tests/test_hand_eye.py checks that (> 0.25 m), the walls, and that a board
+    # anywhere within 5 cm of its place, at any yaw, is in view from each.
     # tilt 20, azimuth 180, roll 0
     (-0.0554, -0.6978, 0.0527, -2.7020, 0.0519, 2.3463, 0.7464),
     # tilt 30, azimuth 150, roll 30
