@@ -34,6 +34,7 @@ SKILL_COMMANDS = (
     "executive.cmd_scan",
     "executive.cmd_trials",
     "executive.cmd_check_hardware",
+    "executive.cmd_calibrate_hand_eye",
     "executive.cmd_view",
 )
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from skills.errors import BearchairError
+
 
 class PerceptionError(RuntimeError):
     """The camera data cannot give an answer: bad frames, no chair, too few points."""
@@ -9,3 +11,12 @@ class PerceptionError(RuntimeError):
 
 class RegistrationError(PerceptionError):
     """Registration of the chair's new view to its reference failed its quality checks."""
+
+
+class HandEyeError(PerceptionError, BearchairError):
+    """The hand-eye calibration cannot give a trustworthy answer (too few poses, rotations
+    too alike, inconsistent inputs): one line, exit status 2 on the command line."""
+
+
+class BoardNotSeenError(HandEyeError):
+    """The calibration board is not in a frame, or too little of it to fix its pose."""

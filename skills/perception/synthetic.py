@@ -1,10 +1,11 @@
 """Rendered RGB-D frames for tests and benchmarks (not a simulated world).
 
 A minimal, physics-free pybullet scene (DIRECT client, TinyRenderer) holding meshes,
-a floor and ArUco tags, rendered from any camera pose with a Carmine-like depth noise
+a floor, ArUco tags and ChArUco calibration boards, rendered from any camera pose with a Carmine-like depth noise
 model; and :class:`SyntheticArm`, a :class:`hardware.interfaces.ScanningArm` whose camera
 pose comes from the Panda's forward kinematics. The mission uses ``hardware.sim``;
 this module exists so the perception algorithms can be tested on their own.
+:func:`board_view` draws a calibration board by its homography alone (no pybullet).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import math
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -22,6 +24,9 @@ import trimesh
 
 from hardware.interfaces import CameraIntrinsics, RGBDFrame
 from skills.arena import TagSpec
+
+if TYPE_CHECKING:
+    from skills.perception.hand_eye import BoardSpec
 
 # The OpenGL camera looks along -z with y up; OpenCV looks along +z with y down.
 _GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
@@ -146,6 +151,42 @@ class SyntheticScene:
             body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1], physicsClientId=self.client
         )
         self.set_pose(body, T_world_tag)
+        return body
+
+    def add_board(self, board: BoardSpec, T_world_board: np.ndarray) -> int:
+        """Adds a printed ChArUco board (white margin of half a square) at ``T_world_board``.
+
+        The body's frame is the board's (:mod:`skills.perception.hand_eye`): origin at the
+        outer top-left chessboard corner, x along its rows, y down its columns, z into the
+        board; the printed face looks along -z.
+        """
+        from skills.perception.hand_eye import board_image
+
+        pixels_per_square = 60
+        image = board_image(board, pixels_per_square=pixels_per_square, margin_squares=0.5)
+        metres_per_px = board.square_m / pixels_per_square
+        margin_m = 0.5 * board.square_m
+        x0, y0 = -margin_m, -margin_m
+        x1, y1 = x0 + image.shape[1] * metres_per_px, y0 + image.shape[0] * metres_per_px
+        self._count += 1
+        png = Path(self._scratch.name) / f"board{self._count}.png"
+        cv2.imwrite(str(png), cv2.cvtColor(image, cv2.COLOR_GRAY2RGB))
+        obj = Path(self._scratch.name) / f"board{self._count}.obj"
+        # The image's top row is texture v = 1 and lies at board y = y0.
+        obj.write_text(
+            f"v {x0} {y0} 0\nv {x1} {y0} 0\nv {x1} {y1} 0\nv {x0} {y1} 0\n"
+            "vt 0 1\nvt 1 1\nvt 1 0\nvt 0 0\nvn 0 0 -1\n"
+            "f 1/1/1 3/3/1 2/2/1\nf 1/1/1 4/4/1 3/3/1\n"
+        )
+        shape = pybullet.createVisualShape(
+            pybullet.GEOM_MESH, fileName=str(obj), physicsClientId=self.client
+        )
+        body = pybullet.createMultiBody(0, -1, shape, physicsClientId=self.client)
+        texture = pybullet.loadTexture(str(png), physicsClientId=self.client)
+        pybullet.changeVisualShape(
+            body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1], physicsClientId=self.client
+        )
+        self.set_pose(body, T_world_board)
         return body
 
     def set_pose(self, body: int, T_world_body: np.ndarray) -> None:
@@ -278,6 +319,55 @@ class SyntheticArm:
 
     def close(self) -> None:
         self.kinematics.close()
+
+
+def board_view(
+    board: BoardSpec,
+    T_camera_board: np.ndarray,
+    intrinsics: CameraIntrinsics,
+    background: int = 110,
+    noise_grey: float = 2.0,
+    seed: int = 0,
+) -> np.ndarray:
+    """A camera's (H, W, 3) uint8 picture of a printed board at ``T_camera_board``.
+
+    The printed board (:func:`skills.perception.hand_eye.board_image`) is mapped by the
+    plane's homography ``K [r1 r2 t]`` at twice the resolution and averaged down 2 x 2
+    (so edges are anti-aliased as a lens and sensor would), on a grey background, with
+    Gaussian grey noise. Exact pinhole geometry, no distortion, no lighting.
+    """
+    from skills.perception.hand_eye import board_image
+
+    pixels_per_square = 120
+    margin_px = pixels_per_square // 2
+    image = board_image(board, pixels_per_square=pixels_per_square, margin_squares=0.5)
+    scale = board.square_m / pixels_per_square
+    # Board-image pixel centre (i, j) is board point ((i + 0.5 - margin) * scale, ...).
+    pixel_to_board = np.array(
+        [
+            [scale, 0.0, (0.5 - margin_px) * scale],
+            [0.0, scale, (0.5 - margin_px) * scale],
+            [0.0, 0.0, 1.0],
+        ]
+    )
+    # The double-resolution camera: pixel centres at 2 u + 0.5.
+    K2 = intrinsics.matrix() * np.array([[2.0], [2.0], [1.0]])
+    K2[0, 2] += 0.5
+    K2[1, 2] += 0.5
+    T = np.asarray(T_camera_board, dtype=float)
+    homography = K2 @ np.column_stack((T[:3, 0], T[:3, 1], T[:3, 3])) @ pixel_to_board
+    big = cv2.warpPerspective(
+        image,
+        homography,
+        (2 * intrinsics.width, 2 * intrinsics.height),
+        flags=cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=background,
+    )
+    grey = cv2.resize(big, (intrinsics.width, intrinsics.height), interpolation=cv2.INTER_AREA)
+    rng = np.random.default_rng(seed)
+    noisy = np.clip(grey + rng.normal(0.0, noise_grey, grey.shape), 0, 255).astype(np.uint8)
+    return cv2.cvtColor(noisy, cv2.COLOR_GRAY2RGB)
 
 
 def _quaternion_xyzw(rotation: np.ndarray) -> list[float]:
