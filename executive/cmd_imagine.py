@@ -4,8 +4,9 @@ Prints the sitting position (metres) and yaw (degrees from +x about +z, the dire
 the sitter faces) in the mesh's frame, the number of correct sittings and the time; or
 ``--json`` one JSON object with the keys found, position, yaw_deg, n_correct, n_drops,
 seconds, vote (how the correct sittings spread over the 8 rotations: counts, chosen_deg,
-runner_up_deg, share, split, resolved_by, extra_drops; null when none) and, when not
-found, reason. A mesh that is not a chair gives ``found: false`` and exit status 0; an
+runner_up_deg, share, split, resolved_by, extra_drops; null when none), backrest (the
+direction the backrest gives: yaw_deg, offset_m, disagreement_deg, used; null when the
+seat has no backrest) and, when not found, reason. A mesh that is not a chair gives ``found: false`` and exit status 0; an
 unreadable or empty file, or an ``--image`` that cannot be written (checked before the
 simulation), gives one line on stderr and status 2.
 """
@@ -75,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
             "n_drops": result.n_drops,
             "seconds": round(seconds, 3),
             "vote": result.vote.to_json() if result.vote is not None else None,
+            "backrest": result.backrest.to_json() if result.backrest is not None else None,
         }
         if not result.found:
             payload["reason"] = result.reason
@@ -89,6 +91,13 @@ def run(args: argparse.Namespace) -> int:
     print(f"correct sittings: {result.n_correct} of {result.n_drops} drops")
     if result.vote is not None:
         print(f"rotation vote:    {result.vote.describe()}")
+    if result.backrest is not None:
+        check = result.backrest
+        verdict = "taken instead" if check.used else "agrees"
+        print(
+            f"backrest:         faces {math.degrees(check.yaw_rad):.1f} deg, the vote's "
+            f"direction {math.degrees(check.disagreement_rad):+.1f} deg from it: {verdict}"
+        )
     print(
         f"time:             {seconds:.2f} s (prepare {result.seconds.get('prepare', 0.0):.2f} s, "
         f"simulate {result.seconds.get('simulate', 0.0):.2f} s)"

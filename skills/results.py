@@ -137,6 +137,8 @@ class ImaginationResult(NamedTuple):
         T_mesh_chair: 4x4 pose of the drops' chair frame (after g_obb) in the frame of
             the mesh given (None when no drop was simulated).
         vote: how the correct sittings were spread over the rotations (None when none).
+        backrest: the sitting direction checked against the backrest's
+            (``skills.imagination.backrest.BackrestCheck``; None when the seat has none).
     """
 
     found: bool
@@ -148,6 +150,7 @@ class ImaginationResult(NamedTuple):
     reason: str = ""
     T_mesh_chair: np.ndarray | None = None
     vote: RotationVote | None = None
+    backrest: Any = None
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -158,6 +161,7 @@ class ImaginationResult(NamedTuple):
             "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
             "reason": self.reason,
             "vote": None if self.vote is None else self.vote.to_json(),
+            "backrest": None if self.backrest is None else self.backrest.to_json(),
         }
 
 

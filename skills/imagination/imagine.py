@@ -41,6 +41,11 @@ The paper's procedure ("Sitting Imagination"):
    the vote of step 4 runs over them, if the chair has horizontal tops at sitting
    height at least as large as the pelvis's footprint (a table's top is too high).
 
+7. Beyond the paper, the direction checked against the chair's shape: the backrest's
+   direction (``skills.imagination.backrest``: from the centroid of what rises above
+   the seat to the seat's centroid) replaces the imagined one when the two disagree by
+   more than 30 degrees (a vote one rotation off on a round seat).
+
 Drops run in worker processes (each with its own pybullet DIRECT client), grouped one
 rotation per physics world. Each drop's small start jitter is seeded from
 (seed, rotation, position), so a seed gives the same result for any number of workers.
@@ -61,6 +66,7 @@ import trimesh
 
 from skills.geometry import SittingPose, transform_points, wrap_angle
 from skills.imagination.agent import LINKS, agent_urdf_path
+from skills.imagination.backrest import check_direction
 from skills.imagination.chair import (
     ChairPreparationError,
     PreparedChair,
@@ -260,6 +266,9 @@ def imagine_sitting_details(
     else:
         result = choose_sitting_pose(prepared, drops, seconds, raw, extra_drops=extra)
     result = result._replace(T_mesh_chair=np.linalg.inv(prepared.T_obb_mesh))
+    if result.sitting_pose is not None:
+        sitting_pose, backrest = check_direction(chair_mesh, result.sitting_pose, seed=seed)
+        result = result._replace(sitting_pose=sitting_pose, backrest=backrest)
     return ImaginationDetails(result, tuple(raw), steps, physics_seconds, prepared)
 
 
