@@ -132,26 +132,13 @@ class SyntheticScene:
         marker = cv2.aruco.generateImageMarker(dictionary, tag.marker_id, cells * cell_px)
         pad = int(border_cells * cell_px)
         image = cv2.copyMakeBorder(marker, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=255)
-        self._count += 1
-        png = Path(self._scratch.name) / f"tag{self._count}.png"
-        cv2.imwrite(str(png), cv2.cvtColor(image, cv2.COLOR_GRAY2RGB))
         half = 0.5 * tag.side_m * image.shape[0] / marker.shape[0]
-        obj = Path(self._scratch.name) / f"tag{self._count}.obj"
-        obj.write_text(
+        obj_text = (
             f"v {-half} {-half} 0\nv {half} {-half} 0\nv {half} {half} 0\nv {-half} {half} 0\n"
             "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\n"
             "f 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n"
         )
-        shape = pybullet.createVisualShape(
-            pybullet.GEOM_MESH, fileName=str(obj), physicsClientId=self.client
-        )
-        body = pybullet.createMultiBody(0, -1, shape, physicsClientId=self.client)
-        texture = pybullet.loadTexture(str(png), physicsClientId=self.client)
-        pybullet.changeVisualShape(
-            body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1], physicsClientId=self.client
-        )
-        self.set_pose(body, T_world_tag)
-        return body
+        return self._add_textured_quad("tag", image, obj_text, T_world_tag)
 
     def add_board(self, board: BoardSpec, T_world_board: np.ndarray) -> int:
         """Adds a printed ChArUco board (white margin of half a square) at ``T_world_board``.
@@ -168,16 +155,25 @@ class SyntheticScene:
         margin_m = 0.5 * board.square_m
         x0, y0 = -margin_m, -margin_m
         x1, y1 = x0 + image.shape[1] * metres_per_px, y0 + image.shape[0] * metres_per_px
-        self._count += 1
-        png = Path(self._scratch.name) / f"board{self._count}.png"
-        cv2.imwrite(str(png), cv2.cvtColor(image, cv2.COLOR_GRAY2RGB))
-        obj = Path(self._scratch.name) / f"board{self._count}.obj"
         # The image's top row is texture v = 1 and lies at board y = y0.
-        obj.write_text(
+        obj_text = (
             f"v {x0} {y0} 0\nv {x1} {y0} 0\nv {x1} {y1} 0\nv {x0} {y1} 0\n"
             "vt 0 1\nvt 1 1\nvt 1 0\nvt 0 0\nvn 0 0 -1\n"
             "f 1/1/1 3/3/1 2/2/1\nf 1/1/1 4/4/1 3/3/1\n"
         )
+        return self._add_textured_quad("board", image, obj_text, T_world_board)
+
+    def _add_textured_quad(
+        self, name: str, image: np.ndarray, obj_text: str, T_world_body: np.ndarray
+    ) -> int:
+        """A body showing the grey ``image`` on the quad ``obj_text`` (an OBJ with texture
+        coordinates) at ``T_world_body``: pybullet reads meshes and textures from files
+        only, so both go to the scratch folder first."""
+        self._count += 1
+        png = Path(self._scratch.name) / f"{name}{self._count}.png"
+        cv2.imwrite(str(png), cv2.cvtColor(image, cv2.COLOR_GRAY2RGB))
+        obj = Path(self._scratch.name) / f"{name}{self._count}.obj"
+        obj.write_text(obj_text)
         shape = pybullet.createVisualShape(
             pybullet.GEOM_MESH, fileName=str(obj), physicsClientId=self.client
         )
@@ -186,7 +182,7 @@ class SyntheticScene:
         pybullet.changeVisualShape(
             body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1], physicsClientId=self.client
         )
-        self.set_pose(body, T_world_board)
+        self.set_pose(body, T_world_body)
         return body
 
     def set_pose(self, body: int, T_world_body: np.ndarray) -> None:
