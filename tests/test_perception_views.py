@@ -209,6 +209,16 @@ def test_visible_fitness_tells_a_right_fit_from_a_turned_one(turned_chair):
         assert visible_fitness(transform_points(off @ motion, reference[::2]), frames) < 0.7
 
 
+def test_a_fit_slipped_3_cm_along_the_chair_is_below_the_bound(turned_chair):
+    reference, _, frames, motion = turned_chair
+    bound = RegistrationConfig().min_visible_fitness
+    assert visible_fitness(transform_points(motion, reference[::2]), frames) >= bound
+    for direction in ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)):
+        slip = yaw_transform(0.0, np.array([*(0.03 * np.array(direction)), 0.0]))
+        slipped = visible_fitness(transform_points(slip @ motion, reference[::2]), frames)
+        assert slipped < bound, (direction, slipped)
+
+
 def test_a_turn_showing_sides_the_reference_never_saw_is_accepted_by_what_the_views_saw(
     turned_chair,
 ):

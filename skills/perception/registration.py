@@ -59,8 +59,12 @@ class RegistrationConfig:
         min_visible_fitness: accept a fit whose seen / (seen + contradicted) share of the
             reference is at least this. A right fit's contradictions come from silhouette
             pixels only: 0.90-0.97 on generated chairs turned 90 and 180 degrees (rendered
-            and simulated views); a fit 3 cm off along the chair scored 0.77-0.84, a yaw
-            10 degrees off 0.64-0.77, 30 degrees or more below 0.6.
+            and simulated views), and 0.864-0.966 over the 34 fits of a 144-trial campaign
+            on calibration chairs, whose thin slats and spindles put more of the chair at
+            a silhouette (two right fits there, 0.87 and 0.88, failed the earlier bound of
+            0.88); a fit 3 cm off along the chair scored 0.77-0.84, a yaw 10 degrees off
+            0.64-0.77, 30 degrees or more below 0.6. The bound sits between the lowest
+            right fit and the highest slip.
         global_voxel_m: downsampling of the FPFH + RANSAC global registration.
     """
 
@@ -73,7 +77,7 @@ class RegistrationConfig:
     min_fitness: float = 0.6
     max_rmse_m: float = 0.01
     visible_tolerance_m: float = 0.03
-    min_visible_fitness: float = 0.88
+    min_visible_fitness: float = 0.85
     global_voxel_m: float = 0.02
 
 
