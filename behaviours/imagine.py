@@ -40,7 +40,11 @@ class ImagineSitting(SkillBehaviour):
         pose = result.sitting_pose
         self.blackboard.set(keys.SITTING_POSE, pose, overwrite=True)
         x, y, z = pose.position
+        direction = ""
+        if result.backrest is not None and result.backrest.used:
+            off_deg = math.degrees(result.backrest.disagreement_rad)
+            direction = f"; direction from the backrest, the vote's was {off_deg:+.0f} deg off"
         return self.succeed(
             f"sit at ({x:.3f}, {y:.3f}, {z:.3f}) m facing {math.degrees(pose.yaw):.0f} deg "
-            f"({result.n_correct} correct of {result.n_drops} drops)"
+            f"({result.n_correct} correct of {result.n_drops} drops{direction})"
         )
