@@ -250,3 +250,18 @@ def test_seat_bear_fails_when_the_step_in_falls_short():
     assert tick_until_done(leaf)[-1] == Status.FAILURE
     assert "stepping in with the bear raised: timed out" in leaf.feedback_message
     assert not skills.calls["plan_seating"]
+
+
+@pytest.mark.parametrize("used", [True, False])
+def test_imagine_says_when_the_backrest_gave_the_direction(used):
+    import math
+
+    from skills.imagination.backrest import BackrestCheck
+
+    check = BackrestCheck(0.0, 0.12, math.radians(45.0 if used else 10.0), used)
+    result = DEFAULTS["imagine_sitting"]._replace(backrest=check)
+    leaf = make(ImagineSitting, ScriptedSkills({"imagine_sitting": result}))
+    assert tick_until_done(leaf)[-1] == Status.SUCCESS
+    assert ("direction from the backrest" in leaf.feedback_message) == used
+    if used:
+        assert "+45 deg off" in leaf.feedback_message
