@@ -97,7 +97,6 @@ DIAGNOSIS_TOLERANCE = 0.005
 
 _ACCEPTED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
-_warm_goal: np.ndarray | None = None
 _GOAL_GUESSES = (
     np.array([0.2, 0.0, -0.8, -0.4, 0.4]),
     np.array([-0.3, 0.9, -1.0, 0.3, 0.5]),
@@ -240,18 +239,20 @@ def _radius_of(label: str) -> float:
 def goal_posture_candidates(problems: SeatingProblems, scene: SeatingScene) -> Iterator[np.ndarray]:
     """Feasible goal postures (eq. 12-16), one per initial guess that reaches one.
 
-    The guesses are the last accepted goal (a warm start) and fixed postures; different
-    guesses may end in different local optima, so a caller whose trajectory fails from
-    one goal can try the next.
+    The guesses are fixed postures, so a goal depends on the scene alone: the accessibility
+    check's pre-plan and SeatBear's plan from where the walk stopped see the same optima
+    (a warm start from the last accepted goal made SeatBear's plan depend on which pre-plans
+    ran before it: a low carry the pre-plan accepted from one failed from the other).
+    Different guesses may end in different local optima, so a caller whose trajectory
+    fails from one goal can try the next.
 
     Raises:
         InfeasibleSeating: when no guess gives a feasible goal (naming the violated
             constraint); raised on the first ``next`` that finds none.
     """
-    global _warm_goal
     chair = scene.profile.as_vector()
     lower, upper = problems.posture_bounds(g_xz=scene.g_xz, tilt_rad=BEAR_TILT_GOAL_RAD)
-    guesses = ([_warm_goal] if _warm_goal is not None else []) + list(_GOAL_GUESSES)
+    guesses = list(_GOAL_GUESSES)
     best: tuple[float, str, str] | None = None
     found: list[np.ndarray] = []
     for guess in guesses:
@@ -272,7 +273,6 @@ def goal_posture_candidates(problems: SeatingProblems, scene: SeatingScene) -> I
             if any(np.max(np.abs(q - other)) < 1e-3 for other in found):
                 continue  # the same optimum again
             found.append(q)
-            _warm_goal = q
             yield q
             continue
         if best is None or violation[0] < best[0]:
