@@ -59,3 +59,9 @@ forward from it."""
 BEAR_COM_AHEAD_M = 0.013
 """How far the bear's centre of mass lies ahead of its seat point (metres), for a
 uniformly dense bear (its legs stick out forward)."""
+
+PLACEMENT_TOLERANCE_M = 0.015
+"""How far (metres, along x and z of the NAO frame) the whole-body goal posture may set
+the bear's seat point from the sitting point g: the goal problem's placement box
+(``skills.planning.wholebody.optimisation``), which a reach-limited goal uses to put the
+bear nearer the NAO."""

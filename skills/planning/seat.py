@@ -19,14 +19,18 @@ import trimesh
 from scipy import ndimage
 
 from skills.geometry import SittingPose
-from skills.nao_carrying import BEAR_COM_AHEAD_M, BEAR_TORSO_DEPTH_M
+from skills.nao_carrying import BEAR_COM_AHEAD_M, BEAR_TORSO_DEPTH_M, PLACEMENT_TOLERANCE_M
 
 SEAT_HEIGHT_TOLERANCE_M = 0.03
 """How much the seat's height may change under a sliding p and still count as the seat
 (a cushion's slope, a scan's noise; a step of more is the seat's edge or an armrest)."""
-BEAR_EDGE_MARGIN_M = BEAR_TORSO_DEPTH_M / 2.0 + BEAR_COM_AHEAD_M
-"""p stays this far (metres) behind the seat's front edge: the torso's front half and
-the centre of mass's offset ahead of p (0.0425 + 0.013 m), so the bear does not tip off."""
+BEAR_EDGE_MARGIN_M = BEAR_TORSO_DEPTH_M / 2.0 + BEAR_COM_AHEAD_M + PLACEMENT_TOLERANCE_M
+"""p stays this far (metres) behind the seat's front edge: the torso's front half, the
+centre of mass's offset ahead of p and how far short of p the whole-body goal may put the
+bear (0.0425 + 0.013 + 0.015 m), so the bear does not tip off. At the reach limit the goal
+posture puts the bear that much nearer the NAO, toward the edge: bears set down with p
+5.55 cm behind the edge (no tolerance) tipped forward off deep seats in two of 60
+calibration trials."""
 SUPPORT_RADIUS_M = 0.04
 """The surface under a point is taken over a disc of this radius (metres), the bear
 torso's half width: gaps between slats and holes in a scan are narrower than the bear."""

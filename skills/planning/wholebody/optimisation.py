@@ -32,7 +32,12 @@ import casadi as ca
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from skills.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, CARRYING_POSTURE_RAD, PALM_IN_WRIST_M
+from skills.nao_carrying import (
+    BEAR_SEAT_BELOW_HANDS_M,
+    CARRYING_POSTURE_RAD,
+    PALM_IN_WRIST_M,
+    PLACEMENT_TOLERANCE_M,
+)
 from skills.planning.wholebody.nao_model import PlanarNao, link_transforms, planar_nao
 
 # The bear (0.25 m tall, 0.2 kg, its frame at its seat point: the bottom centre of its
@@ -46,7 +51,6 @@ BEAR_DEPTH_M = 0.10
 BEAR_MASS_KG = 0.2
 BEAR_COM_HEIGHT_M = 0.09
 
-PLACEMENT_TOLERANCE_M = 0.015
 BEAR_TILT_GOAL_RAD = math.radians(8.0)
 BEAR_TILT_MOTION_RAD = math.radians(30.0)
 SUPPORT_MARGIN_M = 0.01
