@@ -23,7 +23,12 @@ from skills.perception.clearance import (
     chair_extent,
     plan_views,
 )
-from skills.perception.registration import RegistrationConfig, register_chair, visible_fitness
+from skills.perception.registration import (
+    RegistrationConfig,
+    is_visible_peak,
+    register_chair,
+    visible_fitness,
+)
 from skills.perception.scan import scan_chair
 from skills.perception.synthetic import SyntheticArm, SyntheticScene
 from skills.perception.views import (
@@ -217,6 +222,21 @@ def test_a_fit_slipped_3_cm_along_the_chair_is_below_the_bound(turned_chair):
         slip = yaw_transform(0.0, np.array([*(0.03 * np.array(direction)), 0.0]))
         slipped = visible_fitness(transform_points(slip @ motion, reference[::2]), frames)
         assert slipped < bound, (direction, slipped)
+
+
+def test_the_right_fit_is_a_peak_of_the_visible_overlap_and_an_offset_one_is_not(turned_chair):
+    reference, _, frames, motion = turned_chair
+    centre = T_WORLD_CHAIR[:3, 3]
+    assert is_visible_peak(transform_points(motion, reference[::2]), frames)
+    offsets = [
+        yaw_transform(0.0, np.array([0.03, 0.0, 0.0])),
+        yaw_transform(0.0, np.array([0.0, -0.03, 0.0])),
+    ]
+    offsets.append(
+        yaw_transform(0.0, centre) @ yaw_transform(math.radians(10.0)) @ yaw_transform(0.0, -centre)
+    )
+    for offset in offsets:
+        assert not is_visible_peak(transform_points(offset @ motion, reference[::2]), frames)
 
 
 def test_a_turn_showing_sides_the_reference_never_saw_is_accepted_by_what_the_views_saw(
