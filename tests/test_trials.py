@@ -640,13 +640,22 @@ def test_an_interrupted_run_worker_kills_its_trial_process(tmp_path, fake_worker
 
     monkeypatch.setenv("FAKE_SLEEP_S", "30")
     spec = expand_protocol(entries(["a.obj"], tmp_path), "paper", 0)[0]
-    timer = threading.Timer(1.5, os.kill, (os.getpid(), signal.SIGINT))
-    start = time.monotonic()
-    timer.start()
+
+    sent_at: list[float] = []
+
+    def interrupt_once_the_worker_runs() -> None:
+        # Not after a fixed delay: on a loaded machine the worker may still be starting,
+        # and an interrupt then is the harness stopping before the trial began.
+        deadline = time.monotonic() + 30.0
+        while not worker_pids(tmp_path) and time.monotonic() < deadline:
+            time.sleep(0.02)
+        sent_at.append(time.monotonic())
+        os.kill(os.getpid(), signal.SIGINT)
+
+    threading.Thread(target=interrupt_once_the_worker_runs, daemon=True).start()
     with pytest.raises(KeyboardInterrupt):
         run_worker(fake_worker, spec.to_payload(tmp_path / "run", 60), 60)
-    timer.cancel()
-    assert time.monotonic() - start < 10  # stopped, not waited for
+    assert time.monotonic() - sent_at[0] < 10  # stopped, not waited for (it sleeps 30 s)
     pids = worker_pids(tmp_path)
     assert len(pids) == 1 and not process_alive(pids[0])
 
