@@ -55,7 +55,6 @@ def test_chair_facing_the_humanoid_is_accessible(yaw_deg: float) -> None:
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.1, yaw_deg)
     result = _check(chair_mesh, sitting_pose)
     assert result.accessible, result.reason
-    assert result.seconds < 1.0
     assert result.path[0] == START and result.path[-1] == result.se2_goal
     checker = NaoCollisionChecker(DEFAULT_ARENA, chair_solid_boxes(chair_mesh))
     for a, b in zip(result.path, result.path[1:], strict=False):

@@ -641,6 +641,9 @@ def test_an_interrupted_run_worker_kills_its_trial_process(tmp_path, fake_worker
     monkeypatch.setenv("FAKE_SLEEP_S", "30")
     spec = expand_protocol(entries(["a.obj"], tmp_path), "paper", 0)[0]
 
+    # Ctrl-C must reach Python as KeyboardInterrupt, whatever an earlier test's library
+    # (a qi session installs its own signal handling) left installed.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     sent_at: list[float] = []
 
     def interrupt_once_the_worker_runs() -> None:
@@ -653,8 +656,11 @@ def test_an_interrupted_run_worker_kills_its_trial_process(tmp_path, fake_worker
         os.kill(os.getpid(), signal.SIGINT)
 
     threading.Thread(target=interrupt_once_the_worker_runs, daemon=True).start()
-    with pytest.raises(KeyboardInterrupt):
-        run_worker(fake_worker, spec.to_payload(tmp_path / "run", 60), 60)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run_worker(fake_worker, spec.to_payload(tmp_path / "run", 60), 60)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert time.monotonic() - sent_at[0] < 10  # stopped, not waited for (it sleeps 30 s)
     pids = worker_pids(tmp_path)
     assert len(pids) == 1 and not process_alive(pids[0])
