@@ -13,9 +13,10 @@ The imagined direction comes from where the virtual child's drops came to rest, 
 round or near-symmetric seats with a wrap-around back the sitters slide and turn, so the
 vote may land one rotation (45 deg) off. The backrest cue has no such failure, but needs
 a backrest and sees only what the scan saw. Measured: within 5.4 deg of the true front
-on all 53 calibration meshes with a front (median 0.6 deg), and within 13 deg on 13
-scanned reconstructions (the scan sees the backrest from one side), where the imagined
-direction was 46 deg off once.
+on all 53 calibration meshes with a front (median 0.6 deg), and within 22 deg on 28
+scanned reconstructions of a calibration campaign (median 3.8 deg; the scan sees the
+backrest from one side, and the largest errors are on the shallowest backrest offsets),
+where the imagined direction was 46-56 deg off on a round seat.
 
 So the imagined pose keeps its direction unless the two disagree by more than
 :data:`AGREEMENT_RAD`: then at least one is off by more than half of it, and the chair's

@@ -67,7 +67,7 @@ class RegistrationConfig:
             0.64-0.77, 30 degrees or more below 0.6. Below it, only a peak is accepted.
         min_peak_visible_fitness: a fit below ``min_visible_fitness`` is accepted down to
             this when it is a peak of the visible overlap: no fit moved by
-            ``peak_step_m`` along x or y or turned by ``peak_step_deg`` scores as high.
+            ``peak_step_m`` along x or y or turned by ``peak_step_deg`` scores higher.
             The overlap a right fit reaches depends on the chair (a chair with thin
             slats, seen from sides the reference saw obliquely, scored 0.80-0.86 with the
             true motion in the simulated world while its 3 cm slips scored 0.42-0.65); a
