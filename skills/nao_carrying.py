@@ -61,7 +61,11 @@ BEAR_COM_AHEAD_M = 0.013
 uniformly dense bear (its legs stick out forward)."""
 
 PLACEMENT_TOLERANCE_M = 0.015
-"""How far (metres, along x and z of the NAO frame) the whole-body goal posture may set
-the bear's seat point from the sitting point g: the goal problem's placement box
+"""How far (metres, in the NAO frame) the whole-body goal posture may set the bear's seat
+point from the sitting point g: the goal problem's placement box
 (``skills.planning.wholebody.optimisation``), which a reach-limited goal uses to put the
-bear nearer the NAO."""
+bear nearer the NAO. Along x either way; along z only down, never up: the bear is let go
+where the hands hold it and drops what it hangs over the seat. Above g a posture is
+cheaper (less crouching), so a box open upward made every goal let go at its top,
+``BEAR_SEAT_CLEARANCE_M`` plus this over the scanned seat, and bears released 4 cm over
+the seat landed on a wrist and tipped."""

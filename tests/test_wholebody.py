@@ -184,6 +184,8 @@ def test_goal_posture_meets_every_constraint(chair, plan):
     np.testing.assert_allclose(scene.g_xz, [0.30, SEAT_HEIGHT_M + 0.02], atol=1e-9)
     base, forward, up = _bear(q_goal)
     assert np.max(np.abs(base - scene.g_xz)) <= PLACEMENT_TOLERANCE_M + 1e-6
+    # Never let go higher than g: the bear drops what the hands hold it over the seat.
+    assert base[1] <= scene.g_xz[1] + 1e-6
     # Upright bear, facing the sitting direction (the NAO's -x).
     assert abs(math.asin(forward[1])) <= BEAR_TILT_GOAL_RAD + 1e-6
     # Centre of mass inside the feet's support interval with the margin.

@@ -288,6 +288,8 @@ class SeatingProblems:
         if g_xz is not None:
             lower[0:2] = np.asarray(g_xz) - PLACEMENT_TOLERANCE_M
             upper[0:2] = np.asarray(g_xz) + PLACEMENT_TOLERANCE_M
+            # Never higher than g: the bear is let go there and drops the difference.
+            upper[1] = float(g_xz[1])
         lower[2], upper[2] = -math.sin(tilt_rad), math.sin(tilt_rad)
         return lower, upper
 
