@@ -63,6 +63,10 @@ BEAR_COM_AHEAD_M = 0.013
 """How far the bear's centre of mass lies ahead of its seat point (metres), for a
 uniformly dense bear (its legs stick out forward)."""
 
+BEAR_COM_HEIGHT_M = 0.10
+"""Height of the bear's centre of mass over its seat point (metres), for a uniformly dense
+bear."""
+
 PLACEMENT_TOLERANCE_M = 0.015
 """How far (metres, in the NAO frame) the whole-body goal posture may set the bear's seat
 point from the sitting point g: the goal problem's placement box

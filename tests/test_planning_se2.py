@@ -23,6 +23,7 @@ from skills.planning.se2 import (
 )
 from skills.planning.seat import (
     BEAR_EDGE_MARGIN_M,
+    SEAT_DROP_TOLERANCE_M,
     STEP_M,
     seat_ray,
     seat_support_heights,
@@ -304,6 +305,31 @@ def test_seat_of_slats_is_found_under_a_gap_and_ends_at_its_front_edge() -> None
     assert 0.12 - BEAR_EDGE_MARGIN_M - 0.002 <= moved.position[0] <= 0.12 - BEAR_EDGE_MARGIN_M
     assert moved.position[2] == pytest.approx(0.29)
     assert slide_m == pytest.approx(moved.position[0] - p.position[0])
+
+
+def _seat_with_a_lower_front(step_down_m: float) -> trimesh.Trimesh:
+    """A seat 0.24 m high from x = -0.15 to 0.05 and, from 0.05 to 0.15, a strip lower by
+    ``step_down_m`` (a rounded or waterfall front)."""
+    back = trimesh.creation.box(
+        extents=(0.2, 0.3, 0.02),
+        transform=trimesh.transformations.translation_matrix((-0.05, 0, 0.23)),
+    )
+    front_top = 0.24 - step_down_m
+    front = trimesh.creation.box(
+        extents=(0.1, 0.3, 0.02),
+        transform=trimesh.transformations.translation_matrix((0.1, 0, front_top - 0.01)),
+    )
+    return trimesh.util.concatenate([back, front])
+
+
+@pytest.mark.parametrize("step_down_m", [0.005, 0.02])
+def test_a_seat_that_falls_away_at_its_front_ends_where_it_falls(step_down_m: float) -> None:
+    p = SittingPose(np.array([-0.1, 0.0, 0.29]), 0.0)
+    moved, _ = slide_on_seat(_seat_with_a_lower_front(step_down_m), p, 1.0)
+    # A step the bear's torso rests across is still the seat; off a deeper one the bear
+    # would lean forward, so the seat ends at the step.
+    edge_m = 0.15 if step_down_m <= SEAT_DROP_TOLERANCE_M else 0.05
+    assert edge_m - BEAR_EDGE_MARGIN_M - 0.002 <= moved.position[0] <= edge_m - BEAR_EDGE_MARGIN_M
 
 
 def test_nao_too_close_for_the_carried_bear_steps_back_along_the_ray() -> None:

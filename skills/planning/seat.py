@@ -3,7 +3,8 @@
 The sitting ray runs from the imagined sitting point p₀ along the sitting direction γ,
 toward where the NAO stands. A sitting point p(s) = p₀ + s·u on it is *supported* when
 the seat continues under it, at the same height within :data:`SEAT_HEIGHT_TOLERANCE_M`,
-for :data:`BEAR_EDGE_MARGIN_M` ahead: the bear's torso rests wholly on the seat and its
+for :data:`BEAR_EDGE_MARGIN_M` ahead, and does not fall away by more than
+:data:`SEAT_DROP_TOLERANCE_M`: the bear's torso rests wholly on the seat and its
 centre of mass, ahead of p, stays over it. The heights come from vertical rays over a
 disc (:func:`seat_support_heights`), so slats and scan holes narrower than the bear do
 not hide the seat.
@@ -19,11 +20,27 @@ import trimesh
 from scipy import ndimage
 
 from skills.geometry import SittingPose
-from skills.nao_carrying import BEAR_COM_AHEAD_M, BEAR_TORSO_DEPTH_M, PLACEMENT_TOLERANCE_M
+from skills.nao_carrying import (
+    BEAR_COM_AHEAD_M,
+    BEAR_COM_HEIGHT_M,
+    BEAR_TORSO_DEPTH_M,
+    PLACEMENT_TOLERANCE_M,
+)
 
 SEAT_HEIGHT_TOLERANCE_M = 0.03
 """How much the seat's height may change under a sliding p and still count as the seat
 (a cushion's slope, a scan's noise; a step of more is the seat's edge or an armrest)."""
+SEAT_DROP_TOLERANCE_M = BEAR_TORSO_DEPTH_M * (
+    (BEAR_TORSO_DEPTH_M / 2.0 - BEAR_COM_AHEAD_M) / BEAR_COM_HEIGHT_M / 2.0
+)
+"""How far (metres) the seat may fall away ahead of the highest seat behind it, toward
+the NAO, and still count as the seat: a rounded or sloping front edge. A bear whose torso
+rests on a seat falling by δ over its depth D leans forward by atan(δ/D); it tips when
+its centre of mass passes the torso's front edge, at a lean of
+atan((D/2 - c_x)/c_z) = 16 deg (c: the centre of mass ahead of and over the seat point).
+Half that slope keeps room for the landing: δ = D·(D/2 - c_x)/(2·c_z) = 1.25 cm. Where
+the seat rises ahead (a reclined seat) the bear leans back, which the 3 cm height
+tolerance bounds."""
 BEAR_EDGE_MARGIN_M = BEAR_TORSO_DEPTH_M / 2.0 + BEAR_COM_AHEAD_M + PLACEMENT_TOLERANCE_M
 """p stays this far (metres) behind the seat's front edge: the torso's front half, the
 centre of mass's offset ahead of p and how far short of p the whole-body goal may put the
@@ -162,6 +179,7 @@ def seat_map(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatMap:
     if math.isnan(h0):
         return SeatMap(along, np.zeros(a.shape, dtype=bool), heights, math.nan)
     seat = np.abs(np.nan_to_num(heights, nan=-1.0) - h0) <= SEAT_HEIGHT_TOLERANCE_M
+    seat &= ~_falls_away_ahead(heights, seat, along)
     radius = round(SLAT_GAP_M / 2.0 / STEP_M)
     disc = np.hypot(*np.mgrid[-radius : radius + 1, -radius : radius + 1]) <= radius + 1e-9
     padded = np.pad(seat, radius + 1, mode="edge")
@@ -169,6 +187,16 @@ def seat_map(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatMap:
         radius + 1 : -radius - 1, radius + 1 : -radius - 1
     ]
     return SeatMap(along, ndimage.binary_fill_holes(closed | seat), heights, h0)
+
+
+def _falls_away_ahead(heights: np.ndarray, seat: np.ndarray, along_m: np.ndarray) -> np.ndarray:
+    """(R, C) cells ahead of p lower than the highest seat cell between p and them, in
+    their column, by more than :data:`SEAT_DROP_TOLERANCE_M`."""
+    ahead = along_m >= -1e-9
+    seat_heights = np.where(seat & ahead[:, None], np.nan_to_num(heights, nan=-np.inf), -np.inf)
+    highest_behind = np.maximum.accumulate(seat_heights, axis=0)
+    falls = np.nan_to_num(heights, nan=np.inf) < highest_behind - SEAT_DROP_TOLERANCE_M
+    return falls & ahead[:, None]
 
 
 def _seat_height_under(heights: np.ndarray, distance_m: np.ndarray, p_z: float) -> float:
@@ -213,7 +241,10 @@ def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
         limit = MAX_SLIDE_M
     else:
         end = int(np.argmin(on_seat))
-        edge_m = _seat_edge_between(chair_mesh, sitting_pose, along[end - 1], along[end], h0)
+        lowest_m = float(np.max(row_heights[:end])) - SEAT_DROP_TOLERANCE_M
+        edge_m = _seat_edge_between(
+            chair_mesh, sitting_pose, along[end - 1], along[end], h0, lowest_m
+        )
         limit = min(MAX_SLIDE_M, edge_m - BEAR_EDGE_MARGIN_M)
     # p stays where it was imagined when that is already within the margin: the
     # imagination's p is where the child sat, so the seat holds the bear there.
@@ -238,11 +269,13 @@ def _seat_edge_between(
     last_seat_m: float,
     past_edge_m: float,
     h0: float,
+    lowest_m: float,
 ) -> float:
     """Where along the ray (metres from p) the seat's top ends, between a grid row that
     is seat and the next that is not: the farthest row at ``EDGE_RESOLUTION_M`` spacing
     where at least half of the band across the ray (``SUPPORT_RADIUS_M`` either side)
-    meets the seat's height h₀ within ``SEAT_HEIGHT_TOLERANCE_M``."""
+    meets the seat's height h₀ within ``SEAT_HEIGHT_TOLERANCE_M`` and lies no lower than
+    ``lowest_m`` (where the seat falls away, :data:`SEAT_DROP_TOLERANCE_M`)."""
     p = np.asarray(sitting_pose.position, dtype=float)
     u = sitting_pose.direction()
     v = np.array([-u[1], u[0]])
@@ -252,6 +285,7 @@ def _seat_edge_between(
     xy = p[:2] + a.reshape(-1, 1) * u + c.reshape(-1, 1) * v
     heights = _first_surface_below(chair_mesh, xy, float(p[2]) + 0.02).reshape(a.shape)
     seat = np.abs(np.nan_to_num(heights, nan=-1.0) - h0) <= SEAT_HEIGHT_TOLERANCE_M
+    seat &= np.nan_to_num(heights, nan=-1.0) >= lowest_m
     on_seat = np.flatnonzero(seat.mean(axis=1) >= 0.5)
     return float(rows[on_seat[-1]]) if len(on_seat) else float(last_seat_m)
 

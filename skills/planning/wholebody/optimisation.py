@@ -33,6 +33,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from skills.nao_carrying import (
+    BEAR_COM_HEIGHT_M,
     BEAR_SEAT_BELOW_HANDS_M,
     CARRYING_POSTURE_RAD,
     PALM_IN_WRIST_M,
@@ -49,7 +50,6 @@ BEAR_HEIGHT_M = 0.25
 BEAR_DEPTH_M = 0.10
 """Fore-aft extent of the bear's outline (torso and head; its short legs are ignored)."""
 BEAR_MASS_KG = 0.2
-BEAR_COM_HEIGHT_M = 0.09
 
 BEAR_TILT_GOAL_RAD = math.radians(8.0)
 BEAR_TILT_MOTION_RAD = math.radians(30.0)

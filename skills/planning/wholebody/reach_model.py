@@ -22,8 +22,9 @@ no feasible posture holds NaN.
 The grid is computed once (``python -m skills.planning.wholebody.reach_model`` writes
 ``reach_table.json`` beside this module, about a minute on the 2-core machine) and
 shipped; a test recomputes cells and compares. Figures of the shipped table (seat
-fronts at least the feet's length ahead): the NAO places the bear on seats up to about
-0.36 m high, reaching about 0.20-0.27 m ahead at 0.20-0.30 m.
+fronts at least 0.20 m ahead, the bear let go 1 cm over the seat): the NAO places the bear
+on seats 0.16-0.45 m high (the carry over the seat's front limits it to 0.40 m), reaching
+0.29-0.32 m ahead on seats 0.20-0.40 m high and 0.22-0.23 m on seats 0.16-0.17 m.
 """
 
 from __future__ import annotations
