@@ -12,7 +12,11 @@ from scipy.spatial.transform import Rotation
 
 from skills.geometry import SE2Pose, SittingPose
 from skills.meshes import box_chair_mesh
-from skills.nao_carrying import BEAR_SEAT_BELOW_HANDS_M
+from skills.nao_carrying import (
+    BEAR_COM_AHEAD_M,
+    BEAR_COM_HEIGHT_M,
+    BEAR_SEAT_BELOW_HANDS_M,
+)
 from skills.planning.wholebody import (
     RAISED_POSTURE,
     STANCE,
@@ -40,13 +44,16 @@ from skills.planning.wholebody.optimisation import (
     BEAR_HEIGHT_M,
     BEAR_TILT_GOAL_RAD,
     CARRYING_POSTURE_RAD,
+    NO_RELEASED_BEAR,
     PALM_IN_WRIST_M,
     PLACEMENT_TOLERANCE_M,
+    released_bear,
     seating_problems,
 )
 from skills.planning.wholebody.seating import (
     BEAR_SEAT_CLEARANCE_M,
     PLANNING_VELOCITY_RADPS,
+    exact_posture_violation,
     seating_scene,
 )
 
@@ -237,6 +244,13 @@ def test_carrying_posture_matches_the_simulator():
     assert nao_sim.HOLDING_POSTURE_RAD.items() >= CARRYING_POSTURE_RAD.items()
 
 
+def test_the_bear_the_planner_sees_is_the_simulated_bear():
+    bear = pytest.importorskip("hardware.sim.bear")
+    com = bear.bear_centre_of_mass()
+    assert com[0] == pytest.approx(BEAR_COM_AHEAD_M, abs=5e-4)
+    assert com[2] == pytest.approx(BEAR_COM_HEIGHT_M, abs=2e-3)
+
+
 def test_carrying_posture_holds_the_bear_high_stably_within_limits():
     joints, _ = parse_urdf()
     for name, value in CARRYING_POSTURE_RAD.items():
@@ -283,6 +297,56 @@ def test_retract_releases_upright_and_stable(chair, plan):
     # Ends upright: torso pitch zero, arms down.
     assert abs(sum(q_all[-1][:3])) < 1e-6
     assert q_all[-1][3] > 1.0
+
+
+def test_retract_keeps_the_head_and_torso_off_the_bear_it_let_go(chair, plan):
+    # The bear stays where it was let go (its box: 0.10 m deep, 0.25 m tall); standing
+    # up, the head and torso must not sweep through it and knock it off the seat.
+    q_all = _planar(plan.retract_positions_rad)
+    base, forward, up = _bear(q_all[0])
+    for q in q_all:
+        frames = _frames(q)
+        for link, offset, radius in (
+            ("Head", (0, 0, 0.05), 0.055),
+            ("torso", (0.045, 0, 0.09), 0.02),
+        ):
+            point = (frames[link] @ np.r_[offset, 1.0])[[0, 2]]
+            rel = point - base
+            along, height = float(rel @ forward), float(rel @ up)
+            outside = max(abs(along) - BEAR_DEPTH_M / 2, height - BEAR_HEIGHT_M, -height)
+            assert outside >= radius, (link, q)
+
+
+def test_a_released_bear_is_an_obstacle_for_the_body_not_a_load(chair, plan):
+    problems = seating_problems()
+    profile = seating_scene(chair, SITTING_POSE, NAO_POSE).profile
+    q_goal = _planar(plan.positions_rad)[-1]
+    standing = STANDING_POSTURE
+    # A bear resting 6 cm ahead of the standing NAO's head is in its way...
+    head = problems.geometry(standing).body_points["head"]
+    in_the_way = np.array([head[0] + 0.06, head[1] - 0.2, 1.0, 0.0])
+    worst, group, _ = exact_posture_violation(
+        problems,
+        standing,
+        profile,
+        g_xz=None,
+        tilt_rad=math.pi,
+        bear_held=False,
+        released=in_the_way,
+    )
+    assert group == "bear-body collision" and worst > 0.01
+    # ...none is not, and the released bear where it was let go is clear of the goal.
+    for released in (NO_RELEASED_BEAR, released_bear(problems.geometry(q_goal))):
+        worst, _, _ = exact_posture_violation(
+            problems,
+            q_goal,
+            profile,
+            g_xz=None,
+            tilt_rad=math.pi,
+            bear_held=False,
+            released=released,
+        )
+        assert worst <= 1e-4
 
 
 def test_bear_one_metre_away_is_out_of_reach(chair):

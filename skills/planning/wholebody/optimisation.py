@@ -12,7 +12,8 @@ Posture constraints (one vector per posture, see :data:`CONSTRAINT_GROUPS`):
   ``[x_back + margin, x_front - margin]`` (the motion is symmetric, so y is 0);
 * ``chair collision``: every sampled body point and the bear's outline clear the
   chair's two blocks (:mod:`.chair_profile`) by the point's radius plus a margin;
-* ``bear-body collision``: the NAO's legs, torso and head clear the held bear;
+* ``bear-body collision``: the NAO's legs, torso and head clear the bear, held or,
+  in the retract, where it was let go;
 * ``floor``: nothing below the floor.
 
 The block clearance ``max(front_x - x, z - top_z)`` is smoothed for IPOPT by a
@@ -57,6 +58,8 @@ SUPPORT_MARGIN_M = 0.01
 BODY_MARGIN_M = 0.01
 BEAR_CHAIR_MARGIN_M = 0.003
 SMOOTH_MAX_SHARPNESS = 400.0
+NO_RELEASED_BEAR = np.array([10.0, 0.0, -1.0, 0.0])
+"""The ``released`` parameter when no bear rests anywhere near: 10 m ahead."""
 
 GOAL_COM_WEIGHT = 10.0
 GOAL_TORSO_WEIGHT = 1.0
@@ -161,7 +164,9 @@ class SeatingProblems:
 
     Parameters of the goal NLP: ``[g_x, g_z, chair(4), diagnose]``; with ``diagnose``
     = 1 the cost becomes the bear placement error (used to explain infeasibility).
-    Parameters of the trajectory NLP: ``[q_goal(5), chair(4), bear_held]``.
+    Parameters of the trajectory NLP: ``[q_goal(5), chair(4), bear_held, released(4),
+    weights(5)]``; ``released`` is where a let-go bear rests (see
+    :func:`released_bear`), which the NAO's legs, torso and head keep clear of.
     """
 
     def __init__(self, nao: PlanarNao | None = None, n_knots: int = N_KNOTS) -> None:
@@ -170,10 +175,13 @@ class SeatingProblems:
         q = ca.SX.sym("q", 5)
         chair = ca.SX.sym("chair", 4)
         bear_held = ca.SX.sym("bear_held")
+        released = ca.SX.sym("released", 4)
         values, self.rows, self.row_lower, self.row_upper, geometry = self._posture(
-            q, chair, bear_held
+            q, chair, bear_held, released
         )
-        self.posture_constraints = ca.Function("posture_g", [q, chair, bear_held], [values])
+        self.posture_constraints = ca.Function(
+            "posture_g", [q, chair, bear_held, released], [values]
+        )
         self.posture_geometry = ca.Function("posture_geometry", [q, bear_held], geometry)
         self.support_centre_x = 0.5 * sum(self.nao.support_x)
         self._build_goal(q, chair)
@@ -181,7 +189,7 @@ class SeatingProblems:
         self.lock = threading.Lock()
 
     # ---- the posture model -------------------------------------------------------
-    def _posture(self, q: ca.SX, chair: ca.SX, bear_held: ca.SX):
+    def _posture(self, q: ca.SX, chair: ca.SX, bear_held: ca.SX, released: ca.SX):
         nao = self.nao
         frames = nao.frames(q)
         nao_com, nao_mass = nao.centre_of_mass(frames)
@@ -237,8 +245,8 @@ class SeatingProblems:
             body_points[label] = point
             add("chair collision", f"NAO {label}", chair_clearance(point) - radius, BODY_MARGIN_M)
             add("floor", f"NAO {label}", point[1] - radius, 0.0)
-        # A released bear (bear_held = 0) no longer constrains anything: its rows are
-        # lifted by a metre.
+        # A released bear (bear_held = 0) no longer moves with the hands: its chair and
+        # floor rows are lifted by a metre.
         lift = 1.0 - bear_held
         bear_points: dict[str, ca.SX] = {}
         for bx, bz, label in BEAR_OUTLINE:
@@ -246,14 +254,19 @@ class SeatingProblems:
             bear_points[label] = point
             add("chair collision", label, chair_clearance(point) + lift, BEAR_CHAIR_MARGIN_M)
             add("floor", label, point[1] + lift, 0.0)
+        # The body keeps clear of the bear held, and of the bear let go where it rests:
+        # standing up, the head must not sweep through it.
+        body_bear_base = bear_held * bear_base + (1.0 - bear_held) * released[0:2]
+        body_bear_forward = bear_held * forward + (1.0 - bear_held) * released[2:4]
+        body_bear_up = ca.vertcat(-body_bear_forward[1], body_bear_forward[0])
         for _link, _offset, radius, label in LEG_TORSO_HEAD_POINTS:
-            rel = body_points[label] - bear_base
-            lx = ca.dot(rel, forward)
-            lz = ca.dot(rel, up)
+            rel = body_points[label] - body_bear_base
+            lx = ca.dot(rel, body_bear_forward)
+            lz = ca.dot(rel, body_bear_up)
             outside = _smooth_max_n(
                 [-BEAR_DEPTH_M / 2 - lx, lx - BEAR_DEPTH_M / 2, -lz, lz - BEAR_HEIGHT_M]
             )
-            add("bear-body collision", f"NAO {label}", outside - radius + lift, BODY_MARGIN_M)
+            add("bear-body collision", f"NAO {label}", outside - radius, BODY_MARGIN_M)
         geometry = [
             com[0],
             bear_base,
@@ -297,7 +310,7 @@ class SeatingProblems:
     def _build_goal(self, q: ca.SX, chair: ca.SX) -> None:
         g_xz = ca.SX.sym("g", 2)
         diagnose = ca.SX.sym("diagnose")
-        values = self.posture_constraints(q, chair, 1.0)
+        values = self.posture_constraints(q, chair, 1.0, NO_RELEASED_BEAR)
         com_x, base, _, torso_pitch, _, _ = self.posture_geometry(q, 1.0)
         d_com = ca.sqrt((com_x - self.support_centre_x) ** 2 + 1e-8)
         cost = GOAL_COM_WEIGHT * d_com + GOAL_TORSO_WEIGHT * torso_pitch**2
@@ -313,21 +326,29 @@ class SeatingProblems:
         q_goal = ca.SX.sym("q_goal", 5)
         chair = ca.SX.sym("chair", 4)
         bear_held = ca.SX.sym("bear_held")
+        released = ca.SX.sym("released", 4)
         weights = ca.SX.sym("weights", 5)
         cost = 0
         for k in range(n):
             diff = Q[:, k] - q_goal
             cost += 0.5 * ca.sum1(weights * diff**2)
         velocity = [Q[:, k + 1] - Q[:, k] for k in range(n - 1)]
-        interior = self.posture_constraints.map(n - 2)(Q[:, 1:-1], chair, bear_held)
+        interior = self.posture_constraints.map(n - 2)(Q[:, 1:-1], chair, bear_held, released)
         g = ca.vertcat(*velocity, ca.vec(interior))
         nlp = {
             "x": ca.vec(Q),
-            "p": ca.vertcat(q_goal, chair, bear_held, weights),
+            "p": ca.vertcat(q_goal, chair, bear_held, released, weights),
             "f": cost,
             "g": g,
         }
         self.trajectory_solver = ca.nlpsol("seating_trajectory", "ipopt", nlp, _ipopt_options(300))
+
+
+def released_bear(geometry: PostureGeometry) -> np.ndarray:
+    """The ``released`` parameter of a bear let go from a posture: its base (x, z) and its
+    forward axis (x, z) in the NAO frame, where the hands held it."""
+    up = geometry.bear_up
+    return np.array([geometry.bear_base[0], geometry.bear_base[1], up[1], -up[0]])
 
 
 def _ipopt_options(max_iter: int) -> dict:

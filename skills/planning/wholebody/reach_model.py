@@ -42,6 +42,7 @@ from skills.nao_carrying import BEAR_SEAT_CLEARANCE_M
 from skills.planning.wholebody.optimisation import (
     BEAR_CHAIR_MARGIN_M,
     BEAR_TILT_GOAL_RAD,
+    NO_RELEASED_BEAR,
     SeatingProblems,
     _ipopt_options,
     seating_problems,
@@ -168,7 +169,7 @@ class _MaxForwardProblem:
     def __init__(self, problems: SeatingProblems) -> None:
         q = ca.SX.sym("q", 5)
         chair = ca.SX.sym("chair", 4)
-        values = problems.posture_constraints(q, chair, 1.0)
+        values = problems.posture_constraints(q, chair, 1.0, NO_RELEASED_BEAR)
         _, base, _, torso_pitch, _, _ = problems.posture_geometry(q, 1.0)
         # A little weight on the torso pitch picks the most upright of equally far postures.
         cost = -base[0] + 1e-3 * torso_pitch**2

@@ -16,7 +16,7 @@ The plan (the paper, "Motion Planning"):
    starts from :data:`RAISED_POSTURE` (:func:`preplan_approach` decides).
 4. The retract motion, with the bear released: the legs hold still while the arms
    withdraw the hands back (toward the NAO) and a little up beside the bear,
-   then the body stands up to
+   then the body stands up, clear of the bear where it was let go, to
    :data:`REST_POSTURE`; both are solved by the same trajectory problem.
 
 Every solution is re-checked numerically against the exact (non-smoothed) constraints
@@ -50,8 +50,10 @@ from skills.planning.wholebody.optimisation import (
     BEAR_TILT_GOAL_RAD,
     BEAR_TILT_MOTION_RAD,
     LEG_TORSO_HEAD_POINTS,
+    NO_RELEASED_BEAR,
     PLACEMENT_TOLERANCE_M,
     SeatingProblems,
+    released_bear,
     seating_problems,
 )
 from skills.results import SeatingPlan
@@ -192,10 +194,14 @@ def _worst_violation(
 
 
 def _posture_values(
-    problems: SeatingProblems, q: np.ndarray, profile: ChairProfile, bear_held: bool
+    problems: SeatingProblems,
+    q: np.ndarray,
+    profile: ChairProfile,
+    bear_held: bool,
+    released: np.ndarray = NO_RELEASED_BEAR,
 ) -> np.ndarray:
     return np.asarray(
-        problems.posture_constraints(q, profile.as_vector(), float(bear_held))
+        problems.posture_constraints(q, profile.as_vector(), float(bear_held), released)
     ).ravel()
 
 
@@ -207,14 +213,17 @@ def exact_posture_violation(
     g_xz: np.ndarray | None,
     tilt_rad: float,
     bear_held: bool = True,
+    released: np.ndarray = NO_RELEASED_BEAR,
 ) -> tuple[float, str, str]:
     """Worst violation of a posture's constraints with the exact block clearance.
 
     The optimisation's smoothed max over-estimates the clearance by at most ln(2)/κ;
-    here the clearances come from :meth:`ChairProfile.clearance` instead.
+    here the clearances come from :meth:`ChairProfile.clearance` instead. ``released``:
+    where a let-go bear rests (:func:`.optimisation.released_bear`), with ``bear_held``
+    False.
     """
     lower, upper = problems.posture_bounds(g_xz=g_xz, tilt_rad=tilt_rad)
-    values = _posture_values(problems, q, profile, bear_held)
+    values = _posture_values(problems, q, profile, bear_held, released)
     geometry = problems.geometry(q, bear_held)
     for i, row in enumerate(problems.rows):
         if row.group != "chair collision":
@@ -318,11 +327,15 @@ def solve_trajectory(
     q_goal: np.ndarray,
     *,
     bear_held: bool,
+    released: np.ndarray = NO_RELEASED_BEAR,
     freeze_legs: bool = False,
     velocity_radps: float = PLANNING_VELOCITY_RADPS,
     phase: str = "trajectory",
 ) -> tuple[np.ndarray, np.ndarray]:
     """The knots from ``q_start`` to ``q_goal`` (eq. 8-11) and their times.
+
+    With ``bear_held`` False the body keeps clear of the bear at ``released``
+    (:func:`.optimisation.released_bear`).
 
     Returns:
         (times_s (K,), postures (K, 5)), trailing knots at q_goal dropped.
@@ -340,7 +353,13 @@ def solve_trajectory(
         g_xz=None, tilt_rad=BEAR_TILT_MOTION_RAD if bear_held else math.pi
     )
     start_violation = exact_posture_violation(
-        problems, q_start, profile, g_xz=None, tilt_rad=BEAR_TILT_MOTION_RAD, bear_held=bear_held
+        problems,
+        q_start,
+        profile,
+        g_xz=None,
+        tilt_rad=BEAR_TILT_MOTION_RAD,
+        bear_held=bear_held,
+        released=released,
     )
     if start_violation[0] > CHECK_TOLERANCE:
         raise InfeasibleSeating(
@@ -361,7 +380,7 @@ def solve_trajectory(
     with problems.lock:
         result = problems.trajectory_solver(
             x0=x0,
-            p=np.r_[q_goal, profile.as_vector(), float(bear_held), np.ones(5)],
+            p=np.r_[q_goal, profile.as_vector(), float(bear_held), released, np.ones(5)],
             lbx=lbx,
             ubx=ubx,
             lbg=lbg,
@@ -377,6 +396,7 @@ def solve_trajectory(
             g_xz=None,
             tilt_rad=BEAR_TILT_MOTION_RAD if bear_held else math.pi,
             bear_held=bear_held,
+            released=released,
         )
         if violation[0] > worst[0]:
             worst = (violation[0], violation[1], f"{violation[2]} at knot {k}")
@@ -552,13 +572,15 @@ def _motion_from_goal(
     times, knots = solve_trajectory(problems, profile, q_start, q_goal, bear_held=True)
     trajectory_s = time.perf_counter() - started
     started = time.perf_counter()
-    q_folded = _clear_withdrawn_posture(problems, profile, q_goal)
+    released = released_bear(problems.geometry(q_goal))
+    q_folded = _clear_withdrawn_posture(problems, profile, q_goal, released)
     fold_times, fold = solve_trajectory(
         problems,
         profile,
         q_goal,
         q_folded,
         bear_held=False,
+        released=released,
         freeze_legs=True,
         phase="retract (hands back)",
     )
@@ -568,6 +590,7 @@ def _motion_from_goal(
         q_folded,
         REST_POSTURE,
         bear_held=False,
+        released=released,
         phase="retract (standing up)",
     )
     retract_s = time.perf_counter() - started
@@ -577,14 +600,20 @@ def _motion_from_goal(
 
 
 def _clear_withdrawn_posture(
-    problems: SeatingProblems, profile: ChairProfile, q_goal: np.ndarray
+    problems: SeatingProblems, profile: ChairProfile, q_goal: np.ndarray, released: np.ndarray
 ) -> np.ndarray:
     """The first withdrawn-hands posture of ``RETRACT_OFFSETS_M`` clear of the chair (the
     last one when none is: the retract then reports the violation)."""
     for back_m, up_m in RETRACT_OFFSETS_M:
         q_folded = withdrawn_hands_posture(problems, q_goal, back_m, up_m)
         violation = exact_posture_violation(
-            problems, q_folded, profile, g_xz=None, tilt_rad=math.pi, bear_held=False
+            problems,
+            q_folded,
+            profile,
+            g_xz=None,
+            tilt_rad=math.pi,
+            bear_held=False,
+            released=released,
         )
         if violation[0] <= CHECK_TOLERANCE:
             break
