@@ -8,6 +8,7 @@ import threading
 
 import numpy as np
 import pytest
+import trimesh
 from scipy.spatial.transform import Rotation
 
 from skills.geometry import SE2Pose, SittingPose
@@ -31,7 +32,10 @@ from skills.planning.wholebody import (
     preplan_seating,
     release_and_stand,
 )
-from skills.planning.wholebody.chair_profile import largest_horizontal_surface_height
+from skills.planning.wholebody.chair_profile import (
+    BAND_HALF_WIDTH_M,
+    largest_horizontal_surface_height,
+)
 from skills.planning.wholebody.nao_model import (
     DRIVEN_JOINTS,
     joint_values,
@@ -347,6 +351,22 @@ def test_a_released_bear_is_an_obstacle_for_the_body_not_a_load(chair, plan):
             released=released,
         )
         assert worst <= 1e-4
+
+
+def test_where_the_nao_stops_does_not_change_the_chair_it_plans_against(chair):
+    # An armrest whose inner face lies 2 mm inside the band the NAO's arms sweep.
+    armrest = trimesh.creation.box(
+        extents=(0.2, 0.03, 0.02),
+        transform=trimesh.transformations.translation_matrix(
+            (0.0, -(BAND_HALF_WIDTH_M - 0.002) - 0.015, 0.32)
+        ),
+    )
+    armchair = trimesh.util.concatenate([chair, armrest])
+    profiles = {
+        seating_scene(armchair, SITTING_POSE, SE2Pose(NAO_POSE.x, y, NAO_POSE.theta)).profile
+        for y in (-0.005, 0.0, 0.005)  # the walk stops within 5 mm of its goal
+    }
+    assert len({round(p.seat_top_z, 6) for p in profiles}) == 1
 
 
 def test_bear_one_metre_away_is_out_of_reach(chair):

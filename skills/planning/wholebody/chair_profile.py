@@ -1,8 +1,10 @@
 """The chair as two blocks in the NAO's sagittal plane, for collision constraints.
 
 The chair mesh is moved into the NAO frame (x forward, y left, z up, origin on the floor
-between the feet) and sampled; only the part within a lateral band ``|y| <= band`` (the
-width swept by the NAO's body, arms and the bear) matters for a planar, symmetric motion.
+between the feet) and sampled; only the part within a lateral band ``|y - g_y| <= band``
+(the width swept by the NAO's body, arms and the bear) matters for a planar, symmetric
+motion. The band is centred on the sitting point g, which lies within millimetres of the
+NAO's sagittal plane, so that where the NAO stops does not change the profile.
 That cross-section is bounded by two axis-aligned blocks, each the region behind a
 vertical plane and below a horizontal one:
 
@@ -27,6 +29,7 @@ import numpy as np
 import trimesh
 
 from skills.geometry import transform_points
+from skills.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, BEAR_SEAT_CLEARANCE_M
 
 BAND_HALF_WIDTH_M = 0.11
 """Half-width of the lateral band the planar motion sweeps (the hands' centres at
@@ -34,11 +37,12 @@ BAND_HALF_WIDTH_M = 0.11
 
 BEAR_LANE_HALF_WIDTH_M = 0.06
 """Half-width of the lane the bear itself sweeps (its torso is 0.10 m wide), metres."""
-HANDS_ABOVE_SEAT_M = 0.02 + 0.065 - 0.015
+HANDS_ABOVE_SEAT_M = BEAR_SEAT_CLEARANCE_M + BEAR_SEAT_BELOW_HANDS_M - 0.015
 """Beside the bear's lane only the hands and arms pass; the lowest of them, the palms
-(0.065 m above the bear's seat point, which is let go 0.02 m over the seat; the planner's
-hand points have a 0.015 m radius), stays this high over the seat top, metres: lower
-rails beside the bear are not in their way."""
+(``BEAR_SEAT_BELOW_HANDS_M`` above the bear's seat point, which is let go
+``BEAR_SEAT_CLEARANCE_M`` over the seat; the planner's hand points have a 0.015 m
+radius), stays this high over the seat top, metres: lower rails beside the bear are not
+in their way."""
 
 
 def stands_above_seat(lateral_m: np.ndarray, z_m: np.ndarray, seat_top_m: float) -> np.ndarray:
@@ -113,11 +117,15 @@ def fit_chair_profile(
     )
     points = transform_points(T_nao_world, points)
     normals = normals @ T_nao_world[:3, :3].T
+    # The band is centred on g, not on the NAO: the NAO stops within millimetres of its
+    # goal, and a rail at the band's edge must not be in the pre-plan's profile and out of
+    # the one planned where the NAO stopped.
+    g_x, g_y, g_z = (float(v) for v in sitting_point_nao)
+    points[:, 1] -= g_y
     in_band = np.abs(points[:, 1]) <= band_half_width_m
     points, normals = points[in_band], normals[in_band]
     if len(points) == 0:
         raise ChairProfileError("no part of the chair lies in front of the NAO")
-    g_x, g_z = float(sitting_point_nao[0]), float(sitting_point_nao[2])
 
     # The seat top: the highest horizontal surface under g not far above it (a pelvis
     # sits a few centimetres above the seat; higher horizontal surfaces are armrests or
