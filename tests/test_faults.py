@@ -108,6 +108,11 @@ def test_a_signal_while_ticking_stops_tree_and_robots_and_keeps_the_summary(
     summary = read_summary(out)
     assert summary["interrupted"] is True and summary["signal"] == name
     assert summary["outcome"] == "failure" and summary["failed_stage"] == "ScanChair"
+    # The leaf's terminate() sets the cancel and does not wait for its worker, which sees
+    # it at its next poll: possibly after the CLI returned.
+    deadline = time.monotonic() + 2.0
+    while "scan_chair" not in fake.skills.cancelled and time.monotonic() < deadline:
+        time.sleep(0.01)
     assert "scan_chair" in fake.skills.cancelled
     assert fake.robot.humanoid.stopped >= 1
     assert RecordedRun(out).ticks  # the record replays
