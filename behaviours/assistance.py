@@ -15,15 +15,17 @@ from py_trees.common import Access, Status
 from behaviours import keys
 from behaviours.skill_behaviour import SkillBehaviour
 from behaviours.tracking import tracked_humanoid_pose
-from skills.results import ChairRotation, Instruction
+from skills.results import ChairRotation, Instruction, RotationChoice
 
 
 class InstructHelper(SkillBehaviour):
-    """Asks the helper to rotate the chair so that it faces the humanoid.
+    """Asks the helper to rotate the chair so that it faces the humanoid, or by the
+    smallest rotation the accessibility check plans with (``skills.choose_rotation``);
+    fails, saying why, when no rotation helps and the chair already faces the humanoid.
 
     Blackboard:
-        reads ``/sitting/pose``; writes ``/assistance/instructions``,
-        ``/assistance/rotations``, ``/humanoid/pose``.
+        reads ``/sitting/pose``, ``/chair/mesh``, ``/mission/arena``, ``/mission/seed``;
+        writes ``/assistance/instructions``, ``/assistance/rotations``, ``/humanoid/pose``.
     """
 
     activity = "instructing the helper"
@@ -31,26 +33,41 @@ class InstructHelper(SkillBehaviour):
     def __init__(self, name: str = "InstructHelper"):
         super().__init__(
             name,
-            reads=(keys.SITTING_POSE,),
+            reads=(keys.SITTING_POSE, keys.CHAIR_MESH, keys.ARENA, keys.SEED),
             writes=(keys.INSTRUCTIONS, keys.ROTATIONS, keys.HUMANOID_POSE),
         )
 
-    def prepare(self) -> Callable[[], Instruction]:
+    def prepare(self) -> Callable[[], tuple[RotationChoice, Instruction | None]]:
         skills, robot = self.need()
         sitting_pose = self.blackboard.get(keys.SITTING_POSE)
+        chair_mesh = self.blackboard.get(keys.CHAIR_MESH)
+        arena = self.blackboard.get(keys.ARENA)
+        seed = self.blackboard.get(keys.SEED)
 
-        def job() -> Instruction:
+        def job() -> tuple[RotationChoice, Instruction | None]:
             humanoid_pose = tracked_humanoid_pose(skills, robot)
-            instruction = skills.compose_instruction(sitting_pose, humanoid_pose)
+            choice = skills.choose_rotation(
+                chair_mesh, sitting_pose, humanoid_pose, arena, seed=seed
+            )
+            if choice.rotation_rad == 0.0:
+                return choice, None  # nothing worth asking for
+            instruction = skills.compose_instruction(
+                sitting_pose, humanoid_pose, rotation_rad=choice.rotation_rad
+            )
             robot.speaker.say(instruction.sentence)
-            return instruction
+            return choice, instruction
 
         return job
 
-    def conclude(self, instruction: Instruction) -> Status:
+    def conclude(self, outcome: tuple[RotationChoice, Instruction | None]) -> Status:
+        choice, instruction = outcome
+        if instruction is None:
+            return self.fail(choice.reason)
         said = [*self._optional(keys.INSTRUCTIONS, []), instruction.sentence]
         self.blackboard.set(keys.INSTRUCTIONS, said, overwrite=True)
         self.blackboard.set(keys.ROTATIONS, self._optional(keys.ROTATIONS, 0) + 1, overwrite=True)
+        if not choice.predicted_accessible:
+            return self.succeed(f'said "{instruction.sentence}" ({choice.reason})')
         return self.succeed(f'said "{instruction.sentence}"')
 
 

@@ -23,6 +23,7 @@ from skills.results import (
     ChairScan,
     ImaginationResult,
     Instruction,
+    RotationChoice,
     SeatingPlan,
     SeatReachability,
     WalkResult,
@@ -45,6 +46,7 @@ def default_results() -> dict[str, Any]:
         "check_accessibility": AccessibilityResult(
             True, SE2_GOAL, SITTING_POSE, (SE2Pose(1.9, 0.0, np.pi), SE2_GOAL), "", 0.01
         ),
+        "choose_rotation": RotationChoice(-np.pi / 2, True, "", 1),
         "compose_instruction": Instruction(
             "Please rotate the chair about the vertical axis clockwise for 90 degrees", True, 90
         ),

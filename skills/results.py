@@ -256,6 +256,24 @@ class Instruction(NamedTuple):
     angle_deg: int
 
 
+class RotationChoice(NamedTuple):
+    """The rotation to ask for.
+
+    Attributes:
+        rotation_rad: counterclockwise positive, a multiple of 30 degrees; 0 when no
+            rotation is predicted to help and the chair already faces the NAO.
+        predicted_accessible: whether the accessibility check plans with the chair so
+            turned.
+        reason: why no rotation is predicted to help ("" when one is).
+        checked: how many rotations were tried.
+    """
+
+    rotation_rad: float
+    predicted_accessible: bool
+    reason: str = ""
+    checked: int = 0
+
+
 class ChairRotation(NamedTuple):
     """The chair's measured motion after the helper acted (g_rot).
 

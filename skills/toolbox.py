@@ -26,6 +26,7 @@ from skills.results import (
     ChairScan,
     ImaginationResult,
     Instruction,
+    RotationChoice,
     SeatingPlan,
     SeatReachability,
     WalkResult,
@@ -70,8 +71,21 @@ class MissionSkills(Protocol):
         seed: int,
     ) -> AccessibilityResult: ...
 
+    def choose_rotation(
+        self,
+        chair_mesh: trimesh.Trimesh,
+        sitting_pose: SittingPose,
+        humanoid_pose: SE2Pose,
+        arena: Arena,
+        *,
+        seed: int,
+    ) -> RotationChoice: ...
+
     def compose_instruction(
-        self, sitting_pose: SittingPose, humanoid_pose: SE2Pose
+        self,
+        sitting_pose: SittingPose,
+        humanoid_pose: SE2Pose,
+        rotation_rad: float | None = None,
     ) -> Instruction: ...
 
     def wait_until_chair_still(
@@ -127,6 +141,7 @@ SKILL_SOURCES: dict[str, str] = {
     "locate_humanoid": "skills.perception:locate_humanoid",
     "check_seat_reachable": "skills.planning.stance:check_seat_reachable",
     "check_accessibility": "skills.planning.se2:check_accessibility",
+    "choose_rotation": "skills.assistance:choose_rotation",
     "compose_instruction": "skills.assistance:compose_instruction",
     "wait_until_chair_still": "skills.perception:wait_until_chair_still",
     "measure_chair_rotation": "skills.perception:measure_chair_rotation",

@@ -7,8 +7,19 @@ import math
 import numpy as np
 import pytest
 
-from skills.assistance import compose_instruction, instructed_rotation, rotation_toward
+from skills.arena import DEFAULT_ARENA
+from skills.assistance import (
+    choose_rotation,
+    compose_instruction,
+    instructed_rotation,
+    rotation_toward,
+)
+from skills.assistance.rotation import turned_about_centre
 from skills.geometry import SE2Pose, SittingPose
+from skills.meshes import box_chair_mesh
+from skills.results import AccessibilityResult
+
+HUMANOID = SE2Pose(1.9, 0.0, math.pi)
 
 
 @pytest.mark.parametrize(
@@ -90,3 +101,74 @@ def test_obeyed_instruction_points_the_chair_at_the_nao_within_15_degrees() -> N
 def test_target_at_the_sitting_position_is_an_error() -> None:
     with pytest.raises(ValueError, match="no direction"):
         rotation_toward(_sitting(1.0, 1.0, 0.0), (1.0, 1.0))
+
+
+class _AccessibleWhenFacing:
+    """An accessibility check that plans only when the sitting direction is one yaw."""
+
+    def __init__(self, accessible_yaw_deg: float | None) -> None:
+        self.accessible_yaw_deg = accessible_yaw_deg
+        self.yaws_deg: list[float] = []
+
+    def __call__(self, chair_mesh, sitting_pose, humanoid_pose, arena, *, seed):
+        yaw_deg = math.degrees(sitting_pose.yaw)
+        self.yaws_deg.append(round(yaw_deg))
+        wanted = self.accessible_yaw_deg
+        ok = wanted is not None and abs((yaw_deg - wanted + 180.0) % 360.0 - 180.0) < 1.0
+        return AccessibilityResult(ok, None, sitting_pose, (), "" if ok else "touches the wall")
+
+
+def test_rotation_toward_the_nao_is_asked_for_when_it_plans() -> None:
+    check = _AccessibleWhenFacing(0.0)
+    sitting = _sitting(0.6, 0.0, -90.0)
+    choice = choose_rotation(
+        box_chair_mesh(), sitting, HUMANOID, DEFAULT_ARENA, seed=0, check=check
+    )
+    assert choice.predicted_accessible and math.degrees(choice.rotation_rad) == pytest.approx(90)
+    assert check.yaws_deg == [0]  # the paper's rotation, checked once
+
+
+def test_a_chair_facing_the_nao_but_walled_in_is_turned_by_the_smallest_rotation_that_plans():
+    check = _AccessibleWhenFacing(-60.0)
+    sitting = _sitting(0.6, 0.0, 0.0)  # already faces the NAO at +x: the paper asks for 0
+    assert compose_instruction(sitting, HUMANOID).angle_deg == 0
+    choice = choose_rotation(
+        box_chair_mesh(), sitting, HUMANOID, DEFAULT_ARENA, seed=0, check=check
+    )
+    assert math.degrees(choice.rotation_rad) == pytest.approx(-60) and choice.checked == 3
+    assert check.yaws_deg == [-30, 30, -60]  # by size: 30 first, then 60
+    instruction = compose_instruction(sitting, HUMANOID, rotation_rad=choice.rotation_rad)
+    assert instruction.sentence.endswith("clockwise for 60 degrees") and instruction.clockwise
+
+
+def test_when_no_rotation_plans_nothing_useless_is_asked_for() -> None:
+    facing = choose_rotation(
+        box_chair_mesh(),
+        _sitting(0.6, 0.0, 0.0),
+        HUMANOID,
+        DEFAULT_ARENA,
+        seed=0,
+        check=_AccessibleWhenFacing(None),
+    )
+    assert facing.rotation_rad == 0.0 and not facing.predicted_accessible
+    assert "no rotation" in facing.reason and "touches the wall" in facing.reason
+    away = choose_rotation(
+        box_chair_mesh(),
+        _sitting(0.6, 0.0, 180.0),
+        HUMANOID,
+        DEFAULT_ARENA,
+        seed=0,
+        check=_AccessibleWhenFacing(None),
+    )
+    assert abs(math.degrees(away.rotation_rad)) == pytest.approx(180)  # the paper's still
+    assert away.checked == 11
+
+
+def test_rotations_are_tried_about_the_chair_centre() -> None:
+    chair = box_chair_mesh()
+    chair.apply_translation([0.6, 0.2, 0.0])
+    sitting = _sitting(0.65, 0.2, 0.0)
+    turned_chair, turned_pose = turned_about_centre(chair, sitting, math.pi / 2)
+    np.testing.assert_allclose(turned_chair.bounds.mean(axis=0)[:2], [0.6, 0.2], atol=1e-9)
+    np.testing.assert_allclose(turned_pose.position[:2], [0.6, 0.25], atol=1e-9)
+    assert turned_pose.yaw == pytest.approx(math.pi / 2)

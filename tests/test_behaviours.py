@@ -23,7 +23,13 @@ from hardware.interfaces import SeatingJudgement
 from skills.arena import DEFAULT_ARENA
 from skills.fakes import ScriptedSkills, default_results
 from skills.geometry import SE2Pose
-from skills.results import AccessibilityResult, ImaginationResult, SeatReachability, WalkResult
+from skills.results import (
+    AccessibilityResult,
+    ImaginationResult,
+    RotationChoice,
+    SeatReachability,
+    WalkResult,
+)
 from skills.toolbox import SkillNotReady
 
 DEFAULTS = default_results()
@@ -48,7 +54,7 @@ LEAVES = [
             False, None, DEFAULTS["imagine_sitting"].sitting_pose, (), "goal outside the arena"
         ),
     ),
-    (InstructHelper, "compose_instruction", None),
+    (InstructHelper, "choose_rotation", RotationChoice(0.0, False, "no rotation helps", 11)),
     (WaitUntilChairStill, "wait_until_chair_still", None),
     (MeasureChairRotation, "measure_chair_rotation", None),
     (WalkToChair, "walk_path", WalkResult(False, 0.2, 0.3, 60.0, "timed out")),
@@ -204,6 +210,20 @@ def test_instruct_helper_speaks_and_counts():
     assert robot.speaker.said == [sentence, sentence]
     assert py_trees.blackboard.Blackboard.get(keys.ROTATIONS) == 2
     assert py_trees.blackboard.Blackboard.get(keys.INSTRUCTIONS) == [sentence, sentence]
+
+
+def test_instruct_helper_asks_for_nothing_when_no_rotation_helps():
+    reason = "no rotation about the vertical axis makes the chair accessible (wall)"
+    skills = ScriptedSkills(results={"choose_rotation": RotationChoice(0.0, False, reason, 11)})
+    fill_blackboard()
+    robot = fake_robot()
+    leaf = InstructHelper()
+    leaf.setup(skills=skills, robot=robot)
+    assert tick_until_done(leaf)[-1] == Status.FAILURE
+    assert leaf.feedback_message == reason
+    assert robot.speaker.said == [] and not skills.calls["compose_instruction"]
+    _, kwargs = skills.calls["choose_rotation"][0]
+    assert kwargs == {"seed": 7}
 
 
 def test_release_fails_when_the_judge_says_not_seated():

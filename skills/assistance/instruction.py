@@ -54,20 +54,24 @@ def instructed_rotation(rotation_rad: float) -> tuple[bool, int]:
     return wrapped < 0.0, int(angle_deg)
 
 
-def compose_instruction(sitting_pose: SittingPose, humanoid_pose: SE2Pose) -> Instruction:
+def compose_instruction(
+    sitting_pose: SittingPose, humanoid_pose: SE2Pose, rotation_rad: float | None = None
+) -> Instruction:
     """The sentence asking the helper to turn the chair's sitting direction toward the NAO.
 
     Args:
         sitting_pose: g = (p, γ) in the world frame, as measured now.
         humanoid_pose: the NAO's current pose in the world frame.
+        rotation_rad: the rotation to ask for instead (counterclockwise positive), as
+            :func:`skills.assistance.rotation.choose_rotation` chose it.
 
     Returns:
         The instruction; ``angle_deg`` is 0 when the chair already faces the NAO to within
         15 degrees (then turning cannot help, and the mission's attempt limit ends the loop).
     """
-    clockwise, angle_deg = instructed_rotation(
-        rotation_toward(sitting_pose, (humanoid_pose.x, humanoid_pose.y))
-    )
+    if rotation_rad is None:
+        rotation_rad = rotation_toward(sitting_pose, (humanoid_pose.x, humanoid_pose.y))
+    clockwise, angle_deg = instructed_rotation(rotation_rad)
     sentence = INSTRUCTION_TEMPLATE.format(
         direction="clockwise" if clockwise else "counterclockwise", angle=angle_deg
     )
