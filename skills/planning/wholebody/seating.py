@@ -373,7 +373,10 @@ def solve_trajectory(
             return times, knots
     except _NoTrajectory:
         pass
-    times, knots, worst = problem.solve(problems.n_knots, velocity_radps, between=False)
+    try:
+        times, knots, worst = problem.solve(problems.n_knots, velocity_radps, between=False)
+    except _NoTrajectory:
+        raise InfeasibleSeating("trajectory", f"no finite solution of the {phase}") from None
     if worst[0] > CHECK_TOLERANCE:
         raise InfeasibleSeating(worst[1], f"{worst[2]} violated by {worst[0]:.3f} in the {phase}")
     return times, knots
