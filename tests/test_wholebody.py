@@ -34,6 +34,7 @@ from skills.planning.wholebody import (
 )
 from skills.planning.wholebody.chair_profile import (
     BAND_HALF_WIDTH_M,
+    HANDS_ABOVE_SEAT_M,
     largest_horizontal_surface_height,
 )
 from skills.planning.wholebody.nao_model import (
@@ -372,6 +373,30 @@ def test_where_the_nao_stops_does_not_change_the_chair_it_plans_against(chair):
         for y in (-0.005, 0.0, 0.005)  # the walk stops within 5 mm of its goal
     }
     assert len({round(p.seat_top_z, 6) for p in profiles}) == 1
+
+
+@pytest.mark.parametrize("rail_above_seat_m", [0.045, 0.068])
+def test_rails_beside_the_bear_raise_the_seat_only_as_far_as_the_palms_must_clear_them(
+    chair, rail_above_seat_m
+):
+    # Rails on both sides, 0.09 m from the bear's centre line: beside its lane, under the
+    # hands.
+    rails = [
+        trimesh.creation.box(
+            extents=(0.2, 0.03, 0.01),
+            transform=trimesh.transformations.translation_matrix(
+                (0.0, side * 0.09, SEAT_HEIGHT_M + rail_above_seat_m - 0.005)
+            ),
+        )
+        for side in (-1.0, 1.0)
+    ]
+    railed = trimesh.util.concatenate([chair, *rails])
+    seat_top = seating_scene(railed, SITTING_POSE, NAO_POSE).profile.seat_top_z
+    if rail_above_seat_m <= HANDS_ABOVE_SEAT_M:
+        assert seat_top == pytest.approx(SEAT_HEIGHT_M, abs=1e-3)  # the bear's own seat
+    else:
+        expected = SEAT_HEIGHT_M + rail_above_seat_m - HANDS_ABOVE_SEAT_M
+        assert seat_top == pytest.approx(expected, abs=1e-3)
 
 
 def test_bear_one_metre_away_is_out_of_reach(chair):

@@ -9,7 +9,9 @@ That cross-section is bounded by two axis-aligned blocks, each the region behind
 vertical plane and below a horizontal one:
 
 * the seat block  ``{x >= seat_front_x, z <= seat_top_z}``: the seat top is the
-  largest horizontal surface under the sitting pose, its front plane the chair's
+  highest horizontal surface under the sitting pose in the bear's lane, raised where a
+  rail beside the lane would be in the palms' way to ``HANDS_ABOVE_SEAT_M`` below the
+  rail's top (the bear is let go over the seat, not over an armrest), its front plane the chair's
   front-most point at or below the seat;
 * the back block  ``{x >= back_front_x, z <= back_top_z}``: everything above the seat
   (backrest, or anything else standing up from it), from its front-most point up to
@@ -129,15 +131,23 @@ def fit_chair_profile(
 
     # The seat top: the highest horizontal surface under g not far above it (a pelvis
     # sits a few centimetres above the seat; higher horizontal surfaces are armrests or
-    # the backrest's top).
+    # the backrest's top), in the bear's lane; beside it, a rail the hands must pass over
+    # raises it to where the palms clear the rail.
     under = (np.abs(points[:, 0] - g_x) <= 0.06) & (points[:, 2] <= g_z + 0.05)
     horizontal = under & (np.abs(normals[:, 2]) >= HORIZONTAL_NORMAL_Z)
-    candidates = points[horizontal] if np.any(horizontal) else points[under]
+    in_lane = np.abs(points[:, 1]) <= BEAR_LANE_HALF_WIDTH_M
+    candidates = next(
+        (points[m] for m in (horizontal & in_lane, under & in_lane, horizontal, under) if m.any()),
+        points[:0],
+    )
     if len(candidates) == 0:
         raise ChairProfileError(
             f"no seat under the sitting pose ({g_x:.2f} m forward, {g_z:.2f} m high)"
         )
     seat_top_z = float(np.max(candidates[:, 2]))
+    rails = horizontal & ~in_lane
+    if rails.any():
+        seat_top_z = max(seat_top_z, float(np.max(points[rails, 2])) - HANDS_ABOVE_SEAT_M)
     below = points[:, 2] <= seat_top_z + 0.01
     seat_front_x = float(np.min(points[below, 0]))
     above = stands_above_seat(points[:, 1], points[:, 2], seat_top_z)
