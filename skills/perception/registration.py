@@ -17,11 +17,10 @@ nothing nearer hides it; a wrong fit puts chair where the camera saw through to 
 floor or beyond. If the best-fitting hypothesis fails that test, the best of the other
 yaws and a feature-based global registration (FPFH + RANSAC, ../shared/NOTES.md) are
 refined and judged too, and the most consistent fit is kept if it passes: a fixed
-bound, or a lower floor where the fit, moved up to the nearest peak of the visible overlap
-(``climb_visible_overlap``: ICP can stop a step short of it on a partial view), is that
-peak (every fit a few centimetres or degrees from it scores lower; how high a right fit
-scores depends on the chair, a wrong one has a better neighbour). Without frames, the
-fitness bound decides as before.
+bound, or a lower floor where the fit is a peak of the visible overlap (every fit a few
+centimetres or degrees from it scores lower; how high a right fit scores depends on the
+chair, a wrong one has a better neighbour). Without frames, the fitness bound decides as
+before.
 """
 
 from __future__ import annotations
@@ -222,16 +221,12 @@ def register_chair(
                 if key > best[0]:
                     best = (key, T, fit_fitness, fit_rmse, score)
             _, T_old_new, fitness, rmse, visible = best
-        accepted = visible >= config.min_visible_fitness
-        if not accepted:
-            # Below the fixed bound only a peak of the visible overlap is accepted; the fit
-            # is first moved up to its peak.
-            move, climbed, peak = climb_visible_overlap(
+        accepted = visible >= config.min_visible_fitness or (
+            visible >= config.min_peak_visible_fitness
+            and is_visible_peak(
                 transform_points(np.linalg.inv(T_old_new), reference), new_frames, config
             )
-            if peak and climbed >= config.min_peak_visible_fitness:
-                T_old_new = np.linalg.inv(move @ np.linalg.inv(T_old_new))
-                visible, accepted = climbed, True
+        )
         if accepted and rmse <= config.max_rmse_m:
             # Refine on what the new views saw of the reference: every such point has
             # its counterpart in the new cloud, unlike new points on sides the
@@ -316,21 +311,6 @@ def visible_fitness(
     return float(seen.sum()) / judged if judged else 0.0
 
 
-def _neighbour_moves(points: np.ndarray, config: RegistrationConfig) -> list[np.ndarray]:
-    """The moves to a fit's neighbours: ``peak_step_m`` along ±x and ±y, and
-    ±``peak_step_deg`` about the carried points' centroid's vertical."""
-    centre = points.mean(axis=0)
-    step = config.peak_step_m
-    moves = [
-        yaw_transform(0.0, np.array([dx, dy, 0.0]))
-        for dx, dy in ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step))
-    ]
-    for sign in (1.0, -1.0):
-        turn = yaw_transform(sign * math.radians(config.peak_step_deg))
-        moves.append(yaw_transform(0.0, centre) @ turn @ yaw_transform(0.0, -centre))
-    return moves
-
-
 def is_visible_peak(
     points_world: np.ndarray, frames: list[RGBDFrame], config: RegistrationConfig | None = None
 ) -> bool:
@@ -340,41 +320,18 @@ def is_visible_peak(
     config = config or RegistrationConfig()
     points = np.asarray(points_world, dtype=np.float64)
     score = visible_fitness(points, frames, config)
+    centre = points.mean(axis=0)
+    step = config.peak_step_m
+    neighbours = [
+        yaw_transform(0.0, np.array([dx, dy, 0.0]))
+        for dx, dy in ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step))
+    ]
+    for sign in (1.0, -1.0):
+        turn = yaw_transform(sign * math.radians(config.peak_step_deg))
+        neighbours.append(yaw_transform(0.0, centre) @ turn @ yaw_transform(0.0, -centre))
     return all(
-        visible_fitness(transform_points(T, points), frames, config) <= score
-        for T in _neighbour_moves(points, config)
+        visible_fitness(transform_points(T, points), frames, config) <= score for T in neighbours
     )
-
-
-def climb_visible_overlap(
-    points_world: np.ndarray,
-    frames: list[RGBDFrame],
-    config: RegistrationConfig | None = None,
-    max_steps: int = 6,
-) -> tuple[np.ndarray, float, bool]:
-    """Hill-climbs the visible overlap from a fit over its neighbours (see
-    :func:`is_visible_peak`): ICP minimises distances to the nearest points, which on a
-    partial view can stop a step short of where the views agree best.
-
-    Returns:
-        (the world-frame move from the given fit to the last one, its visible overlap,
-        whether it is a peak: no neighbour scores higher; False when ``max_steps`` ran out).
-    """
-    config = config or RegistrationConfig()
-    points = np.asarray(points_world, dtype=np.float64)
-    moved = np.eye(4)
-    score = visible_fitness(points, frames, config)
-    for _ in range(max_steps):
-        carried = transform_points(moved, points)
-        scored = [
-            (visible_fitness(transform_points(T, carried), frames, config), index, T)
-            for index, T in enumerate(_neighbour_moves(carried, config))
-        ]
-        best_score, _, best_move = max(scored, key=lambda s: (s[0], -s[1]))
-        if best_score <= score:
-            return moved, score, True
-        moved, score = best_move @ moved, best_score
-    return moved, score, False
 
 
 def _visibility(
