@@ -35,6 +35,7 @@ from skills.planning.wholebody import (
 from skills.planning.wholebody.chair_profile import (
     BAND_HALF_WIDTH_M,
     HANDS_ABOVE_SEAT_M,
+    RAIL_CLEARANCE_M,
     largest_horizontal_surface_height,
 )
 from skills.planning.wholebody.nao_model import (
@@ -395,7 +396,7 @@ def test_rails_beside_the_bear_raise_the_seat_only_as_far_as_the_palms_must_clea
     if rail_above_seat_m <= HANDS_ABOVE_SEAT_M:
         assert seat_top == pytest.approx(SEAT_HEIGHT_M, abs=1e-3)  # the bear's own seat
     else:
-        expected = SEAT_HEIGHT_M + rail_above_seat_m - HANDS_ABOVE_SEAT_M
+        expected = SEAT_HEIGHT_M + rail_above_seat_m - HANDS_ABOVE_SEAT_M + RAIL_CLEARANCE_M
         assert seat_top == pytest.approx(expected, abs=1e-3)
 
 

@@ -10,8 +10,8 @@ vertical plane and below a horizontal one:
 
 * the seat block  ``{x >= seat_front_x, z <= seat_top_z}``: the seat top is the
   highest horizontal surface under the sitting pose in the bear's lane, raised where a
-  rail beside the lane would be in the palms' way to ``HANDS_ABOVE_SEAT_M`` below the
-  rail's top (the bear is let go over the seat, not over an armrest), its front plane the chair's
+  rail beside the lane would be in the palms' way to ``HANDS_ABOVE_SEAT_M`` less
+  ``RAIL_CLEARANCE_M`` below the rail's top (the bear is let go over the seat, not over an armrest), its front plane the chair's
   front-most point at or below the seat;
 * the back block  ``{x >= back_front_x, z <= back_top_z}``: everything above the seat
   (backrest, or anything else standing up from it), from its front-most point up to
@@ -45,6 +45,11 @@ HANDS_ABOVE_SEAT_M = BEAR_SEAT_CLEARANCE_M + BEAR_SEAT_BELOW_HANDS_M - 0.015
 ``BEAR_SEAT_CLEARANCE_M`` over the seat; the planner's hand points have a 0.015 m
 radius), stays this high over the seat top, metres: lower rails beside the bear are not
 in their way."""
+
+RAIL_CLEARANCE_M = 0.01
+"""Where a rail beside the bear raises the seat top, the palms pass this much higher over
+it (metres): the scan's noise on the rail's top, a few millimetres, must not make the rail
+stand in the hands' way."""
 
 
 def stands_above_seat(lateral_m: np.ndarray, z_m: np.ndarray, seat_top_m: float) -> np.ndarray:
@@ -147,7 +152,8 @@ def fit_chair_profile(
     seat_top_z = float(np.max(candidates[:, 2]))
     rails = horizontal & ~in_lane
     if rails.any():
-        seat_top_z = max(seat_top_z, float(np.max(points[rails, 2])) - HANDS_ABOVE_SEAT_M)
+        rail_top = float(np.max(points[rails, 2]))
+        seat_top_z = max(seat_top_z, rail_top - HANDS_ABOVE_SEAT_M + RAIL_CLEARANCE_M)
     below = points[:, 2] <= seat_top_z + 0.01
     seat_front_x = float(np.min(points[below, 0]))
     above = stands_above_seat(points[:, 1], points[:, 2], seat_top_z)
