@@ -49,11 +49,11 @@ PALM_IN_WRIST_M: tuple[float, float, float] = (0.045, 0.0, -0.008)
 
 BEAR_SEAT_CLEARANCE_M = 0.01
 """The bear's seat point is let go at most this high over the scanned seat's top (metres),
-and the bear drops that far, plus the scan's error (the imagined sitting pose's height is the sitter's pelvis, 6
-to 10 cm over the seat: a bear released there tips over the seat's front edge). It covers
-the scan's error in the seat's height, which put the scanned seat 2-5 mm above the true
-one in the campaign trials. Released from 2 cm the bear lands at 0.6 m/s and bounces off
-curved or railed seats and the NAO's wrists; from 1 cm, at 0.44 m/s."""
+not at the imagined sitting pose's height (the sitter's pelvis, 6 to 10 cm over the seat:
+a bear released there tips over the seat's front edge). It covers the scan's error in the
+seat's height, which put the scanned seat 2-5 mm above the true one in the campaign
+trials. Released from 2 cm the bear lands at 0.6 m/s and bounced off curved or railed
+seats and the NAO's wrists; from 1 cm, at 0.44 m/s."""
 
 BEAR_TORSO_DEPTH_M = 0.085
 """Fore-aft depth of the bear's torso (metres), the part it sits on: its legs stick out

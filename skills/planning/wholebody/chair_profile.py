@@ -11,8 +11,8 @@ vertical plane and below a horizontal one:
 * the seat block  ``{x >= seat_front_x, z <= seat_top_z}``: the seat top is the
   highest horizontal surface under the sitting pose in the bear's lane, raised where a
   rail beside the lane would be in the palms' way to ``HANDS_ABOVE_SEAT_M`` less
-  ``RAIL_CLEARANCE_M`` below the rail's top (the bear is let go over the seat, not over an armrest), its front plane the chair's
-  front-most point at or below the seat;
+  ``RAIL_CLEARANCE_M`` below the rail's top (the bear is let go over the seat, not over
+  an armrest); its front plane is the chair's front-most point at or below the seat;
 * the back block  ``{x >= back_front_x, z <= back_top_z}``: everything above the seat
   (backrest, or anything else standing up from it), from its front-most point up to
   its top.

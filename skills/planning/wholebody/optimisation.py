@@ -192,7 +192,6 @@ class SeatingProblems:
         self.trajectory_solvers = {
             knots: self._build_trajectory(knots) for knots in sorted({COARSE_KNOTS, n_knots})
         }
-        self.trajectory_solver = self.trajectory_solvers[n_knots]
         self.lock = threading.Lock()
 
     # ---- the posture model -------------------------------------------------------
