@@ -41,9 +41,10 @@ class CheckSeatReachable(SkillBehaviour):
         self.blackboard.set(keys.REACHABILITY, verdict, overwrite=True)
         if not verdict.reachable:
             return self.fail(f"refused: {verdict.reason}")
+        across = f" and {verdict.centred_m:.2f} m across" if verdict.centred_m else ""
         return self.succeed(
-            f"seat {verdict.seat_height_m:.2f} m high within reach "
-            f"(p moved {verdict.slide_m:.2f} m, stance {verdict.stance_m:.2f} m from it)"
+            f"seat {verdict.seat_height_m:.2f} m high within reach (p moved "
+            f"{verdict.slide_m:.2f} m{across}, stance {verdict.stance_m:.2f} m from it)"
         )
 
 

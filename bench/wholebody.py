@@ -3,12 +3,19 @@
     python bench/wholebody.py                  # solve times over chairs and stances
     python bench/wholebody.py --sim --runs 10  # plan, execute, release, judge (box chair)
     python bench/wholebody.py --sim --calibration --runs 20
+    python bench/wholebody.py --walk-error     # plans where the walk may stop, per chair
 
 Solve times: the box chair and the calibration chairs (../shared/chairs, skipped when
 absent) with the sitting pose at their true seat (above the area centroid of the mesh's
 largest horizontal surface, 2 cm over the chair's top there: a cushion counts), the NAO
 facing it on the sitting ray at stances 0.22 to 0.36 m. Prints the median and spread of
 the goal posture, trajectory and retract solve times and the feasible stances.
+
+Walk error: for each calibration chair (true mesh, sitting pose at its true seat) the
+stance the mission's search chooses, then the plan from the 8 corners of the walk's stop
+box around it (``WalkGains.stop_tolerance_m`` forward and sideways, ``stop_tolerance_rad``
+in heading): the search accepts s_goal for a plan made where the NAO really stops, and
+every corner should plan. Prints the chairs where some corner fails, with the failures.
 
 Simulation: the chair is placed 0.5 m in front of the NAO's start pose (sitting
 direction toward the NAO) and settles; the NAO is placed (``SimWorld.place_nao``) at the
@@ -194,6 +201,54 @@ def sim_run(chair_path: Path | None, front_yaw_deg: float, seed: int) -> tuple[b
         )
 
 
+def walk_error(chairs: list[tuple[str, trimesh.Trimesh, float]]) -> None:
+    """Prints, per chair, the stop-box corners from which the seating does not plan."""
+    from skills.control.walk import WalkGains
+    from skills.planning.wholebody import plan_seating_where_standing
+
+    gains = WalkGains()
+    step_m, step_rad = gains.stop_tolerance_m, gains.stop_tolerance_rad
+    corners = [
+        (forward, side, turn)
+        for forward in (-step_m, step_m)
+        for side in (-step_m, step_m)
+        for turn in (-step_rad, step_rad)
+    ]
+    searched = planned = tried = 0
+    for name, mesh, front_yaw_deg in chairs:
+        found = feasible_stance(
+            mesh, SittingPose(true_seat_point(mesh), math.radians(front_yaw_deg))
+        )
+        if found is None:
+            print(f"  {name:24s} no stance")
+            continue
+        searched += 1
+        stance, sitting_pose, raise_at = found
+        heading = np.array([math.cos(stance.theta), math.sin(stance.theta)])
+        side_axis = np.array([-heading[1], heading[0]])
+        failures = []
+        for forward, side, turn in corners:
+            x, y = np.array([stance.x, stance.y]) + forward * heading + side * side_axis
+            pose = SE2Pose(float(x), float(y), wrap_angle(stance.theta + turn))
+            tried += 1
+            try:
+                plan_seating_where_standing(mesh, sitting_pose, pose, raised=raise_at is not None)
+                planned += 1
+            except InfeasibleSeating as error:
+                failures.append(
+                    f"({forward * 1e3:+.0f} mm, {side * 1e3:+.0f} mm, "
+                    f"{math.degrees(turn):+.1f} deg) {error}"
+                )
+        if failures:
+            print(f"  {name:24s} {len(failures)}/{len(corners)} corners fail")
+            for failure in failures:
+                print(f"      {failure}")
+    print(
+        f"stop-box corners that plan: {planned}/{tried} "
+        f"({100.0 * planned / max(tried, 1):.1f} %) on {searched} chairs with a stance"
+    )
+
+
 def main() -> None:
     """Parses the options and prints the figures."""
     parser = argparse.ArgumentParser(
@@ -203,6 +258,9 @@ def main() -> None:
     parser.add_argument("--calibration", action="store_true", help="use the calibration chairs")
     parser.add_argument("--runs", type=int, default=10, help="simulated runs")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--walk-error", action="store_true", help="plan from the corners of the walk's stop box"
+    )
     args = parser.parse_args()
 
     started = time.perf_counter()
@@ -217,7 +275,7 @@ def main() -> None:
             chairs.append((name, load_mesh(path), front))
         if len(chairs) == 1:
             print(f"(no calibration chairs at {CHAIRS_DIR}: box chair only)")
-        solve_times(chairs)
+        (walk_error if args.walk_error else solve_times)(chairs)
         return
 
     runs: list[tuple[Path | None, float, str]]

@@ -178,6 +178,7 @@ class SeatReachability(NamedTuple):
         stance_m: the stance's distance from the imagined p along the ray, metres (NaN
             when none).
         seconds: wall time of the check.
+        centred_m: how far p had to move across the ray (between armrests), metres.
     """
 
     reachable: bool
@@ -186,6 +187,7 @@ class SeatReachability(NamedTuple):
     slide_m: float = 0.0
     stance_m: float = math.nan
     seconds: float = 0.0
+    centred_m: float = 0.0
 
     def summary(self) -> dict[str, Any]:
         def number(value: float) -> float | None:
@@ -197,6 +199,7 @@ class SeatReachability(NamedTuple):
             "seat_height_m": number(self.seat_height_m),
             "slide_m": number(self.slide_m),
             "stance_m": number(self.stance_m),
+            "centred_m": number(self.centred_m),
             "seconds": round(self.seconds, 3),
         }
 

@@ -468,3 +468,33 @@ def test_a_ray_turned_about_p_is_searched_when_the_imagined_one_fails() -> None:
     assert nowhere.se2_goal is None and nowhere.turned_rad == 0.0
     assert nowhere.reason == "chair collision: knee"  # the imagined ray's reason
     assert nowhere.preplans <= MAX_PREPLANS + PREPLANS_PER_TURN * len(TURNS_RAD)
+
+
+def test_p_off_the_middle_between_armrests_is_centred_for_the_hands() -> None:
+    from skills.planning.stance import centred_between_rails, planner_seat_top
+
+    # Armrest panels 0.15 m over the seat (above the hands), inner faces 0.13 m either
+    # side of the middle: the band of the hands (0.11 m, plus 1 cm) fits between them.
+    armchair, middle = _placed_chair(0.6, 0.1, 30.0, armrest_height_m=0.39)
+    left = np.array([-math.sin(middle.yaw), math.cos(middle.yaw), 0.0])
+    off_middle = SittingPose(middle.position + 0.025 * left, middle.yaw)
+    seat_top = planner_seat_top(armchair, off_middle, seat_ray(armchair, off_middle))
+    centred = centred_between_rails(armchair, off_middle, seat_top)
+    assert np.dot(centred.position - middle.position, left) == pytest.approx(0.0, abs=0.005)
+    assert centred.yaw == off_middle.yaw
+    assert centred.position[2] == off_middle.position[2]
+
+    reachable = check_seat_reachable(armchair, off_middle)
+    assert reachable.reachable, reachable.reason
+    assert reachable.centred_m == pytest.approx(0.025, abs=0.005)
+
+    # Armrests 0.23 m apart leave the band no room wherever p is; no armrests, nothing
+    # to move for.
+    narrow, narrow_middle = _placed_chair(0.6, 0.1, 30.0, seat_width_m=0.29, armrest_height_m=0.39)
+    narrow_off = SittingPose(narrow_middle.position + 0.025 * left, middle.yaw)
+    top = planner_seat_top(narrow, narrow_off, seat_ray(narrow, narrow_off))
+    assert centred_between_rails(narrow, narrow_off, top) is narrow_off
+    plain, plain_middle = _placed_chair(0.6, 0.1, 30.0)
+    plain_off = SittingPose(plain_middle.position + 0.025 * left, middle.yaw)
+    top = planner_seat_top(plain, plain_off, seat_ray(plain, plain_off))
+    assert centred_between_rails(plain, plain_off, top) is plain_off

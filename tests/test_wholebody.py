@@ -376,6 +376,28 @@ def test_where_the_nao_stops_does_not_change_the_chair_it_plans_against(chair):
     assert len({round(p.seat_top_z, 6) for p in profiles}) == 1
 
 
+def test_a_rail_at_the_band_edge_raises_the_seat_whichever_way_the_nao_stops_turned(chair):
+    # A rail in the hands' way, its top sloping 20 deg (no horizontal face: a scanned
+    # armrest's top is rarely flat), its inner edge 1 mm inside the band: a turn of the
+    # NAO within the walk's stop box moves the rail's top in and out of the band.
+    rail_top_m = SEAT_HEIGHT_M + 0.068
+    rail = trimesh.creation.box(
+        extents=(0.2, 0.03, 0.01),
+        transform=trimesh.transformations.rotation_matrix(math.radians(20.0), (1, 0, 0)),
+    )
+    (_, y_low, _), (_, _, z_high) = rail.bounds
+    rail.apply_translation((0.0, BAND_HALF_WIDTH_M - 0.001 - y_low, rail_top_m - z_high))
+    railed = trimesh.util.concatenate([chair, rail])
+    highest = rail_top_m - HANDS_ABOVE_SEAT_M + RAIL_CLEARANCE_M
+    for turn_deg in (-2.5, 0.0, 2.5):
+        pose = SE2Pose(NAO_POSE.x, NAO_POSE.y, NAO_POSE.theta + math.radians(turn_deg))
+        scene = seating_scene(railed, SITTING_POSE, pose)
+        # Raised for the part of the rail inside the band (its top slopes 1 cm across).
+        assert highest - 0.011 <= scene.profile.seat_top_z <= highest + 1e-3, turn_deg
+        # Not something standing on the seat in front of the bear.
+        assert scene.profile.back_front_x > scene.g_xz[0], turn_deg
+
+
 @pytest.mark.parametrize("rail_above_seat_m", [0.045, 0.068])
 def test_rails_beside_the_bear_raise_the_seat_only_as_far_as_the_palms_must_clear_them(
     chair, rail_above_seat_m

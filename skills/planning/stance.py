@@ -51,6 +51,8 @@ from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from skills.planning.seat import STEP_M, SeatRay, seat_ray
 from skills.planning.wholebody.chair_profile import (
     BAND_HALF_WIDTH_M,
+    BEAR_LANE_HALF_WIDTH_M,
+    RAIL_CLEARANCE_M,
     ChairProfileError,
     fit_chair_profile,
     stands_above_seat,
@@ -77,6 +79,11 @@ deg) and the seating judge's 45 deg."""
 PREPLANS_PER_TURN = 2
 """Pre-plans each turned ray may ask for: the reach model's first pairs are right when
 the seat is reachable from there at all."""
+MAX_CENTRING_M = BEAR_LANE_HALF_WIDTH_M - 0.01
+"""How far (metres) p may move across the sitting ray to centre the NAO's band between
+armrests: the bear's lane, less a centimetre, still covers the imagined p. A sitter lands
+where its drop put it, often a few centimetres off the middle between armrests, and the
+NAO's hands need the middle."""
 
 
 class SeatingCheck(NamedTuple):
@@ -119,6 +126,8 @@ class StanceChoice(NamedTuple):
         seat_height_m: the seat's height under the imagined p, metres (NaN: no seat).
         turned_rad: how far the sitting direction was turned from the imagined one
             (``TURNS_RAD``) for the chosen pair, radians.
+        centred_m: how far p moved across the ray, between armrests
+            (:func:`centred_between_rails`), metres.
     """
 
     se2_goal: SE2Pose | None
@@ -131,6 +140,7 @@ class StanceChoice(NamedTuple):
     approach: SE2Pose | None = None
     seat_height_m: float = math.nan
     turned_rad: float = 0.0
+    centred_m: float = 0.0
 
 
 def goal_on_ray(sitting_pose: SittingPose, distance_m: float) -> SE2Pose:
@@ -188,6 +198,52 @@ def chair_along_ray(
         float(along[below].max()) if below.any() else 0.0,
         float(along[above].max()) if above.any() else -math.inf,
     )
+
+
+def centred_between_rails(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, seat_top_m: float
+) -> SittingPose:
+    """p moved across the ray so that what stands on the seat beside it (armrests) leaves
+    the NAO's band, ``RAIL_CLEARANCE_M`` outside it on each side it stands; p unchanged
+    when nothing stands within that of the band ahead of the bear's back, or no move of
+    at most ``MAX_CENTRING_M`` clears both sides.
+
+    With a and b the nearest such points left and right of the ray (across it, metres;
+    a missing side counts as far away), band w and clearance c, the move is
+
+    .. math::
+
+        δ = \\operatorname{clip}\\Big(\\tfrac{a + b}{2},\\; b + w + c,\\; a - w - c\\Big),
+
+    the middle of the gap, kept within the moves that clear both sides.
+    """
+    p = np.asarray(sitting_pose.position, dtype=float)
+    u = sitting_pose.direction()
+    left_axis = np.array([-u[1], u[0]])
+    points, _ = trimesh.sample.sample_surface(chair_mesh, 20000, seed=0)
+    points = np.vstack([points, chair_mesh.vertices])
+    rel = points[:, :2] - p[:2]
+    along, across = rel @ u, rel @ left_axis
+    reach = BAND_HALF_WIDTH_M + RAIL_CLEARANCE_M
+    ahead = along >= -(BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M)
+    standing = ahead & (np.abs(across) <= reach + MAX_CENTRING_M)
+    standing &= stands_above_seat(across, points[:, 2], seat_top_m)
+    left = across[standing & (across > 0.0)]
+    right = across[standing & (across <= 0.0)]
+    a = float(left.min()) if len(left) else math.inf
+    b = float(right.max()) if len(right) else -math.inf
+    if a > reach and b < -reach:
+        return sitting_pose
+    lowest, highest = b + reach, a - reach
+    if lowest > highest:
+        return sitting_pose  # the gap is narrower than the band: no move helps
+    middle = (a + b) / 2.0 if math.isfinite(a + b) else (lowest if math.isfinite(b) else highest)
+    move = float(np.clip(middle, lowest, highest))
+    if abs(move) > MAX_CENTRING_M:
+        return sitting_pose
+    moved = p.copy()
+    moved[:2] += move * left_axis
+    return SittingPose(moved, sitting_pose.yaw)
 
 
 def _first_clear(
@@ -294,6 +350,16 @@ def choose_stance_on_ray(
     if len(ray.slides_m) == 0:
         return StanceChoice(None, sitting_pose, "no seat under the sitting position")
     seat_top = planner_seat_top(chair_mesh, sitting_pose, ray)
+    centred = centred_between_rails(chair_mesh, sitting_pose, seat_top)
+    centred_m = 0.0
+    if centred is not sitting_pose:
+        centred_ray = seat_ray(chair_mesh, centred)
+        if len(centred_ray.slides_m):
+            centred_m = float(
+                np.linalg.norm(np.asarray(centred.position) - np.asarray(sitting_pose.position))
+            )
+            sitting_pose, ray = centred, centred_ray
+            seat_top = planner_seat_top(chair_mesh, sitting_pose, ray)
     chair = chair_along_ray(chair_mesh, sitting_pose, seat_top)
     seat_under_p0 = float(ray.seat_heights_m[0])
     # Something standing on the seat in the band (armrests, a backrest) in front of the
@@ -303,7 +369,7 @@ def choose_stance_on_ray(
         ray.slides_m >= chair.above_seat_m + BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M
     )
     front = chair.front_m
-    none = StanceChoice(None, sitting_pose, "", seat_height_m=seat_under_p0)
+    none = StanceChoice(None, sitting_pose, "", seat_height_m=seat_under_p0, centred_m=centred_m)
     # The planner lets the bear go over its own seat top (a dished seat's rim, rails):
     # the reach model is asked about that height.
     planner_ray = SeatRay(ray.slides_m, np.maximum(ray.seat_heights_m, seat_top))
@@ -488,4 +554,4 @@ def check_seat_reachable(
             reason = f"no stance passes the seating pre-plan: {reason}"
         return SeatReachability(False, reason, height, seconds=seconds)
     stance = float(np.hypot(choice.se2_goal.x - p0[0], choice.se2_goal.y - p0[1]))
-    return SeatReachability(True, "", height, choice.slide_m, stance, seconds)
+    return SeatReachability(True, "", height, choice.slide_m, stance, seconds, choice.centred_m)

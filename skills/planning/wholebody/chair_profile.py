@@ -150,7 +150,10 @@ def fit_chair_profile(
             f"no seat under the sitting pose ({g_x:.2f} m forward, {g_z:.2f} m high)"
         )
     seat_top_z = float(np.max(candidates[:, 2]))
-    rails = horizontal & ~in_lane
+    # A rail's top from all its samples, not only its horizontal top: a rail at the band's
+    # edge would otherwise be a rail (its top in the band) or, a millimetre further out,
+    # something standing above the seat (only its inner side in the band).
+    rails = under & ~in_lane
     if rails.any():
         rail_top = float(np.max(points[rails, 2]))
         seat_top_z = max(seat_top_z, rail_top - HANDS_ABOVE_SEAT_M + RAIL_CLEARANCE_M)

@@ -618,7 +618,33 @@ def _motion_from_goal(
     trajectory_s = time.perf_counter() - started
     started = time.perf_counter()
     released = released_bear(problems.geometry(q_goal))
-    q_folded = _clear_withdrawn_posture(problems, profile, q_goal, released)
+    # Each withdrawn-hands posture clear of the chair in turn: from one the stand-up may
+    # need the centre of mass where the released bear leaves the torso no room.
+    first_failure: InfeasibleSeating | None = None
+    for q_folded in _clear_withdrawn_postures(problems, profile, q_goal, released):
+        try:
+            retract_times, retract_knots = _retract(problems, profile, q_goal, q_folded, released)
+        except InfeasibleSeating as error:
+            first_failure = first_failure or error
+            continue
+        retract_s = time.perf_counter() - started
+        return times, knots, retract_times, retract_knots, trajectory_s, retract_s
+    assert first_failure is not None
+    raise first_failure
+
+
+def _retract(
+    problems: SeatingProblems,
+    profile: ChairProfile,
+    q_goal: np.ndarray,
+    q_folded: np.ndarray,
+    released: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(times, knots) of the retract: the hands back to ``q_folded``, then standing up.
+
+    Raises:
+        InfeasibleSeating: either part is infeasible.
+    """
     fold_times, fold = solve_trajectory(
         problems,
         profile,
@@ -638,17 +664,15 @@ def _motion_from_goal(
         released=released,
         phase="retract (standing up)",
     )
-    retract_s = time.perf_counter() - started
-    retract_knots = np.vstack([fold, stand[1:]])
-    retract_times = np.r_[fold_times, fold_times[-1] + stand_times[1:]]
-    return times, knots, retract_times, retract_knots, trajectory_s, retract_s
+    return np.r_[fold_times, fold_times[-1] + stand_times[1:]], np.vstack([fold, stand[1:]])
 
 
-def _clear_withdrawn_posture(
+def _clear_withdrawn_postures(
     problems: SeatingProblems, profile: ChairProfile, q_goal: np.ndarray, released: np.ndarray
-) -> np.ndarray:
-    """The first withdrawn-hands posture of ``RETRACT_OFFSETS_M`` clear of the chair (the
-    last one when none is: the retract then reports the violation)."""
+) -> Iterator[np.ndarray]:
+    """The withdrawn-hands postures of ``RETRACT_OFFSETS_M`` clear of the chair, in order
+    (only the last one when none is: the retract then reports the violation)."""
+    clear = 0
     for back_m, up_m in RETRACT_OFFSETS_M:
         q_folded = withdrawn_hands_posture(problems, q_goal, back_m, up_m)
         violation = exact_posture_violation(
@@ -661,8 +685,10 @@ def _clear_withdrawn_posture(
             released=released,
         )
         if violation[0] <= CHECK_TOLERANCE:
-            break
-    return q_folded
+            clear += 1
+            yield q_folded
+    if not clear:
+        yield q_folded
 
 
 def preplan_seating(
