@@ -48,6 +48,7 @@ from skills.planning.wholebody.nao_model import (
 from skills.planning.wholebody.optimisation import (
     BEAR_DEPTH_M,
     BEAR_HEIGHT_M,
+    BEAR_LEAN_BACK_RAD,
     BEAR_TILT_GOAL_RAD,
     CARRYING_POSTURE_RAD,
     COARSE_KNOTS,
@@ -204,6 +205,8 @@ def test_goal_posture_meets_every_constraint(chair, plan):
     assert base[1] <= scene.g_xz[1] + 1e-6
     # Upright bear, facing the sitting direction (the NAO's -x).
     assert abs(math.asin(forward[1])) <= BEAR_TILT_GOAL_RAD + 1e-6
+    # ... let go leaning back toward the backrest, not forward over the seat's front.
+    assert math.asin(up[0]) == pytest.approx(BEAR_LEAN_BACK_RAD, abs=math.radians(2.0))
     # Centre of mass inside the feet's support interval with the margin.
     x_back, x_front = nao.support_x
     com_x = _com_x(q_goal, (base, up))

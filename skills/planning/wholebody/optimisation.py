@@ -63,6 +63,17 @@ NO_RELEASED_BEAR = np.array([10.0, 0.0, -1.0, 0.0])
 
 GOAL_COM_WEIGHT = 10.0
 GOAL_TORSO_WEIGHT = 1.0
+BEAR_LEAN_BACK_RAD = math.radians(5.0)
+"""The goal prefers the bear let go leaning back this far (toward the backrest, radians):
+it then lands on its rear edge with its centre of mass over it, which rocks it onto its
+base. Let go upright or leaning forward onto a seat that falls a few degrees toward the
+NAO (a crowned or rounded seat), it landed on its rear edge with its centre of mass ahead
+of it, and the impact pitched it forward at about 2 rad/s, over its front. 5 deg is well
+inside the 23 deg at which its centre of mass (0.10 m up) would pass the rear edge of its
+0.085 m deep base, and inside the goal's tilt bound (``BEAR_TILT_GOAL_RAD``)."""
+GOAL_LEAN_WEIGHT = 100.0
+"""Weight of the lean's squared error (in sin units): a 5 deg miss costs as much as 0.08 m
+of centre of mass off the feet's middle, so the lean wins unless balance needs it."""
 
 N_KNOTS = 30
 COARSE_KNOTS = 15
@@ -317,9 +328,11 @@ class SeatingProblems:
         g_xz = ca.SX.sym("g", 2)
         diagnose = ca.SX.sym("diagnose")
         values = self.posture_constraints(q, chair, 1.0, NO_RELEASED_BEAR)
-        com_x, base, _, torso_pitch, _, _ = self.posture_geometry(q, 1.0)
+        com_x, base, up, torso_pitch, _, _ = self.posture_geometry(q, 1.0)
         d_com = ca.sqrt((com_x - self.support_centre_x) ** 2 + 1e-8)
         cost = GOAL_COM_WEIGHT * d_com + GOAL_TORSO_WEIGHT * torso_pitch**2
+        # up[0] > 0: the bear's top leans away from the NAO, toward the backrest.
+        cost += GOAL_LEAN_WEIGHT * (up[0] - math.sin(BEAR_LEAN_BACK_RAD)) ** 2
         placement_error = ca.sumsqr(base - g_xz)
         objective = (1 - diagnose) * cost + diagnose * 100.0 * placement_error
         nlp = {"x": q, "p": ca.vertcat(g_xz, chair, diagnose), "f": objective, "g": values}
