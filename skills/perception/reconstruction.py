@@ -9,7 +9,8 @@ Pipeline (each step timed in ``ChairScan.seconds``):
 3. ``floor``: the fused points' dominant horizontal plane (RANSAC) is the floor;
    everything within ``floor_band_m`` of it, or below it, is removed.
 4. ``cluster``: the remaining points are voxelised and split into 26-connected
-   components; the chair is the largest component whose centre lies in the chair area.
+   components; the chair is the largest component whose centre lies in the chair area,
+   with the other sizeable ones there (its parts, where the scan lost a thin bar).
 5. ``mesh``: marching cubes on the same grid; the faces whose vertices lie in the
    chair's voxels are kept, and the legs' cut ends are lowered onto the floor plane.
 """
@@ -154,11 +155,20 @@ def fit_floor(points: np.ndarray, config: ReconstructionConfig) -> np.ndarray:
     raise PerceptionError("no floor plane found in the scan (is the floor in view?)")
 
 
-def largest_cluster(
+CHAIR_PART_SHARE = 0.05
+"""A component of the scan near the chair with at least this share of the chair's largest
+component's cells is a part of the chair: where a bar is thinner than the TSDF's voxels
+(a swivel chair's column, a backrest's stem) the scan loses it and the chair comes apart
+into its seat, base and backrest. Smaller crumbs are the TSDF's noise."""
+
+
+def chair_cluster(
     points: np.ndarray, config: ReconstructionConfig, cell_m: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Keeps the biggest 26-connected component of occupied cells whose centre is in the
-    chair area (grown by 5 cm).
+    """Keeps the 26-connected components of occupied cells that make the chair: the
+    biggest whose centre is in the chair area (grown by 5 cm), with every other one of at
+    least ``CHAIR_PART_SHARE`` of its size whose centre lies within ``MAX_CHAIR_REACH_M``
+    of its centre (horizontally: a part of the same chair).
 
     Returns:
         (mask over ``points``, boolean occupancy grid of the chair, grid origin).
@@ -177,20 +187,33 @@ def largest_cluster(
     point_labels = labels[tuple(cells.T)]
     sizes = np.bincount(point_labels, minlength=count + 1)
     sizes[0] = 0
+    by_size = [int(label) for label in np.argsort(sizes)[::-1] if label and sizes[label]]
+    counts = np.maximum(sizes, 1)
+    centres = np.column_stack(
+        [
+            np.bincount(point_labels, weights=points[:, axis], minlength=count + 1) / counts
+            for axis in (0, 1)
+        ]
+    )
     area = config.chair_area
-    best_label, best_size = 0, 0
-    for label in np.argsort(sizes)[::-1]:
-        if sizes[label] <= best_size or label == 0:
-            break
-        centre = points[point_labels == label].mean(axis=0)
-        if area.x_min - 0.05 <= centre[0] <= area.x_max + 0.05 and (
-            area.y_min - 0.05 <= centre[1] <= area.y_max + 0.05
-        ):
-            best_label, best_size = int(label), int(sizes[label])
-            break
-    if best_label == 0:
+    main = next(
+        (
+            label
+            for label in by_size
+            if area.x_min - 0.05 <= centres[label][0] <= area.x_max + 0.05
+            and area.y_min - 0.05 <= centres[label][1] <= area.y_max + 0.05
+        ),
+        None,
+    )
+    if main is None:
         raise PerceptionError("no object found with its centre in the chair area")
-    return point_labels == best_label, labels == best_label, origin
+    parts = [
+        label
+        for label in by_size
+        if sizes[label] >= CHAIR_PART_SHARE * sizes[main]
+        and np.hypot(*(centres[label] - centres[main])) <= MAX_CHAIR_REACH_M
+    ]
+    return np.isin(point_labels, parts), np.isin(labels, parts), origin
 
 
 @one_open3d_thread()
@@ -238,7 +261,7 @@ def reconstruct_chair(frames: Sequence[RGBDFrame], config: ReconstructionConfig)
     cell_m = 1.5 * config.voxel_size_m
     if len(above) < config.min_chair_points:
         raise PerceptionError("nothing chair-sized stands on the floor in the chair area")
-    keep, chair_cells, origin = largest_cluster(above, config, cell_m)
+    keep, chair_cells, origin = chair_cluster(above, config, cell_m)
     # open3d's hash map returns points in no fixed order: sort them so that the same
     # frames always give the same arrays.
     chair_points = _sorted_rows(above[keep])
