@@ -30,7 +30,7 @@ from skills.meshes import (
     write_cached_arrays,
 )
 
-PREPARATION_VERSION = "v8"
+PREPARATION_VERSION = "v9"
 CHAIR_DENSITY_KG_M3 = 500.0
 """Wood-like; the mass is clamped to CHAIR_MASS_RANGE_KG since the solid under the
 surface overestimates the volume."""
@@ -58,7 +58,10 @@ class PreparedChair(NamedTuple):
         pieces: the boxes' corners in the chair body frame (centred on the
             centre of mass), each an (N, 3) float array.
         collision_obj: an OBJ file of the pieces (one object each, body frame), which
-            pybullet loads as a compound of convex hulls.
+            pybullet loads as a compound of convex hulls: what the agent touches.
+        support_obj: an OBJ file of the pieces' convex hull (one object, body frame):
+            what the floor touches (see ``simulation``: on a flat floor a rigid body
+            rests on, tips about and falls onto points of its convex hull only).
         com_obb_m: (3,) centre of mass in the OBB frame (the body frame's origin).
         mass_kg: chair mass.
         inertia_diag: (3,) moments of inertia about the body axes (kg m^2); the
@@ -73,6 +76,7 @@ class PreparedChair(NamedTuple):
     z_top_m: float
     pieces: tuple[np.ndarray, ...]
     collision_obj: str
+    support_obj: str
     com_obb_m: np.ndarray
     mass_kg: float
     inertia_diag: np.ndarray
@@ -130,7 +134,9 @@ def prepare_chair(mesh: trimesh.Trimesh) -> PreparedChair:
             return _memory[digest]
     path = cache_dir() / "imagination" / f"{digest}-{PREPARATION_VERSION}.npz"
     prepared = _from_cache(read_cached_arrays(path))
-    if prepared is not None and not Path(prepared.collision_obj).exists():
+    if prepared is not None and not all(
+        Path(name).exists() for name in (prepared.collision_obj, prepared.support_obj)
+    ):
         prepared = None
     if prepared is None:
         prepared = _prepare(mesh, digest)
@@ -176,6 +182,7 @@ def _from_cache(arrays: dict[str, np.ndarray] | None) -> PreparedChair | None:
             z_top_m=float(arrays["z_top_m"]),
             pieces=tuple(np.asarray(piece, dtype=float) for piece in arrays["pieces"]),
             collision_obj=str(arrays["collision_obj"]),
+            support_obj=str(arrays["support_obj"]),
             com_obb_m=np.asarray(arrays["com_obb_m"], dtype=float).reshape(3),
             mass_kg=float(arrays["mass_kg"]),
             inertia_diag=np.asarray(arrays["inertia_diag"], dtype=float).reshape(3),
@@ -223,10 +230,10 @@ def _prepare(mesh: trimesh.Trimesh, digest: str) -> PreparedChair:
     )
     pieces = tuple(_box_corners(box) - com for box in boxes)
     collision_obj = cache_dir() / "imagination" / f"{digest}-{PREPARATION_VERSION}-pieces.obj"
-    _write_pieces_obj(
-        collision_obj,
-        [(_box_corners(box) - com, _BOX_FACES) for box in _collision_boxes(boxes, z_min)],
-    )
+    _write_pieces_obj(collision_obj, [(piece, _BOX_FACES) for piece in pieces])
+    hull = trimesh.convex.convex_hull(np.concatenate(pieces))
+    support_obj = collision_obj.with_name(f"{digest}-{PREPARATION_VERSION}-support.obj")
+    _write_pieces_obj(support_obj, [(np.asarray(hull.vertices), np.asarray(hull.faces))])
     return PreparedChair(
         digest=digest,
         T_obb_mesh=T_obb_mesh,
@@ -236,6 +243,7 @@ def _prepare(mesh: trimesh.Trimesh, digest: str) -> PreparedChair:
         z_top_m=z_top,
         pieces=pieces,
         collision_obj=str(collision_obj),
+        support_obj=str(support_obj),
         com_obb_m=com,
         mass_kg=mass,
         inertia_diag=np.maximum(np.diag(inertia), 1e-6),
@@ -280,61 +288,3 @@ def _write_pieces_obj(path: Path, pieces: list[tuple[np.ndarray, np.ndarray]]) -
     scratch = path.with_suffix(f".{threading.get_ident()}.tmp")
     scratch.write_text("\n".join(lines) + "\n")
     scratch.replace(path)
-
-
-FLOOR_LAYER_M = 0.04
-"""Height of the layer the collision boxes are cut at (metres): twice pybullet's contact
-breaking threshold (2 cm), within which a box's bottom near the floor already makes
-contact points."""
-
-
-def _collision_boxes(boxes: np.ndarray, z_min_m: float) -> list[np.ndarray]:
-    """The same solid as ``boxes`` (floor-standing, (n, 2, 3)), cut at ``FLOOR_LAYER_M``.
-
-    Every box of the solid stands on the floor, so a chair of a few hundred boxes rests on
-    the floor with four contact points per box, and the chair-floor contacts are most of
-    a drop's cost. Cut at a layer above the floor's contact distance, the boxes keep
-    their tops (all a sitter touches) above it, and below it their footprint merges into
-    a few rectangles, which are all that touches the floor: the union, hence the shape,
-    is unchanged. Boxes no taller than the layer stay whole.
-    """
-    layer_top = z_min_m + FLOOR_LAYER_M
-    tall = boxes[:, 1, 2] > layer_top + 1e-9
-    pieces = [box for box in boxes[~tall]]
-    for box in boxes[tall]:
-        raised = box.copy()
-        raised[0, 2] = layer_top
-        pieces.append(raised)
-    if not tall.any():
-        return pieces
-    for x0, y0, x1, y1 in _merged_rectangles(boxes[tall][:, :, :2]):
-        pieces.append(np.array([[x0, y0, z_min_m], [x1, y1, layer_top]]))
-    return pieces
-
-
-def _merged_rectangles(rectangles: np.ndarray) -> list[tuple[float, float, float, float]]:
-    """Disjoint rectangles ((n, 2, 2) lower and upper xy corners) merged greedily into
-    fewer ones covering the same union: the union on the grid of their own edges, then
-    the largest run along y from each uncovered cell, grown along x."""
-    xs = np.unique(rectangles[:, :, 0])
-    ys = np.unique(rectangles[:, :, 1])
-    filled = np.zeros((len(xs) - 1, len(ys) - 1), dtype=bool)
-    for (x0, y0), (x1, y1) in rectangles:
-        i0, i1 = np.searchsorted(xs, [x0, x1])
-        j0, j1 = np.searchsorted(ys, [y0, y1])
-        filled[i0:i1, j0:j1] = True
-    merged = []
-    nx, ny = filled.shape
-    for i in range(nx):
-        for j in range(ny):
-            if not filled[i, j]:
-                continue
-            j_end = j + 1
-            while j_end < ny and filled[i, j_end]:
-                j_end += 1
-            i_end = i + 1
-            while i_end < nx and filled[i_end, j:j_end].all():
-                i_end += 1
-            filled[i:i_end, j:j_end] = False
-            merged.append((float(xs[i]), float(ys[j]), float(xs[i_end]), float(ys[j_end])))
-    return merged

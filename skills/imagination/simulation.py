@@ -11,6 +11,9 @@ chair). Only raw measurements come back; the sitting affordance model scores the
 A task is computed the same way in whichever process runs it, starting from
 ``resetSimulation``: the result of a seed does not depend on the number of workers.
 
+Each chair copy is its boxes, which the agent touches, and their convex hull, which the
+floor touches (``add_chair``).
+
 Frames: the chair frame is the OBB frame of ``PreparedChair`` (after g_obb); chair
 copy j stands at T_world_chair_j = translation(0, j * spacing, 0).
 """
@@ -133,6 +136,12 @@ class RawDrop(NamedTuple):
     link_poses: np.ndarray | None = None
 
 
+SUPPORT_LINK = 0
+"""The chair body's link that touches the floor (its convex hull; the base is the boxes)."""
+SUPPORT_MASS_KG = 1e-3
+"""Mass of that link (kg): negligible beside a chair's 1.5-12 kg, and not zero, which
+pybullet would take for a static link."""
+
 TRUNK_LINKS = ("pelvis", "chest", "head")
 """Links whose contact with the floor ends a drop as fallen."""
 
@@ -211,6 +220,9 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
     chair_shape = p.createCollisionShape(
         p.GEOM_MESH, fileName=chair.collision_obj, physicsClientId=cid
     )
+    support_shape = p.createCollisionShape(
+        p.GEOM_MESH, fileName=chair.support_obj, physicsClientId=cid
+    )
     spacing = float(max(chair.extents_m[:2])) + 2.5
     agent_joint_indices: list[int] = []
     link_indices: list[int] = []
@@ -219,25 +231,7 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
     active: list[dict[str, Any]] = []
     for j, drop in enumerate(task.drops):
         origin = np.array([0.0, j * spacing, 0.0])
-        chair_body = p.createMultiBody(
-            baseMass=chair.mass_kg if settings.dynamic_chair else 0.0,
-            baseCollisionShapeIndex=chair_shape,
-            basePosition=(origin + chair.com_obb_m).tolist(),
-            baseInertialFramePosition=[0, 0, 0],
-            physicsClientId=cid,
-        )
-        if settings.dynamic_chair:
-            p.changeDynamics(
-                chair_body,
-                -1,
-                localInertiaDiagonal=chair.inertia_diag.tolist(),
-                lateralFriction=settings.chair_friction,
-                physicsClientId=cid,
-            )
-        else:
-            p.changeDynamics(
-                chair_body, -1, lateralFriction=settings.chair_friction, physicsClientId=cid
-            )
+        chair_body = add_chair(p, cid, chair, chair_shape, support_shape, floor, origin, settings)
         quat = p.getQuaternionFromEuler([0.0, 0.0, drop.yaw_rad])
         z = chair.z_top_m + settings.drop_clearance_m
         agent = p.loadURDF(
@@ -250,13 +244,18 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
         if not agent_joint_indices:
             agent_joint_indices, link_indices = _index_maps(p, cid, agent)
             trunk = {link_indices[LINK_NAMES.index(name)] for name in TRUNK_LINKS}
+        # The chair's support hull stands for it on the floor only (see add_chair).
+        for link_index in range(-1, p.getNumJoints(agent, physicsClientId=cid)):
+            p.setCollisionFilterPair(
+                agent, chair_body, link_index, SUPPORT_LINK, 0, physicsClientId=cid
+            )
         targets = upright_targets() if drop.upright else [joint.pre_sitting_rad for joint in JOINTS]
         for index, angle in zip(agent_joint_indices, targets, strict=True):
             p.resetJointState(agent, index, angle, physicsClientId=cid)
         # Raise the agent until it starts clear of the chair: the legs hang below the
         # pelvis and would otherwise start inside a tall backrest.
         for _ in range(20):
-            if not p.getClosestPoints(agent, chair_body, 0.005, physicsClientId=cid):
+            if not p.getClosestPoints(agent, chair_body, 0.005, linkIndexB=-1, physicsClientId=cid):
                 break
             z += 0.05
             p.resetBasePositionAndOrientation(
@@ -315,6 +314,63 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
         active = still
     seconds = time.perf_counter() - started
     return [r for r in results if r is not None], seconds
+
+
+def add_chair(
+    p: Any,
+    cid: int,
+    chair: PreparedChair,
+    chair_shape: int,
+    support_shape: int,
+    floor: int,
+    origin: np.ndarray,
+    settings: SimulationSettings,
+) -> int:
+    """Adds one copy of the chair, its OBB frame at ``origin`` (metres, world frame).
+
+    The chair's boxes (``chair_shape``, the base) touch the agent; their convex hull
+    (``support_shape``, a link fixed to the base) touches the floor. A flat floor meets a
+    rigid body only at points of its convex hull, so the chair stands, slides and tips as
+    on its boxes, with a few contact points instead of four under every floor-standing
+    box: a few hundred boxes made the chair-floor contacts most of a drop's cost.
+
+    Returns:
+        The chair's body id.
+    """
+    chair_body = p.createMultiBody(
+        baseMass=chair.mass_kg if settings.dynamic_chair else 0.0,
+        baseCollisionShapeIndex=chair_shape,
+        basePosition=(origin + chair.com_obb_m).tolist(),
+        baseInertialFramePosition=[0, 0, 0],
+        linkMasses=[SUPPORT_MASS_KG if settings.dynamic_chair else 0.0],
+        linkCollisionShapeIndices=[support_shape],
+        linkVisualShapeIndices=[-1],
+        linkPositions=[[0, 0, 0]],
+        linkOrientations=[[0, 0, 0, 1]],
+        linkInertialFramePositions=[[0, 0, 0]],
+        linkInertialFrameOrientations=[[0, 0, 0, 1]],
+        linkParentIndices=[0],
+        linkJointTypes=[p.JOINT_FIXED],
+        linkJointAxis=[[0, 0, 1]],
+        physicsClientId=cid,
+    )
+    p.setCollisionFilterPair(chair_body, floor, -1, -1, 0, physicsClientId=cid)
+    p.changeDynamics(
+        chair_body, SUPPORT_LINK, lateralFriction=settings.chair_friction, physicsClientId=cid
+    )
+    if settings.dynamic_chair:
+        p.changeDynamics(
+            chair_body,
+            -1,
+            localInertiaDiagonal=chair.inertia_diag.tolist(),
+            lateralFriction=settings.chair_friction,
+            physicsClientId=cid,
+        )
+    else:
+        p.changeDynamics(
+            chair_body, -1, lateralFriction=settings.chair_friction, physicsClientId=cid
+        )
+    return chair_body
 
 
 def _apply_righting_torque(p: Any, cid: int, agent: int) -> None:
