@@ -25,7 +25,7 @@ import math
 import os
 import signal
 import time
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -36,7 +36,9 @@ from skills.imagination.agent import (
     LINK_NAMES,
     upright_targets,
 )
-from skills.imagination.chair import PreparedChair
+
+if TYPE_CHECKING:
+    from skills.imagination.chair import PreparedChair
 
 
 class SimulationSettings(NamedTuple):
@@ -98,10 +100,34 @@ class DropSpec(NamedTuple):
     upright: bool = False
 
 
-class TaskSpec(NamedTuple):
-    """Drops simulated together in one world."""
+class ChairBody(NamedTuple):
+    """What a drop needs of a ``PreparedChair`` (same fields, same units).
 
-    chair: PreparedChair
+    Sent to the worker processes instead of the prepared chair: its boxes stay behind,
+    and the workers need not import the mesh libraries (trimesh, scipy), about half a
+    second of each worker's start-up.
+    """
+
+    collision_obj: str
+    support_obj: str
+    extents_m: np.ndarray
+    z_min_m: float
+    z_top_m: float
+    com_obb_m: np.ndarray
+    mass_kg: float
+    inertia_diag: np.ndarray
+
+    @classmethod
+    def of(cls, prepared: PreparedChair) -> ChairBody:
+        """The body of a prepared chair."""
+        return cls(*(getattr(prepared, name) for name in cls._fields))
+
+
+class TaskSpec(NamedTuple):
+    """Drops simulated together in one world (``chair``: a ``ChairBody``, or a
+    ``PreparedChair``, which has its fields)."""
+
+    chair: ChairBody
     urdf_path: str
     drops: tuple[DropSpec, ...]
     settings: SimulationSettings
@@ -192,6 +218,12 @@ def worker_initializer() -> None:
     os.close(devnull)
     _pybullet()
     _connection()
+
+
+def ping() -> int:
+    """A no-op task that starts a worker process (defined here, where the workers import
+    nothing they do not need)."""
+    return 0
 
 
 def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
@@ -319,7 +351,7 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
 def add_chair(
     p: Any,
     cid: int,
-    chair: PreparedChair,
+    chair: ChairBody,
     chair_shape: int,
     support_shape: int,
     floor: int,
@@ -414,7 +446,7 @@ def _stop_reason(
     p: Any,
     cid: int,
     item: dict[str, Any],
-    chair: PreparedChair,
+    chair: ChairBody,
     settings: SimulationSettings,
     step: int,
     min_steps: int,
@@ -442,7 +474,7 @@ def _stop_reason(
 
 
 def _measure(
-    p: Any, cid: int, item: dict[str, Any], chair: PreparedChair, step: int, stopped_by: str
+    p: Any, cid: int, item: dict[str, Any], chair: ChairBody, step: int, stopped_by: str
 ) -> RawDrop:
     agent, chair_body = item["agent"], item["chair"]
     # T_world_chair: the chair body's pose composed with the body -> OBB frame offset.
