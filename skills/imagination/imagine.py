@@ -172,7 +172,7 @@ def imagine_sitting_details(
     started = time.perf_counter()
     _pybullet()  # imported quietly here, before anything else imports it with its banner
     if workers > 1:
-        _pool(workers)  # the workers start up (about 1 s) while the chair is prepared
+        _pool(workers)  # the workers start up (0.2 s or more) while the chair is prepared
     try:
         prepared = prepare_chair(chair_mesh)
     except ChairPreparationError as error:
