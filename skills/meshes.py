@@ -323,10 +323,22 @@ def _column_tops(
     origin = np.asarray(mesh.bounds[0], dtype=float)
     shape = np.floor(np.asarray(mesh.extents) / pitch_m).astype(int) + 1
     occupied = np.zeros(shape, dtype=bool)
+    # In place and through flat indices (the same cells, a third faster than fancy
+    # indexing of three index arrays): millions of samples on a large table.
+    flat = occupied.reshape(-1)
+    upper = shape - 1
+    stride_x, stride_y = int(shape[1] * shape[2]), int(shape[2])
     for points in _surface_sample_groups(mesh, 0.5 * pitch_m):
-        cells = np.floor((points - origin) / pitch_m).astype(int)
-        np.clip(cells, 0, shape - 1, out=cells)
-        occupied[cells[:, 0], cells[:, 1], cells[:, 2]] = True
+        scaled = points - origin
+        scaled /= pitch_m
+        np.floor(scaled, out=scaled)
+        cells = scaled.astype(np.intp)
+        np.maximum(cells, 0, out=cells)
+        np.minimum(cells, upper, out=cells)
+        index = cells[:, 0] * stride_x
+        index += cells[:, 1] * stride_y
+        index += cells[:, 2]
+        flat[index] = True
     levels = int(shape[2])
     top = np.where(occupied.any(axis=2), levels - 1 - np.argmax(occupied[:, :, ::-1], axis=2), -1)
     highest_near = ndimage.maximum_filter(top, size=3, mode="constant", cval=-1)

@@ -426,6 +426,8 @@ def test_the_imagination_cache_survives_a_damaged_entry(tmp_path, monkeypatch):
     from skills.meshes import box_chair_mesh
 
     monkeypatch.setenv("BEARCHAIR_CACHE", str(tmp_path))
+    # An earlier test may have prepared the same chair into this process's memory.
+    monkeypatch.setattr(imagination_chair, "_memory", {})
     mesh = box_chair_mesh()
     first = imagination_chair.prepare_chair(mesh)
     entries = list((tmp_path / "imagination").glob("*.npz"))

@@ -4,15 +4,25 @@ Public entry point: :func:`imagine_sitting` (the ``imagine_sitting`` skill of
 ``skills.toolbox``). See ``imagine.py`` for the procedure, ``agent.py`` for the
 generated child-sized agent, ``chair.py`` for g_obb and the chair's preparation,
 ``simulation.py`` for the drops and ``sam.py`` for the sitting affordance model.
+
+The names below are imported from ``imagine.py`` on first use, not with the package:
+the drop worker processes import ``simulation.py`` only, and importing ``imagine.py``
+(trimesh, scipy) would be about half a second of each worker's start-up.
 """
 
-from skills.imagination.imagine import (
-    ImaginationDetails,
-    imagine_sitting,
-    imagine_sitting_details,
-    shutdown_workers,
-    warm_up,
-)
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from skills.imagination.imagine import (
+        ImaginationDetails,
+        imagine_sitting,
+        imagine_sitting_details,
+        shutdown_workers,
+        warm_up,
+    )
 
 __all__ = [
     "ImaginationDetails",
@@ -21,3 +31,9 @@ __all__ = [
     "shutdown_workers",
     "warm_up",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name in __all__:
+        return getattr(importlib.import_module("skills.imagination.imagine"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

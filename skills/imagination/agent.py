@@ -19,8 +19,6 @@ import math
 from pathlib import Path
 from typing import NamedTuple
 
-from skills.meshes import cache_dir
-
 AGENT_VERSION = "v3"
 """Bumped whenever the generated body changes, so cached URDFs are regenerated."""
 
@@ -160,6 +158,9 @@ def agent_urdf_text() -> str:
 
 def agent_urdf_path() -> Path:
     """Writes the agent URDF into the cache directory (once per version) and returns it."""
+    # Imported here: the drop workers import this module and need no mesh library.
+    from skills.meshes import cache_dir
+
     path = cache_dir() / "agent" / f"sitting_agent_{AGENT_VERSION}.urdf"
     text = agent_urdf_text()
     if not path.exists() or path.read_text() != text:

@@ -30,7 +30,7 @@ from skills.meshes import (
     write_cached_arrays,
 )
 
-PREPARATION_VERSION = "v7"
+PREPARATION_VERSION = "v9"
 CHAIR_DENSITY_KG_M3 = 500.0
 """Wood-like; the mass is clamped to CHAIR_MASS_RANGE_KG since the solid under the
 surface overestimates the volume."""
@@ -58,7 +58,10 @@ class PreparedChair(NamedTuple):
         pieces: the boxes' corners in the chair body frame (centred on the
             centre of mass), each an (N, 3) float array.
         collision_obj: an OBJ file of the pieces (one object each, body frame), which
-            pybullet loads as a compound of convex hulls.
+            pybullet loads as a compound of convex hulls: what the agent touches.
+        support_obj: an OBJ file of the pieces' convex hull (one object, body frame):
+            what the floor touches (see ``simulation``: on a flat floor a rigid body
+            rests on, tips about and falls onto points of its convex hull only).
         com_obb_m: (3,) centre of mass in the OBB frame (the body frame's origin).
         mass_kg: chair mass.
         inertia_diag: (3,) moments of inertia about the body axes (kg m^2); the
@@ -73,6 +76,7 @@ class PreparedChair(NamedTuple):
     z_top_m: float
     pieces: tuple[np.ndarray, ...]
     collision_obj: str
+    support_obj: str
     com_obb_m: np.ndarray
     mass_kg: float
     inertia_diag: np.ndarray
@@ -130,7 +134,9 @@ def prepare_chair(mesh: trimesh.Trimesh) -> PreparedChair:
             return _memory[digest]
     path = cache_dir() / "imagination" / f"{digest}-{PREPARATION_VERSION}.npz"
     prepared = _from_cache(read_cached_arrays(path))
-    if prepared is not None and not Path(prepared.collision_obj).exists():
+    if prepared is not None and not all(
+        Path(name).exists() for name in (prepared.collision_obj, prepared.support_obj)
+    ):
         prepared = None
     if prepared is None:
         prepared = _prepare(mesh, digest)
@@ -176,6 +182,7 @@ def _from_cache(arrays: dict[str, np.ndarray] | None) -> PreparedChair | None:
             z_top_m=float(arrays["z_top_m"]),
             pieces=tuple(np.asarray(piece, dtype=float) for piece in arrays["pieces"]),
             collision_obj=str(arrays["collision_obj"]),
+            support_obj=str(arrays["support_obj"]),
             com_obb_m=np.asarray(arrays["com_obb_m"], dtype=float).reshape(3),
             mass_kg=float(arrays["mass_kg"]),
             inertia_diag=np.asarray(arrays["inertia_diag"], dtype=float).reshape(3),
@@ -224,6 +231,9 @@ def _prepare(mesh: trimesh.Trimesh, digest: str) -> PreparedChair:
     pieces = tuple(_box_corners(box) - com for box in boxes)
     collision_obj = cache_dir() / "imagination" / f"{digest}-{PREPARATION_VERSION}-pieces.obj"
     _write_pieces_obj(collision_obj, [(piece, _BOX_FACES) for piece in pieces])
+    hull = trimesh.convex.convex_hull(np.concatenate(pieces))
+    support_obj = collision_obj.with_name(f"{digest}-{PREPARATION_VERSION}-support.obj")
+    _write_pieces_obj(support_obj, [(np.asarray(hull.vertices), np.asarray(hull.faces))])
     return PreparedChair(
         digest=digest,
         T_obb_mesh=T_obb_mesh,
@@ -233,6 +243,7 @@ def _prepare(mesh: trimesh.Trimesh, digest: str) -> PreparedChair:
         z_top_m=z_top,
         pieces=pieces,
         collision_obj=str(collision_obj),
+        support_obj=str(support_obj),
         com_obb_m=com,
         mass_kg=mass,
         inertia_diag=np.maximum(np.diag(inertia), 1e-6),

@@ -75,11 +75,13 @@ from skills.imagination.chair import (
 )
 from skills.imagination.sam import DEFAULT_THRESHOLDS, SamThresholds, failed_criteria, score_drop
 from skills.imagination.simulation import (
+    ChairBody,
     DropSpec,
     RawDrop,
     SimulationSettings,
     TaskSpec,
     _pybullet,
+    ping,
     run_task,
     worker_initializer,
 )
@@ -169,6 +171,8 @@ def imagine_sitting_details(
     settings = settings or SimulationSettings()
     started = time.perf_counter()
     _pybullet()  # imported quietly here, before anything else imports it with its banner
+    if workers > 1:
+        _pool(workers)  # the workers start up (0.2 s or more) while the chair is prepared
     try:
         prepared = prepare_chair(chair_mesh)
     except ChairPreparationError as error:
@@ -184,6 +188,7 @@ def imagine_sitting_details(
         )
         return ImaginationDetails(result, (), 0, 0.0, None)
     urdf = str(agent_urdf_path())
+    body = ChairBody.of(prepared)
     prepared_at = time.perf_counter()
 
     runner = _runner(workers)
@@ -192,7 +197,7 @@ def imagine_sitting_details(
     cancelled = False
     for positions in (FIRST_POSITIONS, EXTRA_POSITIONS):
         tasks = [
-            TaskSpec(prepared, urdf, _drop_specs(prepared, i, positions, seed), settings)
+            TaskSpec(body, urdf, _drop_specs(prepared, i, positions, seed), settings)
             for i in range(N_ROTATIONS)
         ]
         outcomes, seconds, cancelled = runner(tasks, cancel)
@@ -210,7 +215,7 @@ def imagine_sitting_details(
         upright = True
         tasks = [
             TaskSpec(
-                prepared,
+                body,
                 urdf,
                 _drop_specs(prepared, i, FIRST_POSITIONS, seed, upright=True),
                 settings,
@@ -229,7 +234,7 @@ def imagine_sitting_details(
             if len(contested) > 1 or holes:
                 tasks = [
                     TaskSpec(
-                        prepared,
+                        body,
                         urdf,
                         _drop_specs(
                             prepared, i, FIRST_POSITIONS, seed, repeat=repeat, upright=upright
@@ -526,8 +531,14 @@ def _run_in_pool(
     return [drops for drops, _ in results], sum(seconds for _, seconds in results), False
 
 
+_pings: dict[int, list[Future]] = {}
+
+
 def _pool(workers: int) -> ProcessPoolExecutor:
-    """A persistent pool per worker count: process start-up is paid once per process."""
+    """A persistent pool per worker count: process start-up is paid once per process.
+
+    A new pool is sent one no-op per worker, so every worker process starts at once
+    (the pool starts one per task submitted) and the caller need not wait for them."""
     with _pools_lock:
         pool = _pools.get(workers)
         if pool is None:
@@ -537,19 +548,22 @@ def _pool(workers: int) -> ProcessPoolExecutor:
                 initializer=worker_initializer,
             )
             _pools[workers] = pool
+            _pings[workers] = [pool.submit(ping) for _ in range(workers)]
         return pool
 
 
-def warm_up(workers: int = 2) -> None:
-    """Starts the worker processes now (they import pybullet and connect)."""
+def warm_up(workers: int = 2, *, wait: bool = True) -> None:
+    """Starts the worker processes now (they import pybullet and connect).
+
+    Args:
+        workers: the worker count a later ``imagine_sitting`` will use.
+        wait: return only once every worker is up; else start them and return.
+    """
     if workers > 1:
-        pool = _pool(workers)
-        for future in [pool.submit(_ping) for _ in range(workers)]:
-            future.result()
-
-
-def _ping() -> int:
-    return 0
+        _pool(workers)
+        if wait:
+            for future in _pings[workers]:
+                future.result()
 
 
 def shutdown_workers() -> None:
@@ -558,6 +572,7 @@ def shutdown_workers() -> None:
         for pool in _pools.values():
             pool.shutdown(wait=True, cancel_futures=True)
         _pools.clear()
+        _pings.clear()
 
 
 atexit.register(shutdown_workers)

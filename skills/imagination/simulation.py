@@ -11,6 +11,9 @@ chair). Only raw measurements come back; the sitting affordance model scores the
 A task is computed the same way in whichever process runs it, starting from
 ``resetSimulation``: the result of a seed does not depend on the number of workers.
 
+Each chair copy is its boxes, which the agent touches, and their convex hull, which the
+floor touches (``add_chair``).
+
 Frames: the chair frame is the OBB frame of ``PreparedChair`` (after g_obb); chair
 copy j stands at T_world_chair_j = translation(0, j * spacing, 0).
 """
@@ -22,7 +25,7 @@ import math
 import os
 import signal
 import time
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -33,7 +36,9 @@ from skills.imagination.agent import (
     LINK_NAMES,
     upright_targets,
 )
-from skills.imagination.chair import PreparedChair
+
+if TYPE_CHECKING:
+    from skills.imagination.chair import PreparedChair
 
 
 class SimulationSettings(NamedTuple):
@@ -95,10 +100,34 @@ class DropSpec(NamedTuple):
     upright: bool = False
 
 
-class TaskSpec(NamedTuple):
-    """Drops simulated together in one world."""
+class ChairBody(NamedTuple):
+    """What a drop needs of a ``PreparedChair`` (same fields, same units).
 
-    chair: PreparedChair
+    Sent to the worker processes instead of the prepared chair: its boxes stay behind,
+    and the workers need not import the mesh libraries (trimesh, scipy), about half a
+    second of each worker's start-up.
+    """
+
+    collision_obj: str
+    support_obj: str
+    extents_m: np.ndarray
+    z_min_m: float
+    z_top_m: float
+    com_obb_m: np.ndarray
+    mass_kg: float
+    inertia_diag: np.ndarray
+
+    @classmethod
+    def of(cls, prepared: PreparedChair) -> ChairBody:
+        """The body of a prepared chair."""
+        return cls(*(getattr(prepared, name) for name in cls._fields))
+
+
+class TaskSpec(NamedTuple):
+    """Drops simulated together in one world (``chair``: a ``ChairBody``, or a
+    ``PreparedChair``, which has its fields)."""
+
+    chair: ChairBody
     urdf_path: str
     drops: tuple[DropSpec, ...]
     settings: SimulationSettings
@@ -132,6 +161,12 @@ class RawDrop(NamedTuple):
     stopped_by: str
     link_poses: np.ndarray | None = None
 
+
+SUPPORT_LINK = 0
+"""The chair body's link that touches the floor (its convex hull; the base is the boxes)."""
+SUPPORT_MASS_KG = 1e-3
+"""Mass of that link (kg): negligible beside a chair's 1.5-12 kg, and not zero, which
+pybullet would take for a static link."""
 
 TRUNK_LINKS = ("pelvis", "chest", "head")
 """Links whose contact with the floor ends a drop as fallen."""
@@ -185,6 +220,12 @@ def worker_initializer() -> None:
     _connection()
 
 
+def ping() -> int:
+    """A no-op task that starts a worker process (defined here, where the workers import
+    nothing they do not need)."""
+    return 0
+
+
 def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
     """Simulates a group of drops in a fresh world of this process's client.
 
@@ -211,6 +252,9 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
     chair_shape = p.createCollisionShape(
         p.GEOM_MESH, fileName=chair.collision_obj, physicsClientId=cid
     )
+    support_shape = p.createCollisionShape(
+        p.GEOM_MESH, fileName=chair.support_obj, physicsClientId=cid
+    )
     spacing = float(max(chair.extents_m[:2])) + 2.5
     agent_joint_indices: list[int] = []
     link_indices: list[int] = []
@@ -219,44 +263,33 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
     active: list[dict[str, Any]] = []
     for j, drop in enumerate(task.drops):
         origin = np.array([0.0, j * spacing, 0.0])
-        chair_body = p.createMultiBody(
-            baseMass=chair.mass_kg if settings.dynamic_chair else 0.0,
-            baseCollisionShapeIndex=chair_shape,
-            basePosition=(origin + chair.com_obb_m).tolist(),
-            baseInertialFramePosition=[0, 0, 0],
-            physicsClientId=cid,
-        )
-        if settings.dynamic_chair:
-            p.changeDynamics(
-                chair_body,
-                -1,
-                localInertiaDiagonal=chair.inertia_diag.tolist(),
-                lateralFriction=settings.chair_friction,
-                physicsClientId=cid,
-            )
-        else:
-            p.changeDynamics(
-                chair_body, -1, lateralFriction=settings.chair_friction, physicsClientId=cid
-            )
+        chair_body = add_chair(p, cid, chair, chair_shape, support_shape, floor, origin, settings)
         quat = p.getQuaternionFromEuler([0.0, 0.0, drop.yaw_rad])
         z = chair.z_top_m + settings.drop_clearance_m
         agent = p.loadURDF(
             task.urdf_path,
             basePosition=[origin[0] + drop.xy_m[0], origin[1] + drop.xy_m[1], z],
             baseOrientation=quat,
-            flags=p.URDF_USE_INERTIA_FROM_FILE,
+            # Cached graphics shapes: the agent's visuals (which a DIRECT world never
+            # draws) are built once per world, not per drop: half of loadURDF's 3.5 ms.
+            flags=p.URDF_USE_INERTIA_FROM_FILE | p.URDF_ENABLE_CACHED_GRAPHICS_SHAPES,
             physicsClientId=cid,
         )
         if not agent_joint_indices:
             agent_joint_indices, link_indices = _index_maps(p, cid, agent)
             trunk = {link_indices[LINK_NAMES.index(name)] for name in TRUNK_LINKS}
+        # The chair's support hull stands for it on the floor only (see add_chair).
+        for link_index in range(-1, p.getNumJoints(agent, physicsClientId=cid)):
+            p.setCollisionFilterPair(
+                agent, chair_body, link_index, SUPPORT_LINK, 0, physicsClientId=cid
+            )
         targets = upright_targets() if drop.upright else [joint.pre_sitting_rad for joint in JOINTS]
         for index, angle in zip(agent_joint_indices, targets, strict=True):
             p.resetJointState(agent, index, angle, physicsClientId=cid)
         # Raise the agent until it starts clear of the chair: the legs hang below the
         # pelvis and would otherwise start inside a tall backrest.
         for _ in range(20):
-            if not p.getClosestPoints(agent, chair_body, 0.005, physicsClientId=cid):
+            if not p.getClosestPoints(agent, chair_body, 0.005, linkIndexB=-1, physicsClientId=cid):
                 break
             z += 0.05
             p.resetBasePositionAndOrientation(
@@ -317,6 +350,63 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
     return [r for r in results if r is not None], seconds
 
 
+def add_chair(
+    p: Any,
+    cid: int,
+    chair: ChairBody,
+    chair_shape: int,
+    support_shape: int,
+    floor: int,
+    origin: np.ndarray,
+    settings: SimulationSettings,
+) -> int:
+    """Adds one copy of the chair, its OBB frame at ``origin`` (metres, world frame).
+
+    The chair's boxes (``chair_shape``, the base) touch the agent; their convex hull
+    (``support_shape``, a link fixed to the base) touches the floor. A flat floor meets a
+    rigid body only at points of its convex hull, so the chair stands, slides and tips as
+    on its boxes, with a few contact points instead of four under every floor-standing
+    box: a few hundred boxes made the chair-floor contacts most of a drop's cost.
+
+    Returns:
+        The chair's body id.
+    """
+    chair_body = p.createMultiBody(
+        baseMass=chair.mass_kg if settings.dynamic_chair else 0.0,
+        baseCollisionShapeIndex=chair_shape,
+        basePosition=(origin + chair.com_obb_m).tolist(),
+        baseInertialFramePosition=[0, 0, 0],
+        linkMasses=[SUPPORT_MASS_KG if settings.dynamic_chair else 0.0],
+        linkCollisionShapeIndices=[support_shape],
+        linkVisualShapeIndices=[-1],
+        linkPositions=[[0, 0, 0]],
+        linkOrientations=[[0, 0, 0, 1]],
+        linkInertialFramePositions=[[0, 0, 0]],
+        linkInertialFrameOrientations=[[0, 0, 0, 1]],
+        linkParentIndices=[0],
+        linkJointTypes=[p.JOINT_FIXED],
+        linkJointAxis=[[0, 0, 1]],
+        physicsClientId=cid,
+    )
+    p.setCollisionFilterPair(chair_body, floor, -1, -1, 0, physicsClientId=cid)
+    p.changeDynamics(
+        chair_body, SUPPORT_LINK, lateralFriction=settings.chair_friction, physicsClientId=cid
+    )
+    if settings.dynamic_chair:
+        p.changeDynamics(
+            chair_body,
+            -1,
+            localInertiaDiagonal=chair.inertia_diag.tolist(),
+            lateralFriction=settings.chair_friction,
+            physicsClientId=cid,
+        )
+    else:
+        p.changeDynamics(
+            chair_body, -1, lateralFriction=settings.chair_friction, physicsClientId=cid
+        )
+    return chair_body
+
+
 def _apply_righting_torque(p: Any, cid: int, agent: int) -> None:
     """An upright sitter's balance: a torque on the pelvis about a horizontal axis that
     turns its z axis back toward vertical, τ = −k θ n − c ω_h (θ the tilt, n the tilt
@@ -358,7 +448,7 @@ def _stop_reason(
     p: Any,
     cid: int,
     item: dict[str, Any],
-    chair: PreparedChair,
+    chair: ChairBody,
     settings: SimulationSettings,
     step: int,
     min_steps: int,
@@ -386,7 +476,7 @@ def _stop_reason(
 
 
 def _measure(
-    p: Any, cid: int, item: dict[str, Any], chair: PreparedChair, step: int, stopped_by: str
+    p: Any, cid: int, item: dict[str, Any], chair: ChairBody, step: int, stopped_by: str
 ) -> RawDrop:
     agent, chair_body = item["agent"], item["chair"]
     # T_world_chair: the chair body's pose composed with the body -> OBB frame offset.
