@@ -24,22 +24,14 @@ from skills.perception import (
 )
 from skills.perception.synthetic import SyntheticArm, SyntheticScene, carmine_intrinsics
 from skills.perception.views import HOME_CONFIGURATION, SCAN_CONFIGURATIONS, look_at
+from tests.test_perception_views import frames_of
 
 T_WORLD_CHAIR = yaw_transform(0.6, np.array([0.58, 0.08, 0.0]))
 
 
 @pytest.fixture(scope="module")
 def box_chair_frames() -> list[RGBDFrame]:
-    scene = SyntheticScene(seed=3)
-    scene.add_mesh(box_chair_mesh(), T_WORLD_CHAIR)
-    arm = SyntheticArm(scene)
-    frames = []
-    for joints in SCAN_CONFIGURATIONS:
-        arm.move_to(joints)
-        frames.append(arm.capture())
-    arm.close()
-    scene.close()
-    return frames
+    return frames_of(box_chair_mesh(), T_WORLD_CHAIR, SCAN_CONFIGURATIONS, seed=3)
 
 
 @pytest.fixture(scope="module")
@@ -248,17 +240,8 @@ def test_a_chair_the_scan_splits_keeps_every_part():
         extents=(0.03, 0.28, 0.22),
         transform=trimesh.transformations.translation_matrix((-0.125, 0.0, 0.42)),
     )
-    scene = SyntheticScene(seed=4)
-    scene.add_mesh(trimesh.util.concatenate([chair, panel]), T_WORLD_CHAIR)
-    arm = SyntheticArm(scene)
-    try:
-        frames = []
-        for joints in SCAN_CONFIGURATIONS:
-            arm.move_to(joints)
-            frames.append(arm.capture())
-    finally:
-        arm.close()
-        scene.close()
+    mesh = trimesh.util.concatenate([chair, panel])
+    frames = frames_of(mesh, T_WORLD_CHAIR, SCAN_CONFIGURATIONS, seed=4)
     scan = reconstruct_chair(frames, ReconstructionConfig())
     assert scan.chair_mesh.bounds[1, 2] == pytest.approx(0.53, abs=0.02)
     assert scan.chair_points[:, 2].max() == pytest.approx(0.53, abs=0.02)
