@@ -555,3 +555,27 @@ def test_a_trajectory_is_solved_on_coarse_knots_when_they_hold_between_knots(cha
     q_goal = next(goal_posture_candidates(problems, scene))
     _, knots = solve_trajectory(problems, scene.profile, STANDING_POSTURE, q_goal, bear_held=True)
     assert len(knots) <= COARSE_KNOTS < problems.n_knots
+
+
+def test_a_centre_of_mass_off_the_feet_where_it_stopped_slides_p_closer(monkeypatch) -> None:
+    from skills.planning.wholebody import seating
+
+    deep_chair = box_chair_mesh(seat_height_m=SEAT_HEIGHT_M, seat_depth_m=0.40)
+    tried: list[float] = []
+
+    def leaning_too_far(chair_mesh, sitting_pose, humanoid_pose, *, raised=False):
+        tried.append(float(sitting_pose.position[0]))
+        if len(tried) == 1:
+            raise InfeasibleSeating("support polygon", "centre of mass violated by 0.001")
+        return "plan"
+
+    monkeypatch.setattr(seating, "plan_seating", leaning_too_far)
+    assert seating.plan_seating_where_standing(deep_chair, SITTING_POSE, NAO_POSE) == "plan"
+    assert tried[1] > tried[0]  # p moved toward the NAO (+x)
+
+    def colliding(chair_mesh, sitting_pose, humanoid_pose, *, raised=False):
+        raise InfeasibleSeating("chair collision", "knee")
+
+    monkeypatch.setattr(seating, "plan_seating", colliding)
+    with pytest.raises(InfeasibleSeating, match="knee"):
+        seating.plan_seating_where_standing(deep_chair, SITTING_POSE, NAO_POSE)

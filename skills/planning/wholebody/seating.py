@@ -582,7 +582,9 @@ def plan_seating_where_standing(
     The walk stops within 5 mm of s_goal, and the stance search accepts a pre-plan at
     s_goal with less reach to spare than that (it goes to the reach model's limit). Then
     p slides toward the NAO along the seat, up to 3 cm, over supported seat only
-    (:func:`skills.planning.seat.slide_on_seat`, which keeps it off the seat's edge).
+    (:func:`skills.planning.seat.slide_on_seat`, which keeps it off the seat's edge):
+    when the bear is out of reach, or the NAO would lean its centre of mass off its feet
+    to put it there (both say the bear is a little too far).
 
     Raises:
         InfeasibleSeating: the first failure, when no slide helps.
@@ -590,7 +592,7 @@ def plan_seating_where_standing(
     try:
         return plan_seating(chair_mesh, sitting_pose, humanoid_pose, raised=raised)
     except InfeasibleSeating as error:
-        if error.constraint != "bear placement":
+        if error.constraint not in _TOO_FAR:
             raise
         first_failure = error
     for slide_m in REACHED_POSE_SLIDES_M:
@@ -600,9 +602,13 @@ def plan_seating_where_standing(
         try:
             return plan_seating(chair_mesh, moved, humanoid_pose, raised=raised)
         except InfeasibleSeating as error:
-            if error.constraint != "bear placement":
+            if error.constraint not in _TOO_FAR:
                 raise
     raise first_failure
+
+
+_TOO_FAR = ("bear placement", "support polygon")
+"""Constraints a bear placed nearer the NAO may meet."""
 
 
 def _motion_from_goal(
