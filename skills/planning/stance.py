@@ -179,15 +179,25 @@ def planner_seat_top(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, ray
         return float(np.max(ray.seat_heights_m))
 
 
+def surface_points(chair_mesh: trimesh.Trimesh) -> np.ndarray:
+    """(N, 3) points of the chair's surface the search looks at: 20000 samples (seed 0)
+    and the vertices, world frame, metres."""
+    points, _ = trimesh.sample.sample_surface(chair_mesh, 20000, seed=0)
+    return np.vstack([points, chair_mesh.vertices])
+
+
 def chair_along_ray(
-    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, seat_top_m: float
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    seat_top_m: float,
+    points: np.ndarray | None = None,
 ) -> ChairAlongRay:
     """Where the chair lies along the sitting ray within ``BAND_HALF_WIDTH_M`` of it,
-    below and above the seat top (:mod:`.wholebody.chair_profile`'s two blocks)."""
+    below and above the seat top (:mod:`.wholebody.chair_profile`'s two blocks);
+    ``points``: :func:`surface_points` when the caller has them."""
     p = np.asarray(sitting_pose.position, dtype=float)
     u = sitting_pose.direction()
-    points, _ = trimesh.sample.sample_surface(chair_mesh, 20000, seed=0)
-    points = np.vstack([points, chair_mesh.vertices])
+    points = surface_points(chair_mesh) if points is None else points
     rel = points[:, :2] - p[:2]
     along = rel @ u
     across = rel @ np.array([-u[1], u[0]])
@@ -201,7 +211,10 @@ def chair_along_ray(
 
 
 def centred_between_rails(
-    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, seat_top_m: float
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    seat_top_m: float,
+    points: np.ndarray | None = None,
 ) -> SittingPose:
     """p moved across the ray so that what stands on the seat beside it (armrests) leaves
     the NAO's band, ``RAIL_CLEARANCE_M`` outside it on each side it stands; p unchanged
@@ -215,13 +228,13 @@ def centred_between_rails(
 
         δ = \\operatorname{clip}\\Big(\\tfrac{a + b}{2},\\; b + w + c,\\; a - w - c\\Big),
 
-    the middle of the gap, kept within the moves that clear both sides.
+    the middle of the gap, kept within the moves that clear both sides. ``points``:
+    :func:`surface_points` when the caller has them.
     """
     p = np.asarray(sitting_pose.position, dtype=float)
     u = sitting_pose.direction()
     left_axis = np.array([-u[1], u[0]])
-    points, _ = trimesh.sample.sample_surface(chair_mesh, 20000, seed=0)
-    points = np.vstack([points, chair_mesh.vertices])
+    points = surface_points(chair_mesh) if points is None else points
     rel = points[:, :2] - p[:2]
     along, across = rel @ u, rel @ left_axis
     reach = BAND_HALF_WIDTH_M + RAIL_CLEARANCE_M
@@ -290,8 +303,9 @@ def choose_stance(
         The first pair found, or the imagined ray's failure with its reason.
     """
     model = model or reach_model()
+    points = surface_points(chair_mesh)
     first = choose_stance_on_ray(
-        chair_mesh, sitting_pose, checker, validator, scene=scene, model=model
+        chair_mesh, sitting_pose, checker, validator, scene=scene, model=model, points=points
     )
     if first.se2_goal is not None or not _turning_may_help(first, model):
         return first
@@ -307,6 +321,7 @@ def choose_stance(
             scene=scene,
             model=model,
             max_preplans=PREPLANS_PER_TURN,
+            points=points,
         )
         preplans += choice.preplans
         if choice.se2_goal is not None:
@@ -329,6 +344,7 @@ def choose_stance_on_ray(
     scene: bool = True,
     model: ReachModel | None = None,
     max_preplans: int = MAX_PREPLANS,
+    points: np.ndarray | None = None,
 ) -> StanceChoice:
     """Searches stance and sitting point together on one ray (see the module doc).
 
@@ -350,7 +366,8 @@ def choose_stance_on_ray(
     if len(ray.slides_m) == 0:
         return StanceChoice(None, sitting_pose, "no seat under the sitting position")
     seat_top = planner_seat_top(chair_mesh, sitting_pose, ray)
-    centred = centred_between_rails(chair_mesh, sitting_pose, seat_top)
+    points = surface_points(chair_mesh) if points is None else points
+    centred = centred_between_rails(chair_mesh, sitting_pose, seat_top, points)
     centred_m = 0.0
     if centred is not sitting_pose:
         centred_ray = seat_ray(chair_mesh, centred)
@@ -360,7 +377,7 @@ def choose_stance_on_ray(
             )
             sitting_pose, ray = centred, centred_ray
             seat_top = planner_seat_top(chair_mesh, sitting_pose, ray)
-    chair = chair_along_ray(chair_mesh, sitting_pose, seat_top)
+    chair = chair_along_ray(chair_mesh, sitting_pose, seat_top, points)
     seat_under_p0 = float(ray.seat_heights_m[0])
     # Something standing on the seat in the band (armrests, a backrest) in front of the
     # bear's back: the planar planner may still find its way (its seat top is the highest
