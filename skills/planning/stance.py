@@ -360,6 +360,7 @@ def choose_stance_on_ray(
         scene: also keep the stance clear of walls and obstacles inside the arena.
         model: the reach model (default: the shipped one).
         max_preplans: how many pairs the pre-plan may be asked about.
+        points: the chair's :func:`surface_points` (taken here when None).
     """
     model = model or reach_model()
     ray = seat_ray(chair_mesh, sitting_pose)
