@@ -83,7 +83,12 @@ def test_preparation_is_cached(box_chair: trimesh.Trimesh) -> None:
 
 
 def test_chair_stands_and_tips_over_on_its_support_hull(box_chair: trimesh.Trimesh) -> None:
-    from skills.imagination.simulation import SimulationSettings, _connection, add_chair
+    from skills.imagination.simulation import (
+        ChairBody,
+        SimulationSettings,
+        _connection,
+        add_chair,
+    )
 
     chair = prepare_chair(box_chair)
     p, cid = _connection()
@@ -101,7 +106,7 @@ def test_chair_stands_and_tips_over_on_its_support_hull(box_chair: trimesh.Trime
         p.createCollisionShape(p.GEOM_MESH, fileName=name, physicsClientId=cid)
         for name in (chair.collision_obj, chair.support_obj)
     ]
-    body = add_chair(p, cid, chair, *shapes, floor, np.zeros(3), settings)
+    body = add_chair(p, cid, ChairBody.of(chair), *shapes, floor, np.zeros(3), settings)
     hull = trimesh.load(chair.support_obj, force="mesh")
 
     def pose() -> tuple[np.ndarray, np.ndarray]:

@@ -124,8 +124,7 @@ class ChairBody(NamedTuple):
 
 
 class TaskSpec(NamedTuple):
-    """Drops simulated together in one world (``chair``: a ``ChairBody``, or a
-    ``PreparedChair``, which has its fields)."""
+    """Drops simulated together in one world."""
 
     chair: ChairBody
     urdf_path: str

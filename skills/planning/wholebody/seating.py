@@ -567,7 +567,12 @@ def plan_seating(
 
 
 REACHED_POSE_SLIDES_M = (0.01, 0.02, 0.03)
-"""How far p may slide toward the NAO when the bear is out of reach from where it stopped."""
+"""How far p may slide toward the NAO when the bear is a little too far (``_TOO_FAR``) from
+where it stopped."""
+
+
+_TOO_FAR = ("bear placement", "support polygon")
+"""Constraints a bear placed nearer the NAO may meet."""
 
 
 def plan_seating_where_standing(
@@ -605,10 +610,6 @@ def plan_seating_where_standing(
             if error.constraint not in _TOO_FAR:
                 raise
     raise first_failure
-
-
-_TOO_FAR = ("bear placement", "support polygon")
-"""Constraints a bear placed nearer the NAO may meet."""
 
 
 def _motion_from_goal(
