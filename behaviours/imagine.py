@@ -41,9 +41,16 @@ class ImagineSitting(SkillBehaviour):
         self.blackboard.set(keys.SITTING_POSE, pose, overwrite=True)
         x, y, z = pose.position
         direction = ""
-        if result.backrest is not None and result.backrest.used:
-            off_deg = math.degrees(result.backrest.disagreement_rad)
+        check = result.backrest
+        if check is not None and check.used:
+            off_deg = math.degrees(check.disagreement_rad)
             direction = f"; direction from the backrest, the vote's was {off_deg:+.0f} deg off"
+        elif check is not None and not math.isnan(check.mirror_vote):
+            direction = (
+                f"; the backrest's direction, {math.degrees(check.disagreement_rad):+.0f} deg "
+                f"off, mirrors the chair less ({check.mirror_back:.2f} against "
+                f"{check.mirror_vote:.2f})"
+            )
         return self.succeed(
             f"sit at ({x:.3f}, {y:.3f}, {z:.3f}) m facing {math.degrees(pose.yaw):.0f} deg "
             f"({result.n_correct} correct of {result.n_drops} drops{direction})"

@@ -94,6 +94,11 @@ def run(args: argparse.Namespace) -> int:
     if result.backrest is not None:
         check = result.backrest
         verdict = "taken instead" if check.used else "agrees"
+        if not check.used and not math.isnan(check.mirror_vote):
+            verdict = (
+                f"the vote's plane mirrors the chair better ({check.mirror_vote:.2f} against "
+                f"{check.mirror_back:.2f}): the vote stands"
+            )
         print(
             f"backrest:         faces {math.degrees(check.yaw_rad):.1f} deg, the vote's "
             f"direction {math.degrees(check.disagreement_rad):+.1f} deg from it: {verdict}"

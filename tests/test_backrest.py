@@ -7,10 +7,16 @@ import math
 
 import numpy as np
 import pytest
+import trimesh
 
 from skills.chairgen import FAMILIES, generate_chair
 from skills.geometry import SittingPose, make_transform, rot_z, wrap_angle
-from skills.imagination.backrest import AGREEMENT_RAD, backrest_yaw, check_direction
+from skills.imagination.backrest import (
+    AGREEMENT_RAD,
+    MIRROR_MARGIN,
+    backrest_yaw,
+    check_direction,
+)
 from skills.meshes import box_chair_mesh
 
 BACKLESS = ("stool", "bench")
@@ -55,6 +61,26 @@ def test_a_direction_within_the_agreement_stands_and_one_beyond_it_is_replaced()
     assert check.used and abs(math.degrees(wrap_angle(replaced.yaw - front))) < 3.0
     assert np.array_equal(replaced.position, p)
     assert math.degrees(check.disagreement_rad) == pytest.approx(45.0, abs=3.0)
+
+
+def test_a_cue_pulled_sideways_by_one_armrest_yields_to_the_chairs_mirror_plane() -> None:
+    # The scan saw one armrest (a side panel 0.22 m high along +y) and not the other: the
+    # centroid of what rises above the seat moves toward it, past the agreement.
+    panel = trimesh.creation.box((0.28, 0.03, 0.22))
+    panel.apply_translation((0.0, 0.145, 0.35))
+    chair_mesh = trimesh.util.concatenate([box_chair_mesh(), panel])
+    pose = SittingPose(np.array([0.0, 0.0, 0.29]), 0.0)  # the box chair faces +x
+    kept, check = check_direction(chair_mesh, pose)
+    assert check is not None and abs(check.disagreement_rad) > AGREEMENT_RAD
+    assert not check.used and kept == pose
+    assert check.mirror_vote > check.mirror_back + MIRROR_MARGIN
+
+
+def test_a_cue_beyond_the_agreement_on_a_symmetric_chair_mirrors_it_as_well() -> None:
+    chair_mesh = box_chair_mesh()
+    _, check = check_direction(chair_mesh, SittingPose(np.array([0.0, 0.0, 0.29]), 0.8))
+    assert check.used
+    assert check.mirror_back > 0.8 > check.mirror_vote + MIRROR_MARGIN
 
 
 def test_no_seat_under_p_gives_no_check() -> None:

@@ -285,3 +285,16 @@ def test_imagine_says_when_the_backrest_gave_the_direction(used):
     assert ("direction from the backrest" in leaf.feedback_message) == used
     if used:
         assert "+45 deg off" in leaf.feedback_message
+
+
+def test_imagine_says_when_the_vote_stood_against_the_backrest():
+    import math
+
+    from skills.imagination.backrest import BackrestCheck
+
+    check = BackrestCheck(0.0, 0.08, math.radians(-46.0), False, 0.37, 0.86)
+    result = DEFAULTS["imagine_sitting"]._replace(backrest=check)
+    leaf = make(ImagineSitting, ScriptedSkills({"imagine_sitting": result}))
+    assert tick_until_done(leaf)[-1] == Status.SUCCESS
+    assert "direction from the backrest" not in leaf.feedback_message
+    assert "-46 deg off, mirrors the chair less (0.37 against 0.86)" in leaf.feedback_message
