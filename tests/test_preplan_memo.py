@@ -1,0 +1,47 @@
+"""The pre-plan memo: the same question is planned once, a turned chair is a new one, and
+the memo stays bounded."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from skills.geometry import SE2Pose, SittingPose, make_transform, rot_z
+from skills.meshes import box_chair_mesh
+from skills.planning.se2 import PREPLANS, PreplanMemo, SeatingCheck, default_seating_validator
+from skills.planning.stance import goal_on_ray
+
+SITTING_POSE = SittingPose(np.array([0.0, 0.0, 0.29]), 0.0)
+
+
+def test_a_question_asked_twice_is_planned_once_and_answered_alike() -> None:
+    validator = default_seating_validator()
+    chair_mesh = box_chair_mesh()
+    se2_goal = goal_on_ray(SITTING_POSE, 0.33)
+    hits = PREPLANS.hits
+    first = validator(chair_mesh, SITTING_POSE, se2_goal)
+    second = validator(chair_mesh.copy(), SITTING_POSE, se2_goal)
+    assert PREPLANS.hits == hits + 1
+    assert second == first
+
+
+def test_a_turned_chair_or_another_stance_is_a_new_question() -> None:
+    chair_mesh = box_chair_mesh()
+    turned = chair_mesh.copy().apply_transform(
+        make_transform(rot_z(math.radians(30.0)), np.zeros(3))
+    )
+    key = PreplanMemo.key(chair_mesh, SITTING_POSE, SE2Pose(0.3, 0.0, math.pi))
+    assert PreplanMemo.key(turned, SITTING_POSE, SE2Pose(0.3, 0.0, math.pi)) != key
+    assert PreplanMemo.key(chair_mesh, SITTING_POSE, SE2Pose(0.31, 0.0, math.pi)) != key
+    assert PreplanMemo.key(chair_mesh.copy(), SITTING_POSE, SE2Pose(0.3, 0.0, math.pi)) == key
+
+
+def test_the_memo_forgets_the_least_recently_used_answer_beyond_its_size() -> None:
+    memo = PreplanMemo(max_size=2)
+    memo.put(("a",), SeatingCheck("a"))
+    memo.put(("b",), SeatingCheck("b"))
+    assert memo.get(("a",)) == SeatingCheck("a")  # "b" is now the least recently used
+    memo.put(("c",), SeatingCheck("c"))
+    assert memo.get(("b",)) is None
+    assert memo.get(("a",)) == SeatingCheck("a") and memo.get(("c",)) == SeatingCheck("c")
