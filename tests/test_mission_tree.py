@@ -17,6 +17,7 @@ from executive.runner import MissionRunner, summarise
 from hardware.fakes import FakeJudge, fake_robot
 from skills.arena import DEFAULT_ARENA
 from skills.fakes import ScriptedSkills, default_results
+from skills.perception.errors import RegistrationError
 from skills.results import AccessibilityResult, SeatReachability
 from skills.toolbox import SkillNotReady
 from trees.mission import STAGES, create_tree
@@ -81,6 +82,22 @@ def test_assistance_loop_asks_until_accessible(rotations_needed):
     assert len(skills.calls["measure_chair_rotation"]) == rotations_needed
     assert len(skills.calls["check_accessibility"]) == rotations_needed + 1
     assert len(skills.calls["walk_path"]) == 1
+
+
+def test_a_turned_chair_no_fit_accepts_is_scanned_and_imagined_anew():
+    rejected = RegistrationError("chair registration rejected: visible overlap 0.78 (need 0.88)")
+    skills = ScriptedSkills(
+        {"check_accessibility": [BLOCKED, ACCESSIBLE], "measure_chair_rotation": rejected}
+    )
+    summary, runner = run(skills)
+    assert summary["outcome"] == "success", summary["reason"]
+    assert summary["rotations"] == 1
+    assert len(skills.calls["scan_chair"]) == 2 and len(skills.calls["imagine_sitting"]) == 2
+    # The second accessibility check asks about the chair as scanned anew.
+    assert len(skills.calls["check_accessibility"]) == 2
+    assert any("registration rejected" in failure for failure in summary["failures"])
+    statuses = {node.name: node.status for node in runner.root.iterate()}
+    assert statuses["ScanTurnedChair"] == statuses["ImagineTurnedChair"] == Status.SUCCESS
 
 
 def test_assistance_loop_gives_up_after_the_third_rotation():

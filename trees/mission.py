@@ -12,7 +12,11 @@
                 [-] Ask the helper to rotate the chair Sequence (memory)
                     --> InstructHelper
                     --> WaitUntilChairStill
-                    --> MeasureChairRotation
+                    [o] LocateTurnedChair              Selector (memory)
+                        --> MeasureChairRotation       ICP against the chair as it was
+                        [-] Scan the turned chair anew Sequence (memory)
+                            --> ScanTurnedChair        when no fit is accepted
+                            --> ImagineTurnedChair
                     --> CheckAccessibilityAgain
             --> GiveUp
         --> WalkToChair
@@ -48,6 +52,21 @@ STAGES = (
 """The mission's stages: the names of the root's children, in order."""
 
 
+def create_locate_turned_chair() -> py_trees.behaviour.Behaviour:
+    """Where the chair is after a turn: the rotation measured by ICP, or, when no fit is
+    accepted (a turn that shows sides the first scan never saw), the chair scanned and its
+    sitting pose imagined again, so that the next instruction is not given for a chair
+    where it no longer stands."""
+    anew = py_trees.composites.Sequence(
+        name="Scan the turned chair anew",
+        memory=True,
+        children=[ScanChair(name="ScanTurnedChair"), ImagineSitting(name="ImagineTurnedChair")],
+    )
+    return py_trees.composites.Selector(
+        name="LocateTurnedChair", memory=True, children=[MeasureChairRotation(), anew]
+    )
+
+
 def create_assistance_loop(max_rotations: int = keys.MAX_ROTATIONS) -> py_trees.behaviour.Behaviour:
     """The human-assistance loop: check, then ask for up to ``max_rotations`` rotations."""
     ask_once = py_trees.composites.Sequence(
@@ -56,7 +75,7 @@ def create_assistance_loop(max_rotations: int = keys.MAX_ROTATIONS) -> py_trees.
         children=[
             InstructHelper(),
             WaitUntilChairStill(),
-            MeasureChairRotation(),
+            create_locate_turned_chair(),
             CheckAccessibility(name="CheckAccessibilityAgain"),
         ],
     )
