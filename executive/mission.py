@@ -236,7 +236,9 @@ def _run_tree(
     """Ticks the tree on ``robot`` and writes the summary; the record survives any error."""
     recording = None
     try:
-        skills = skills or DefaultSkills()
+        if skills is None:
+            skills = DefaultSkills()
+            skills.warm_up()
         recording = open_recording(root, config.out_dir, record=config.record, live=config.live)
         if recording is not None:
             skills = recording.watch_skills(skills, robot.clock)

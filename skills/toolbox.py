@@ -177,6 +177,14 @@ def resolve_skill(name: str) -> Callable[..., Any]:
 class DefaultSkills:
     """The real skills, each bound lazily from :data:`SKILL_SOURCES`."""
 
+    def warm_up(self) -> None:
+        """Starts building, in the background, what a skill would otherwise build on its
+        first call: the whole-body planner's problems (0.7 s), needed after the scan and
+        the imagination."""
+        from skills.planning.wholebody.optimisation import start_building_problems
+
+        start_building_problems()
+
     def __getattr__(self, name: str) -> Callable[..., Any]:
         if name not in SKILL_SOURCES:
             raise AttributeError(name)

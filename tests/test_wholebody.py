@@ -567,3 +567,16 @@ def test_a_centre_of_mass_off_the_feet_where_it_stopped_slides_p_closer(monkeypa
     monkeypatch.setattr(seating, "plan_seating", colliding)
     with pytest.raises(InfeasibleSeating, match="knee"):
         seating.plan_seating_where_standing(deep_chair, SITTING_POSE, NAO_POSE)
+
+
+def test_the_problems_build_in_the_background_and_the_fine_trajectory_on_first_use() -> None:
+    from skills.planning.wholebody import optimisation
+
+    builder = optimisation.start_building_problems()
+    builder.join(timeout=60.0)
+    assert not builder.is_alive()
+    problems = optimisation.seating_problems()
+    assert problems is optimisation.seating_problems()
+    fine = problems.trajectory_solver(problems.n_knots)
+    assert fine is problems.trajectory_solver(problems.n_knots)
+    assert fine is not problems.trajectory_solver(optimisation.COARSE_KNOTS)

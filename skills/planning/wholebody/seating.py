@@ -421,10 +421,9 @@ class _TrajectoryProblem(NamedTuple):
         parameters = np.r_[
             q_goal, self.profile.as_vector(), float(self.bear_held), self.released, np.ones(5)
         ]
+        solver = problems.trajectory_solver(n)
         with problems.lock:
-            result = problems.trajectory_solvers[n](
-                x0=x0, p=parameters, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg
-            )
+            result = solver(x0=x0, p=parameters, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         knots = np.asarray(result["x"]).reshape(n, 5)
         if not np.all(np.isfinite(knots)):
             raise _NoTrajectory
