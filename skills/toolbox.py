@@ -177,13 +177,14 @@ def resolve_skill(name: str) -> Callable[..., Any]:
 class DefaultSkills:
     """The real skills, each bound lazily from :data:`SKILL_SOURCES`."""
 
-    def warm_up(self) -> None:
+    def warm_up(self) -> threading.Thread:
         """Starts building, in the background, what a skill would otherwise build on its
-        first call: the whole-body planner's problems (0.7 s), needed after the scan and
-        the imagination."""
+        first call: the whole-body planner's problems (2 s), needed after the scan and the
+        imagination. (Modules are not imported there: some import each other, and two
+        threads importing such a pair can deadlock.)"""
         from skills.planning.wholebody.optimisation import start_building_problems
 
-        start_building_problems()
+        return start_building_problems()
 
     def __getattr__(self, name: str) -> Callable[..., Any]:
         if name not in SKILL_SOURCES:

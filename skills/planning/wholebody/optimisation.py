@@ -404,12 +404,20 @@ def seating_problems() -> SeatingProblems:
 
 
 def start_building_problems() -> threading.Thread:
-    """Builds :func:`seating_problems` in a background thread and returns it.
+    """Builds :func:`seating_problems`, then its fine trajectory NLP, in a background
+    thread and returns it.
 
     The mission's first pre-plan comes after the scan and the imagination; built while
     they run (casadi releases the GIL while it builds), it does not wait for the build.
-    A pre-plan that comes first waits on the same lock.
+    A pre-plan that comes first waits on the same locks. One coarse plan refused in a
+    mission needs the fine NLP (in 6 of 7 missions of bench/mission.py), so it is built
+    too.
     """
-    thread = threading.Thread(target=seating_problems, name="build seating problems", daemon=True)
+
+    def build() -> None:
+        problems = seating_problems()
+        problems.trajectory_solver(problems.n_knots)
+
+    thread = threading.Thread(target=build, name="build seating problems", daemon=True)
     thread.start()
     return thread
