@@ -49,6 +49,8 @@ from skills.planning.wholebody.optimisation import (
     BEAR_DEPTH_M,
     BEAR_HEIGHT_M,
     BEAR_LEAN_BACK_RAD,
+    BEAR_SNOUT_M,
+    BEAR_SNOUT_Z_M,
     BEAR_TILT_GOAL_RAD,
     CARRYING_POSTURE_RAD,
     COARSE_KNOTS,
@@ -316,8 +318,13 @@ def test_retract_releases_upright_and_stable(chair, plan):
 def test_retract_keeps_the_head_and_torso_off_the_bear_it_let_go(chair, plan):
     # The bear stays where it was let go (its box: 0.10 m deep, 0.25 m tall); standing
     # up, the head and torso must not sweep through it and knock it off the seat.
+    # Nor through its snout, which stands out of that box toward the NAO: no deeper than
+    # where the bear was let go.
     q_all = _planar(plan.retract_positions_rad)
     base, forward, up = _bear(q_all[0])
+    let_go_in_snout_m = released_bear(seating_problems().geometry(q_all[0]))[4]
+    assert let_go_in_snout_m < 0.01
+    snout_low, snout_high = BEAR_SNOUT_Z_M
     for q in q_all:
         frames = _frames(q)
         for link, offset, radius in (
@@ -329,6 +336,11 @@ def test_retract_keeps_the_head_and_torso_off_the_bear_it_let_go(chair, plan):
             along, height = float(rel @ forward), float(rel @ up)
             outside = max(abs(along) - BEAR_DEPTH_M / 2, height - BEAR_HEIGHT_M, -height)
             assert outside >= radius, (link, q)
+            face = BEAR_DEPTH_M / 2  # forward faces the NAO: the snout is at along > face
+            snout = max(
+                face - along, along - face - BEAR_SNOUT_M, snout_low - height, height - snout_high
+            )
+            assert snout >= radius - let_go_in_snout_m - 1e-6, (link, q)
 
 
 def test_a_released_bear_is_an_obstacle_for_the_body_not_a_load(chair, plan):
@@ -338,7 +350,7 @@ def test_a_released_bear_is_an_obstacle_for_the_body_not_a_load(chair, plan):
     standing = STANDING_POSTURE
     # A bear resting 6 cm ahead of the standing NAO's head is in its way...
     head = problems.geometry(standing).body_points["head"]
-    in_the_way = np.array([head[0] + 0.06, head[1] - 0.2, 1.0, 0.0])
+    in_the_way = np.array([head[0] + 0.06, head[1] - 0.2, 1.0, 0.0, 0.0])
     worst, group, _ = exact_posture_violation(
         problems,
         standing,

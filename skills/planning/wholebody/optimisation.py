@@ -51,6 +51,11 @@ BEAR_HEIGHT_M = 0.25
 BEAR_DEPTH_M = 0.10
 """Fore-aft extent of the bear's outline (torso and head; its short legs are ignored)."""
 BEAR_MASS_KG = 0.2
+BEAR_SNOUT_M = 0.03
+"""How far the bear's snout and nose stand out of its outline's front (toward the NAO),
+metres, over the heights ``BEAR_SNOUT_Z_M`` above its base (the simulated bear,
+``hardware/sim/bear.py``, has its nose 0.076 m ahead of its centre, 0.145-0.18 m up)."""
+BEAR_SNOUT_Z_M = (0.14, 0.19)
 
 BEAR_TILT_GOAL_RAD = math.radians(8.0)
 BEAR_TILT_MOTION_RAD = math.radians(30.0)
@@ -58,7 +63,7 @@ SUPPORT_MARGIN_M = 0.01
 BODY_MARGIN_M = 0.01
 BEAR_CHAIR_MARGIN_M = 0.003
 SMOOTH_MAX_SHARPNESS = 400.0
-NO_RELEASED_BEAR = np.array([10.0, 0.0, -1.0, 0.0])
+NO_RELEASED_BEAR = np.array([10.0, 0.0, -1.0, 0.0, 0.0])
 """The ``released`` parameter when no bear rests anywhere near: 10 m ahead."""
 
 GOAL_COM_WEIGHT = 10.0
@@ -179,7 +184,7 @@ class SeatingProblems:
 
     Parameters of the goal NLP: ``[g_x, g_z, chair(4), diagnose]``; with ``diagnose``
     = 1 the cost becomes the bear placement error (used to explain infeasibility).
-    Parameters of the trajectory NLP: ``[q_goal(5), chair(4), bear_held, released(4),
+    Parameters of the trajectory NLP: ``[q_goal(5), chair(4), bear_held, released(5),
     weights(5)]``; ``released`` is where a let-go bear rests (see
     :func:`released_bear`), which the NAO's legs, torso and head keep clear of.
     """
@@ -190,7 +195,7 @@ class SeatingProblems:
         q = ca.SX.sym("q", 5)
         chair = ca.SX.sym("chair", 4)
         bear_held = ca.SX.sym("bear_held")
-        released = ca.SX.sym("released", 4)
+        released = ca.SX.sym("released", 5)
         values, self.rows, self.row_lower, self.row_upper, geometry = self._posture(
             q, chair, bear_held, released
         )
@@ -289,9 +294,22 @@ class SeatingProblems:
             rel = body_points[label] - body_bear_base
             lx = ca.dot(rel, body_bear_forward)
             lz = ca.dot(rel, body_bear_up)
-            outside = _smooth_max_n(
+            outline = _smooth_max_n(
                 [-BEAR_DEPTH_M / 2 - lx, lx - BEAR_DEPTH_M / 2, -lz, lz - BEAR_HEIGHT_M]
             )
+            # The let-go bear's snout (lx < 0 is its face) too: standing up with only the
+            # outline clear, the head swept 3 cm into it and pushed the bear over. It may
+            # be touched, and entered as deep as where it was let go (released[4]); the
+            # held bear's is left to the outline's margin.
+            snout = _smooth_max_n(
+                [
+                    -BEAR_DEPTH_M / 2 - BEAR_SNOUT_M - lx,
+                    lx + BEAR_DEPTH_M / 2,
+                    BEAR_SNOUT_Z_M[0] - lz,
+                    lz - BEAR_SNOUT_Z_M[1],
+                ]
+            )
+            outside = ca.fmin(outline, snout + BODY_MARGIN_M + released[4] + bear_held)
             add("bear-body collision", f"NAO {label}", outside - radius, BODY_MARGIN_M)
         geometry = [
             com[0],
@@ -353,7 +371,7 @@ class SeatingProblems:
         q_goal = ca.SX.sym("q_goal", 5)
         chair = ca.SX.sym("chair", 4)
         bear_held = ca.SX.sym("bear_held")
-        released = ca.SX.sym("released", 4)
+        released = ca.SX.sym("released", 5)
         weights = ca.SX.sym("weights", 5)
         cost = 0
         for k in range(n):
@@ -373,9 +391,25 @@ class SeatingProblems:
 
 def released_bear(geometry: PostureGeometry) -> np.ndarray:
     """The ``released`` parameter of a bear let go from a posture: its base (x, z) and its
-    forward axis (x, z) in the NAO frame, where the hands held it."""
+    forward axis (x, z) in the NAO frame, where the hands held it, and how deep (metres)
+    the body already is in its snout there (the retract may go no deeper), with the
+    smoothing's ln(4)/κ so that the posture itself meets the smoothed row."""
     up = geometry.bear_up
-    return np.array([geometry.bear_base[0], geometry.bear_base[1], up[1], -up[0]])
+    forward = np.array([up[1], -up[0]])
+    base = geometry.bear_base
+    deepest = -math.inf
+    for _link, _offset, radius, label in LEG_TORSO_HEAD_POINTS:
+        rel = geometry.body_points[label] - base
+        lx, lz = float(rel @ forward), float(rel @ up)
+        snout = max(
+            -BEAR_DEPTH_M / 2 - BEAR_SNOUT_M - lx,
+            lx + BEAR_DEPTH_M / 2,
+            BEAR_SNOUT_Z_M[0] - lz,
+            lz - BEAR_SNOUT_Z_M[1],
+        )
+        deepest = max(deepest, radius - snout)
+    allowance = max(deepest + math.log(4.0) / SMOOTH_MAX_SHARPNESS, 0.0)
+    return np.array([base[0], base[1], forward[0], forward[1], allowance])
 
 
 def _ipopt_options(max_iter: int) -> dict:
