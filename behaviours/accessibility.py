@@ -14,11 +14,17 @@ from behaviours.tracking import tracked_humanoid_pose
 from skills.geometry import SE2Pose
 from skills.results import AccessibilityResult, SeatReachability
 
+REFUSED = "refused: "
+"""How CheckSeatReachable's message starts when it refuses the mission: the seat is out
+of the NAO's reach from every stance (the trials count these apart)."""
+
 
 class CheckSeatReachable(SkillBehaviour):
     """FAILURE, refusing the mission with the reason, when no stance lets the NAO seat the
     bear on this seat whatever the chair's orientation (too high, too deep for its
-    reach); SUCCESS otherwise. Runs before anyone is asked to turn the chair.
+    reach); SUCCESS otherwise. Runs before anyone is asked to turn the chair. Where the
+    scan lost the seat under the sitting point, an unreachable seat is not refused (the
+    chair may be within reach): the leaf fails saying the scan cannot tell.
 
     Blackboard:
         reads ``/chair/mesh``, ``/sitting/pose``; writes ``/accessibility/reachable``.
@@ -39,8 +45,13 @@ class CheckSeatReachable(SkillBehaviour):
 
     def conclude(self, verdict: SeatReachability) -> Status:
         self.blackboard.set(keys.REACHABILITY, verdict, overwrite=True)
+        if not verdict.reachable and not verdict.seat_seen:
+            return self.fail(
+                "cannot tell whether the seat is within reach: the scan shows no seat under "
+                f"the sitting point ({verdict.reason})"
+            )
         if not verdict.reachable:
-            return self.fail(f"refused: {verdict.reason}")
+            return self.fail(f"{REFUSED}{verdict.reason}")
         across = f" and {verdict.centred_m:.2f} m across" if verdict.centred_m else ""
         return self.succeed(
             f"seat {verdict.seat_height_m:.2f} m high within reach (p moved "

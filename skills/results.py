@@ -179,6 +179,9 @@ class SeatReachability(NamedTuple):
             when none).
         seconds: wall time of the check.
         centred_m: how far p had to move across the ray (between armrests), metres.
+        seat_seen: the scan has the seat's top under p. When it lost it, p cannot slide
+            over the seat toward the NAO, and an unreachable verdict says what the scan
+            shows, not what the chair is.
     """
 
     reachable: bool
@@ -188,6 +191,7 @@ class SeatReachability(NamedTuple):
     stance_m: float = math.nan
     seconds: float = 0.0
     centred_m: float = 0.0
+    seat_seen: bool = True
 
     def summary(self) -> dict[str, Any]:
         def number(value: float) -> float | None:
@@ -201,6 +205,7 @@ class SeatReachability(NamedTuple):
             "stance_m": number(self.stance_m),
             "centred_m": number(self.centred_m),
             "seconds": round(self.seconds, 3),
+            "seat_seen": self.seat_seen,
         }
 
 

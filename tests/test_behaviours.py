@@ -298,3 +298,14 @@ def test_imagine_says_when_the_vote_stood_against_the_backrest():
     assert tick_until_done(leaf)[-1] == Status.SUCCESS
     assert "direction from the backrest" not in leaf.feedback_message
     assert "-46 deg off, mirrors the chair less (0.37 against 0.86)" in leaf.feedback_message
+
+
+@pytest.mark.parametrize("seat_seen", [True, False])
+def test_check_seat_reachable_refuses_only_what_the_scan_shows(seat_seen):
+    verdict = SeatReachability(False, "seat out of the NAO's reach", 0.31, seat_seen=seat_seen)
+    leaf = make(CheckSeatReachable, ScriptedSkills({"check_seat_reachable": verdict}))
+    assert tick_until_done(leaf)[-1] == Status.FAILURE
+    assert leaf.feedback_message.startswith("refused: ") == seat_seen
+    assert "seat out of the NAO's reach" in leaf.feedback_message
+    if not seat_seen:
+        assert "the scan shows no seat under the sitting point" in leaf.feedback_message

@@ -434,7 +434,9 @@ def test_a_sitting_point_over_a_lost_seat_top_stays_where_it_was_imagined() -> N
     seat = _seat_with_hole(0.07, open_to_front=True)
     moved, slide_m = slide_on_seat(seat, p, 1.0)
     assert slide_m == 0.0 and np.array_equal(moved.position, p.position)
-    assert seat_ray(seat, p).seat_heights_m == pytest.approx([0.24])
+    ray = seat_ray(seat, p)
+    assert ray.seat_heights_m == pytest.approx([0.24]) and not ray.seat_seen
+    assert seat_ray(_seat_with_hole(0.07, open_to_front=False), p).seat_seen
     nothing = check_seat_reachable(seat, SittingPose(np.array([1.0, 1.0, 0.29]), 0.0))
     assert not nothing.reachable and nothing.reason == "no seat under the sitting position"
 

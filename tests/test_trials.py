@@ -683,3 +683,19 @@ def test_refused_chairs_are_a_cause_of_their_own():
     assert "Refused (no stance reaches the seat): 3 trial(s) on 1 chair(s)" in text
     assert f"tall.obj (3): {reason}" in text
     assert "## Refused chairs" in markdown_report(table, records)
+
+
+def test_a_scan_that_cannot_tell_the_reach_is_not_a_refusal():
+    lost = make_record(
+        "accessible",
+        "failure",
+        chair="tub.obj",
+        failed_stage="CheckSeatReachable",
+        reason=(
+            "CheckSeatReachable: cannot tell whether the seat is within reach: the scan shows "
+            "no seat under the sitting point (seat out of the NAO's reach: ...)"
+        ),
+    )
+    table = compute_table([lost])
+    assert table.refusals == ()
+    assert ("CheckSeatReachable", 1) in table.failure_stages

@@ -17,6 +17,7 @@ from collections import Counter
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from behaviours.accessibility import REFUSED
 from executive.trials.pictures import trial_picture_name
 from executive.trials.protocol import EXPERIMENT_LABELS, EXPERIMENTS, SkippedChair
 from trees.mission import STAGES
@@ -125,12 +126,15 @@ REFUSING_STAGE = "CheckSeatReachable"
 
 
 def _refusals(failed: list[dict[str, Any]]) -> tuple[tuple[str, str, int], ...]:
-    """(chair, reason, trials) of the refused trials, by chair."""
+    """(chair, reason, trials) of the refused trials, by chair: failed at
+    :data:`REFUSING_STAGE` with a refusal (not, say, a scan that cannot tell)."""
     by_chair: dict[str, list[str]] = {}
     for record in failed:
-        if record.get("failed_stage") == REFUSING_STAGE:
-            reason = failure_cause(record).split(": ", 1)[1].removeprefix("refused: ")
-            by_chair.setdefault(record["chair"], []).append(reason)
+        if record.get("failed_stage") != REFUSING_STAGE:
+            continue
+        message = failure_cause(record).split(": ", 1)[1]
+        if message.startswith(REFUSED):
+            by_chair.setdefault(record["chair"], []).append(message.removeprefix(REFUSED))
     return tuple(
         (chair, Counter(reasons).most_common(1)[0][0], len(reasons))
         for chair, reasons in sorted(by_chair.items())

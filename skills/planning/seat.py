@@ -124,10 +124,14 @@ class SeatRay(NamedTuple):
     Attributes:
         slides_m: (S,) candidate slides s of p toward the NAO, supported ones only.
         seat_heights_m: (S,) the seat's height under each p(s).
+        seat_seen: the scan has the seat's top under p; when not (a scan that lost it,
+            while the imagined child sat there), p stays and nothing is known of the seat
+            ahead of it.
     """
 
     slides_m: np.ndarray
     seat_heights_m: np.ndarray
+    seat_seen: bool = True
 
 
 SEAT_MAP_BEHIND_M = 0.15
@@ -236,7 +240,7 @@ def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
     along, on_seat, row_heights = along[ahead], on_seat[ahead], row_heights[ahead]
     if not on_seat[0]:
         # The scan lost the seat's top here, yet the imagined child sat on it: p stays.
-        return SeatRay(np.zeros(1), np.full(1, h0))
+        return SeatRay(np.zeros(1), np.full(1, h0), seat_seen=False)
     if on_seat.all():
         limit = MAX_SLIDE_M
     else:

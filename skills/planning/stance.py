@@ -557,7 +557,8 @@ def check_seat_reachable(
     from skills.planning.se2 import default_seating_validator
 
     began = time.perf_counter()
-    if len(seat_ray(chair_mesh, sitting_pose).slides_m) == 0:
+    ray = seat_ray(chair_mesh, sitting_pose)
+    if len(ray.slides_m) == 0:
         p_z = float(sitting_pose.position[2])
         return SeatReachability(False, "no seat under the sitting position", p_z)
     checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_solid_boxes(chair_mesh))
@@ -570,6 +571,6 @@ def check_seat_reachable(
         reason = choice.reason
         if choice.check.reason:
             reason = f"no stance passes the seating pre-plan: {reason}"
-        return SeatReachability(False, reason, height, seconds=seconds)
+        return SeatReachability(False, reason, height, seconds=seconds, seat_seen=ray.seat_seen)
     stance = float(np.hypot(choice.se2_goal.x - p0[0], choice.se2_goal.y - p0[1]))
     return SeatReachability(True, "", height, choice.slide_m, stance, seconds, choice.centred_m)
