@@ -10,6 +10,7 @@ written to ``OUT/report.md`` with ``OUT/chairs/*.png`` (imagined pose per chair)
 from __future__ import annotations
 
 import argparse
+import os
 import shlex
 import sys
 from pathlib import Path
@@ -100,6 +101,15 @@ def _recording_available() -> bool:
     return False
 
 
+def imagination_workers(args: argparse.Namespace) -> int:
+    """Processes each trial's imagination uses: on this machine, the cores left to a trial
+    by the others running at once (each pool costs its processes' start-up, and more
+    processes than cores only queue); on a Ray cluster, the imagination's default."""
+    if args.backend == "ray":
+        return 2
+    return max(1, min(2, (os.cpu_count() or 1) // max(1, args.workers)))
+
+
 def _db_path(args: argparse.Namespace) -> Path:
     return args.db or args.out / "trials.sqlite"
 
@@ -180,6 +190,7 @@ def run(args: argparse.Namespace) -> int:
                 args.timeout,
                 progress=progress,
                 record=record,
+                imagination_workers=imagination_workers(args),
             )
         except BackendUnavailableError as error:
             raise CliError(f"bearchair trials: {error}") from error

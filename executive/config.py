@@ -34,6 +34,8 @@ class RunConfig:
         snapshots: in simulation, save a picture whenever a stage ends.
         record: write a Rerun recording, ``out_dir/mission.rrd`` (``executive.recording``).
         live: stream to a Rerun viewer while running: ``"spawn"``, ``"web"`` or a URL.
+        imagination_workers: processes the imagination's drops run in (1: the run's own;
+            the result is the same for any number).
     """
 
     chair_path: Path | None = None
@@ -48,6 +50,7 @@ class RunConfig:
     snapshots: bool = False
     record: bool = False
     live: str | None = None
+    imagination_workers: int = 2
 
     def chair_name(self) -> str:
         return self.chair_path.name if self.chair_path else "box-chair (built in)"

@@ -237,7 +237,7 @@ def _run_tree(
     recording = None
     try:
         if skills is None:
-            skills = DefaultSkills()
+            skills = DefaultSkills(imagination_workers=config.imagination_workers)
             skills.warm_up()
         recording = open_recording(root, config.out_dir, record=config.record, live=config.live)
         if recording is not None:

@@ -105,6 +105,7 @@ def main(argv: list[str] | None = None) -> int:
             mute=True,
             timeout_s=mission_timeout_s(float(payload["timeout_s"])),
             record=bool(payload.get("record", False)) and _rerun_installed(),
+            imagination_workers=int(payload.get("imagination_workers", 2)),
         )
         keeper = ChairKeeper()
         summary = run_in_simulation(config, on_tick=keeper)

@@ -9,6 +9,7 @@ their own stubs with the same methods.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import threading
 from collections.abc import Callable
@@ -175,7 +176,14 @@ def resolve_skill(name: str) -> Callable[..., Any]:
 
 
 class DefaultSkills:
-    """The real skills, each bound lazily from :data:`SKILL_SOURCES`."""
+    """The real skills, each bound lazily from :data:`SKILL_SOURCES`.
+
+    Args:
+        imagination_workers: processes ``imagine_sitting`` drops in (1: this one).
+    """
+
+    def __init__(self, imagination_workers: int = 2) -> None:
+        self.imagination_workers = imagination_workers
 
     def warm_up(self) -> threading.Thread:
         """Starts building, in the background, what a skill would otherwise build on its
@@ -190,5 +198,7 @@ class DefaultSkills:
         if name not in SKILL_SOURCES:
             raise AttributeError(name)
         function = resolve_skill(name)
+        if name == "imagine_sitting":
+            function = functools.partial(function, workers=self.imagination_workers)
         setattr(self, name, function)
         return function

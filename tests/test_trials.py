@@ -699,3 +699,33 @@ def test_a_scan_that_cannot_tell_the_reach_is_not_a_refusal():
     table = compute_table([lost])
     assert table.refusals == ()
     assert ("CheckSeatReachable", 1) in table.failure_stages
+
+
+@pytest.mark.parametrize(
+    ("backend", "workers", "cores", "expected"),
+    [
+        ("local", 2, 2, 1),
+        ("local", 1, 2, 2),
+        ("local", 4, 2, 1),
+        ("local", 1, 8, 2),
+        ("ray", 8, 2, 2),
+    ],
+)
+def test_each_trials_imagination_gets_the_cores_the_other_trials_leave(
+    monkeypatch, backend, workers, cores, expected
+):
+    import argparse
+
+    from executive import cmd_trials
+
+    monkeypatch.setattr(cmd_trials.os, "cpu_count", lambda: cores)
+    args = argparse.Namespace(backend=backend, workers=workers)
+    assert cmd_trials.imagination_workers(args) == expected
+
+
+def test_the_imagination_workers_reach_the_trials_payload_and_the_skills(tmp_path):
+    from skills.toolbox import DefaultSkills
+
+    spec = expand_protocol([ChairEntry(tmp_path / "a.obj", "chair", 90.0)], "paper", 0)[0]
+    assert spec.to_payload(tmp_path, 60.0, imagination_workers=1)["imagination_workers"] == 1
+    assert DefaultSkills(imagination_workers=1).imagine_sitting.keywords == {"workers": 1}

@@ -42,6 +42,7 @@ def run_campaign(
     progress: Progress | None = None,
     on_record: Callable[[dict[str, Any]], None] | None = None,
     record: bool = False,
+    imagination_workers: int = 2,
 ) -> CampaignResult:
     """Runs the trials the records do not hold yet, recording each as it ends.
 
@@ -54,6 +55,7 @@ def run_campaign(
         progress: the progress bar (optional).
         on_record: called after each record is committed (tests use it to interrupt).
         record: each trial writes a Rerun recording, ``mission.rrd``, in its run folder.
+        imagination_workers: processes each trial's imagination drops in (1: its own).
 
     Returns:
         What ran; ``interrupted`` when Ctrl-C stopped it (finished trials are kept).
@@ -67,7 +69,14 @@ def run_campaign(
         run_dir = runs_dir / spec.run_dir_name()
         if run_dir.exists():  # left by an interrupted run: start clean
             shutil.rmtree(run_dir)
-        jobs.append((spec, spec.to_payload(run_dir, timeout_s, record=record)))
+        jobs.append(
+            (
+                spec,
+                spec.to_payload(
+                    run_dir, timeout_s, record=record, imagination_workers=imagination_workers
+                ),
+            )
+        )
     ran = 0
 
     def record(spec: TrialSpec, outcome: WorkerOutcome) -> None:

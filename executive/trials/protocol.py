@@ -103,10 +103,13 @@ class TrialSpec(NamedTuple):
         """The trial's run record directory, relative to the campaign's runs folder."""
         return f"{Path(self.chair).stem}/t{self.trial_index}-{self.experiment}-seed{self.seed}"
 
-    def to_payload(self, out_dir: Path, timeout_s: float, record: bool = False) -> dict[str, Any]:
+    def to_payload(
+        self, out_dir: Path, timeout_s: float, record: bool = False, imagination_workers: int = 2
+    ) -> dict[str, Any]:
         """The JSON the trial worker gets on its command line."""
         return {
             "record": record,
+            "imagination_workers": imagination_workers,
             "chair_path": str(self.chair_path),
             "placement": self.placement,
             "helper": self.helper,
