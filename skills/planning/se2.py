@@ -113,7 +113,8 @@ def reach_validator(
 
 
 PREPLAN_MEMO_SIZE = 64
-"""Pre-plan answers kept, most recent first (a stance search asks a few to a few dozen)."""
+"""Pre-plan answers kept, the least recently used dropped first (a stance search asks a
+few to a few dozen questions)."""
 
 
 class PreplanMemo:
