@@ -205,8 +205,9 @@ class SeatingProblems:
         self.posture_geometry = ca.Function("posture_geometry", [q, bear_held], geometry)
         self.support_centre_x = 0.5 * sum(self.nao.support_x)
         self._build_goal(q, chair)
-        # The fine trajectory NLP is built only when a coarse plan is refused (2 of 39
-        # solves on six chairs): building it takes 1.4 s of every process's first plan.
+        # The fine trajectory NLP (1.4 s to build) is built when a coarse plan is first
+        # refused: 2 of 39 solves on six chairs, but once in most missions, so the
+        # mission's warm-up (start_building_problems) builds it ahead.
         self._trajectory_solvers = {COARSE_KNOTS: self._build_trajectory(COARSE_KNOTS)}
         self._building = threading.Lock()
         self.lock = threading.Lock()
