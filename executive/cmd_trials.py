@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from executive.cli_types import positive_int, positive_seconds, seed_value
+from skills.imagination import DEFAULT_WORKERS
 
 DEFAULT_OUT = Path("trials")
 DEFAULT_TIMEOUT_S = 300.0
@@ -106,8 +107,8 @@ def imagination_workers(args: argparse.Namespace) -> int:
     by the others running at once (each pool costs its processes' start-up, and more
     processes than cores only queue); on a Ray cluster, the imagination's default."""
     if args.backend == "ray":
-        return 2
-    return max(1, min(2, (os.cpu_count() or 1) // max(1, args.workers)))
+        return DEFAULT_WORKERS
+    return max(1, min(DEFAULT_WORKERS, (os.cpu_count() or 1) // max(1, args.workers)))
 
 
 def _db_path(args: argparse.Namespace) -> Path:

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Literal
 
 from skills.arena import DEFAULT_ARENA, Arena
+from skills.imagination import DEFAULT_WORKERS
 
 logger = logging.getLogger(__name__)
 
@@ -50,7 +51,7 @@ class RunConfig:
     snapshots: bool = False
     record: bool = False
     live: str | None = None
-    imagination_workers: int = 2
+    imagination_workers: int = DEFAULT_WORKERS
 
     def chair_name(self) -> str:
         return self.chair_path.name if self.chair_path else "box-chair (built in)"

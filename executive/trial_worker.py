@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from executive.trials.worker_process import RESULT_MARKER
+from skills.imagination import DEFAULT_WORKERS
 
 MISSION_TIMEOUT_MARGIN_S = 30.0
 """The mission stops itself this long before the harness would kill the worker, so a
@@ -105,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
             mute=True,
             timeout_s=mission_timeout_s(float(payload["timeout_s"])),
             record=bool(payload.get("record", False)) and _rerun_installed(),
-            imagination_workers=int(payload.get("imagination_workers", 2)),
+            imagination_workers=int(payload.get("imagination_workers", DEFAULT_WORKERS)),
         )
         keeper = ChairKeeper()
         summary = run_in_simulation(config, on_tick=keeper)

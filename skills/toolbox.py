@@ -21,6 +21,7 @@ import trimesh
 from hardware.interfaces import Clock, Humanoid, ScanningArm
 from skills.arena import Arena
 from skills.geometry import SE2Pose, SittingPose
+from skills.imagination import DEFAULT_WORKERS
 from skills.results import (
     AccessibilityResult,
     ChairRotation,
@@ -182,7 +183,7 @@ class DefaultSkills:
         imagination_workers: processes ``imagine_sitting`` drops in (1: this one).
     """
 
-    def __init__(self, imagination_workers: int = 2) -> None:
+    def __init__(self, imagination_workers: int = DEFAULT_WORKERS) -> None:
         self.imagination_workers = imagination_workers
 
     def warm_up(self) -> threading.Thread:

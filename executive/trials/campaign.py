@@ -17,6 +17,7 @@ from executive.trials.progress import Progress
 from executive.trials.protocol import TrialSpec
 from executive.trials.store import TrialStore, record_from_error, record_from_summary
 from executive.trials.worker_process import WorkerOutcome
+from skills.imagination import DEFAULT_WORKERS
 
 
 class CampaignResult(NamedTuple):
@@ -42,7 +43,7 @@ def run_campaign(
     progress: Progress | None = None,
     on_record: Callable[[dict[str, Any]], None] | None = None,
     record: bool = False,
-    imagination_workers: int = 2,
+    imagination_workers: int = DEFAULT_WORKERS,
 ) -> CampaignResult:
     """Runs the trials the records do not hold yet, recording each as it ends.
 

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from skills import errors
+from skills.imagination import DEFAULT_WORKERS
 from skills.meshes import SUPPORTED_SUFFIXES
 
 EXPERIMENTS = ("accessible", "inaccessible_obeys", "inaccessible_disobeys")
@@ -104,7 +105,11 @@ class TrialSpec(NamedTuple):
         return f"{Path(self.chair).stem}/t{self.trial_index}-{self.experiment}-seed{self.seed}"
 
     def to_payload(
-        self, out_dir: Path, timeout_s: float, record: bool = False, imagination_workers: int = 2
+        self,
+        out_dir: Path,
+        timeout_s: float,
+        record: bool = False,
+        imagination_workers: int = DEFAULT_WORKERS,
     ) -> dict[str, Any]:
         """The JSON the trial worker gets on its command line."""
         return {

@@ -24,6 +24,10 @@ if TYPE_CHECKING:
         warm_up,
     )
 
+DEFAULT_WORKERS = 2
+"""Worker processes the imagination drops in unless told otherwise (1: the caller's own);
+the result is the same for any number."""
+
 __all__ = [
     "ImaginationDetails",
     "imagine_sitting",

@@ -122,7 +122,11 @@ class BackrestCheck(NamedTuple):
 
 
 def backrest_yaw(
-    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, *, seed: int = 0
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    *,
+    seed: int = 0,
+    surface: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[float, float] | None:
     """γ_back and the centroids' distance (radians, metres), or None without a backrest.
 
@@ -130,12 +134,13 @@ def backrest_yaw(
         chair_mesh: the chair, z up, metres (any horizontal frame; γ_back comes in it).
         sitting_pose: the imagined g; only p is used (the seat under it).
         seed: the surface sampling's seed.
+        surface: the chair's surface samples and their faces when the caller has them.
     """
     p = np.asarray(sitting_pose.position, dtype=float)
     seat_top = float(seat_support_heights(chair_mesh, p[None, :2], float(p[2]))[0])
     if not math.isfinite(seat_top):
         return None
-    points, faces = _surface(chair_mesh, seed)
+    points, faces = _surface(chair_mesh, seed) if surface is None else surface
     near = np.hypot(points[:, 0] - p[0], points[:, 1] - p[1]) <= NEAR_P_M
     upward = chair_mesh.face_normals[faces][:, 2] >= UPWARD_NORMAL_Z
     seat = near & upward & (np.abs(points[:, 2] - seat_top) <= SEAT_BAND_M)
@@ -154,15 +159,15 @@ def _surface(chair_mesh: trimesh.Trimesh, seed: int) -> tuple[np.ndarray, np.nda
     return trimesh.sample.sample_surface(chair_mesh, SAMPLES, seed=seed)
 
 
-def mirror_share(points: np.ndarray, p: np.ndarray, yaw_rad: float) -> float:
+def mirror_share(points: np.ndarray, p: np.ndarray, yaw_rad: float, tree: Any = None) -> float:
     """m(γ) (see the module doc): the largest share of ``points`` (N, 3) whose mirror image
     across a vertical plane along ``yaw_rad``, within ``MIRROR_OFFSETS_M`` of p, lies within
-    ``MIRROR_TOLERANCE_M`` of a point."""
+    ``MIRROR_TOLERANCE_M`` of a point; ``tree``: a ``cKDTree`` of ``points`` if built."""
     from scipy.spatial import cKDTree
 
     u = np.array([math.cos(yaw_rad), math.sin(yaw_rad)])
     v = np.array([-u[1], u[0]])
-    tree = cKDTree(points)
+    tree = cKDTree(points) if tree is None else tree
     lateral = (points[:, :2] - np.asarray(p, dtype=float)[:2]) @ v
     best = 0.0
     for offset in MIRROR_OFFSETS_M:
@@ -182,17 +187,21 @@ def check_direction(
         (g, the check): g keeps its yaw when the two agree within :data:`AGREEMENT_RAD`,
         or takes γ_back (p unchanged); the check is None when the seat gives no cue.
     """
-    cue = backrest_yaw(chair_mesh, sitting_pose, seed=seed)
+    surface = _surface(chair_mesh, seed)
+    cue = backrest_yaw(chair_mesh, sitting_pose, seed=seed, surface=surface)
     if cue is None:
         return sitting_pose, None
     yaw_rad, offset_m = cue
     disagreement = wrap_angle(sitting_pose.yaw - yaw_rad)
     if abs(disagreement) <= AGREEMENT_RAD:
         return sitting_pose, BackrestCheck(yaw_rad, offset_m, disagreement, False)
-    points = _surface(chair_mesh, seed)[0][:MIRROR_SAMPLES]
+    from scipy.spatial import cKDTree
+
+    points = surface[0][:MIRROR_SAMPLES]
+    tree = cKDTree(points)
     p = np.asarray(sitting_pose.position, dtype=float)
-    mirror_back = mirror_share(points, p, yaw_rad)
-    mirror_vote = mirror_share(points, p, sitting_pose.yaw)
+    mirror_back = mirror_share(points, p, yaw_rad, tree)
+    mirror_vote = mirror_share(points, p, sitting_pose.yaw, tree)
     used = mirror_vote <= mirror_back + MIRROR_MARGIN
     check = BackrestCheck(yaw_rad, offset_m, disagreement, used, mirror_back, mirror_vote)
     if not used:

@@ -65,6 +65,7 @@ import numpy as np
 import trimesh
 
 from skills.geometry import SittingPose, transform_points, wrap_angle
+from skills.imagination import DEFAULT_WORKERS
 from skills.imagination.agent import LINKS, agent_urdf_path
 from skills.imagination.backrest import check_direction
 from skills.imagination.chair import (
@@ -140,7 +141,7 @@ def imagine_sitting(
     *,
     seed: int,
     cancel: threading.Event | None = None,
-    workers: int = 2,
+    workers: int = DEFAULT_WORKERS,
 ) -> ImaginationResult:
     """Finds how to sit on a chair by simulating drops of a child-sized agent.
 
@@ -163,7 +164,7 @@ def imagine_sitting_details(
     *,
     seed: int,
     cancel: threading.Event | None = None,
-    workers: int = 2,
+    workers: int = DEFAULT_WORKERS,
     thresholds: SamThresholds = DEFAULT_THRESHOLDS,
     settings: SimulationSettings | None = None,
 ) -> ImaginationDetails:
@@ -552,7 +553,7 @@ def _pool(workers: int) -> ProcessPoolExecutor:
         return pool
 
 
-def warm_up(workers: int = 2, *, wait: bool = True) -> None:
+def warm_up(workers: int = DEFAULT_WORKERS, *, wait: bool = True) -> None:
     """Starts the worker processes now (they import pybullet and connect).
 
     Args:
