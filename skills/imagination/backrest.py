@@ -39,7 +39,7 @@ than :data:`MIRROR_MARGIN`. Measured on the 14 overrides of three calibration ca
 the cue's plane mirrored 0.38-0.86 of the scan, the vote's 0.37-0.86; the one wrong
 override had the vote's plane at 0.86 against the cue's 0.37, and in the 13 right ones
 the vote's plane was never more than 0.01 better (a round seat, near-symmetric both
-ways). The two are mirrored only when they disagree (0.2-0.4 s on a scan)."""
+ways). The two are mirrored only when they disagree (0.15-0.2 s on a scan)."""
 
 from __future__ import annotations
 
