@@ -1,8 +1,10 @@
 """Benchmark: where a whole simulated mission's time goes, stage by stage.
 
 Runs the whole mission on the box chair and on the first N calibration chairs with a
-front in ../shared/chairs, each in a process of its own (as ``bearchair trials`` runs a
-trial). Calibration chair k runs the paper protocol's trial k mod 6 (seeded as in the
+front in ../shared/chairs, each in a process of its own as ``bearchair trials`` runs a
+trial: a fork of the preloaded trial server (``executive.trials.forked_workers``), or
+with ``--fresh`` a fresh interpreter, which pays the imports and the planner's casadi
+problems (about 3 s) in every run. Calibration chair k runs the paper protocol's trial k mod 6 (seeded as in the
 campaign), so the six conditions (accessible, inaccessible with a helper who obeys or
 disobeys) are all met; the box chair runs an accessible trial. For every run and stage
 it prints:
@@ -20,13 +22,14 @@ it prints:
     rtf       robot / wall, the simulated world's real-time factor
     frames    frames rendered (and their megapixels)
 
-"setup" is the process from its start to the first tick (imports, building the world),
+"setup" is the process from its start to the first tick (building the world, and with
+``--fresh`` the imports; the server's one-off preload time is printed apart),
 "teardown" what follows the last tick (final picture, ground truth, record). Then the
 medians over runs, and each run's peak memory (resident set of the run's process; of
 its whole process tree, sampled every 2 s, including the imagination's workers).
 
     .venv/bin/python bench/mission.py [--chairs 6] [--seed 0] [--profile] [--out DIR]
-        [--json FILE] [--no-box]
+        [--json FILE] [--no-box] [--fresh]
 
 ``--profile`` runs each mission under cProfile in every thread (the tick loop and the
 leaves' workers) and prints the top functions by cumulative time, summed over threads
@@ -133,15 +136,20 @@ def _tree_rss(process: Any) -> int:
     return total
 
 
-def run_one(payload: dict[str, Any]) -> dict[str, Any]:
-    """Runs one mission in this process and returns its measurements."""
+def run_one(payload: dict[str, Any], started: float = PROCESS_STARTED) -> dict[str, Any]:
+    """Runs one mission in this process and returns its measurements.
+
+    Args:
+        payload: the case (``_cases``).
+        started: ``time.perf_counter()`` when the run's process began.
+    """
     profiler = _ThreadProfiles() if payload.get("profile") else None
     if profiler is not None:
         profiler.start()
     from executive.config import RunConfig
     from executive.mission import run_in_simulation
 
-    meter = StageMeter(PROCESS_STARTED)
+    meter = StageMeter(started)
     config = RunConfig(
         chair_path=Path(payload["chair_path"]) if payload.get("chair_path") else None,
         placement=payload["placement"],
@@ -159,13 +167,25 @@ def run_one(payload: dict[str, Any]) -> dict[str, Any]:
         "failed_stage": summary["failed_stage"],
         "reason": summary["reason"][:200],
         "stages": meter.rows,
-        "wall_s": time.perf_counter() - PROCESS_STARTED,
+        "wall_s": time.perf_counter() - started,
         "peak_process_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
         "peak_tree_bytes": meter.peak_tree_bytes,
     }
     if profiler is not None:
         result["pstats"] = profiler.dump(Path(payload["out_dir"]) / "profile.pstats")
+    preload = sys.modules.get("executive.trials.server_preload")
+    result["server_preload_s"] = getattr(preload, "PRELOAD_S", None)
     return result
+
+
+def forked_entry(argv: list[str]) -> int:
+    """:func:`run_one` in a fork of the trial server (``PreloadedLauncher``'s entry)."""
+    from executive.trials.worker_process import RESULT_MARKER as TRIAL_RESULT
+
+    started = time.perf_counter()
+    result = run_one(json.loads(argv[0]), started)
+    print(TRIAL_RESULT + json.dumps({"summary": result}), flush=True)
+    return 0
 
 
 class _ThreadProfiles:
@@ -252,7 +272,20 @@ def _cases(chairs: int, seed: int, box: bool, out: Path) -> list[dict[str, Any]]
     return cases
 
 
-def _run_child(case: dict[str, Any]) -> dict[str, Any]:
+def _run_forked(case: dict[str, Any]) -> dict[str, Any]:
+    # By its package name, so that the trial server can import the entry.
+    sys.path.insert(0, str(ROOT))
+    from bench import mission as this_module
+    from executive.trials.forked_workers import PreloadedLauncher
+    from executive.trials.worker_process import run_worker
+
+    outcome = run_worker(PreloadedLauncher(this_module.forked_entry), case, 1800.0)
+    if outcome.summary is None:
+        return {"label": case["label"], "error": outcome.error}
+    return outcome.summary
+
+
+def _run_fresh(case: dict[str, Any]) -> dict[str, Any]:
     environment = {
         **os.environ,
         "PYTHONPATH": f"{ROOT}{os.pathsep}{os.environ.get('PYTHONPATH', '')}",
@@ -331,6 +364,9 @@ def _print_summary(results: list[dict[str, Any]]) -> None:
                 f"  real-time factor in {'+'.join(names)}: median {statistics.median(ratios):.1f}, "
                 f"min {min(ratios):.1f}"
             )
+    preloads = [r["server_preload_s"] for r in ok if r.get("server_preload_s") is not None]
+    if preloads:
+        print(f"  trial server's preload (paid once, not in any run): {preloads[0]:.1f} s")
     peaks = [r["peak_process_bytes"] / 2**20 for r in ok]
     trees = [r["peak_tree_bytes"] / 2**20 for r in ok]
     print(f"  peak memory: process max {max(peaks):.0f} MiB, process tree max {max(trees):.0f} MiB")
@@ -347,6 +383,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--top", type=int, default=30, help="profile lines to print")
     parser.add_argument("--out", type=Path, help="run records (default: a temporary folder)")
     parser.add_argument("--json", type=Path, help="write every measurement here")
+    parser.add_argument(
+        "--fresh", action="store_true", help="each run in a fresh interpreter (no preloading)"
+    )
     parser.add_argument("--one", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
 
@@ -361,7 +400,7 @@ def main(argv: list[str] | None = None) -> int:
     for case in cases:
         case["profile"] = args.profile
         print(f"running {case['label']} (seed {case['seed']}) ...", file=sys.stderr, flush=True)
-        result = _run_child(case)
+        result = _run_fresh(case) if args.fresh else _run_forked(case)
         results.append(result)
         if "error" in result:
             print(f"\n{result['label']}: ERROR {result['error']}")

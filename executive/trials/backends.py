@@ -1,8 +1,10 @@
 """Where trial subprocesses run: here (a few at once) or as Ray tasks.
 
-Both backends run the same worker command (``executive.trials.worker_process``) and
-hand each :class:`WorkerOutcome` back to the caller in the caller's thread, as soon as
-it is ready, so the harness alone writes the records. On Ctrl-C (KeyboardInterrupt in
+Both backends run the same trial worker (``executive.trials.worker_process``): here as
+forks of a preloaded trial server (``executive.trials.forked_workers``), on Ray as a
+command on the node that runs the task. They hand each :class:`WorkerOutcome` back to
+the caller in the caller's thread, as soon as it is ready, so the harness alone writes
+the records. On Ctrl-C (KeyboardInterrupt in
 the caller's thread), a backend stops every running trial and re-raises; what was
 stopped is never handed back.
 """
@@ -15,10 +17,13 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from typing import Any, Protocol
 
 from executive.interrupts import emergency_stop_on_second_signal
+from executive.trials.forked_workers import PreloadedLauncher
 from executive.trials.protocol import TrialSpec
 from executive.trials.worker_process import (
     ProcessGroup,
+    WorkerLauncher,
     WorkerOutcome,
+    as_launcher,
     default_worker_command,
     run_worker_with_retry,
 )
@@ -43,21 +48,27 @@ class LocalBackend:
     """Runs ``workers`` trial subprocesses at once on this machine.
 
     Args:
-        workers: subprocesses at once (each trial's imagination itself uses 2 processes).
+        workers: subprocesses at once.
         timeout_s: per-trial wall time before the worker is killed.
-        command: the worker command (tests inject a fake one).
+        command: a worker command or launcher (tests inject a fake one); None forks
+            the real worker from the preloaded trial server.
     """
 
-    def __init__(self, workers: int, timeout_s: float, command: list[str] | None = None) -> None:
+    def __init__(
+        self,
+        workers: int,
+        timeout_s: float,
+        command: WorkerLauncher | list[str] | None = None,
+    ) -> None:
         self.workers = max(1, workers)
         self.timeout_s = timeout_s
-        self.command = command or default_worker_command()
+        self.launcher = PreloadedLauncher() if command is None else as_launcher(command)
 
     def run(self, jobs: Sequence[Job], on_result: OnResult) -> None:
         group = ProcessGroup()
         pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="trial")
         pending = {
-            pool.submit(run_worker_with_retry, self.command, payload, self.timeout_s, group): (
+            pool.submit(run_worker_with_retry, self.launcher, payload, self.timeout_s, group): (
                 index,
                 spec,
             )

@@ -1,8 +1,11 @@
 """Running one trial in its own subprocess, whatever happens to it.
 
-The trial worker (``python -m executive.trial_worker '<json>'``) prints one line
+The trial worker (``executive.trial_worker.main``) prints one line
 ``BEARCHAIR-TRIAL-RESULT {"summary": ...}`` (or ``{"error": ...}``) on stdout. Its
-stderr goes to ``worker.log`` in the trial's run directory. A worker that dies (for
+stderr goes to ``worker.log`` in the trial's run directory. A :class:`WorkerLauncher`
+starts it: :class:`CommandLauncher` as a command (``python -m executive.trial_worker
+'<json>'``, a fresh interpreter), ``executive.trials.forked_workers.PreloadedLauncher``
+as a fork of a server that has already imported the mission's modules. A worker that dies (for
 example a segfault in a native library) or outlives its timeout is reported with an
 error instead; a timed-out worker is killed with its whole process group (the
 imagination's pool processes included).
@@ -21,7 +24,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import IO, Any, NamedTuple, Protocol
 
 RESULT_MARKER = "BEARCHAIR-TRIAL-RESULT "
 KILL_GRACE_S = 3.0
@@ -54,6 +57,65 @@ def default_worker_command() -> list[str]:
     return [sys.executable, "-m", "executive.trial_worker"]
 
 
+class WorkerHandle(Protocol):
+    """A started worker, as much of ``subprocess.Popen`` as the harness uses.
+
+    The worker runs in a process group of its own whose id is ``pid``.
+    """
+
+    pid: int
+
+    @property
+    def returncode(self) -> int | None: ...
+
+    def wait(self, timeout: float | None = None) -> int:
+        """Its exit status (negative: the signal that killed it); raises
+        ``subprocess.TimeoutExpired`` if it is still running after ``timeout`` s."""
+        ...
+
+    def communicate(self, timeout: float | None = None) -> tuple[str, Any]:
+        """Waits as :meth:`wait` does and returns what it printed on stdout (and None)."""
+        ...
+
+
+class WorkerLauncher(Protocol):
+    """Starts trial workers."""
+
+    def start(self, payload_json: str, log: IO[str]) -> WorkerHandle:
+        """Starts one worker on a trial, its stderr into ``log``, in a new session that
+        dies with the harness."""
+        ...
+
+
+class CommandLauncher:
+    """Workers started as a command (a fresh interpreter each), the trial's JSON appended.
+
+    Args:
+        command: the worker command (tests inject a fake one).
+    """
+
+    def __init__(self, command: list[str] | None = None) -> None:
+        self.command = command or default_worker_command()
+
+    def start(self, payload_json: str, log: IO[str]) -> subprocess.Popen:
+        return subprocess.Popen(
+            [*self.command, payload_json],
+            stdout=subprocess.PIPE,
+            stderr=log,
+            stdin=subprocess.DEVNULL,
+            text=True,
+            start_new_session=True,
+            preexec_fn=die_with_parent,
+        )
+
+
+def as_launcher(how: WorkerLauncher | list[str] | None) -> WorkerLauncher:
+    """A launcher; a command (a list) is started with :class:`CommandLauncher`."""
+    if how is None or isinstance(how, list):
+        return CommandLauncher(how)
+    return how
+
+
 class ProcessGroup:
     """The live trial subprocesses, so Ctrl-C can stop every one of them.
 
@@ -64,17 +126,17 @@ class ProcessGroup:
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
-        self._live: set[subprocess.Popen] = set()
+        self._live: set[WorkerHandle] = set()
         self.stopping = False
 
-    def start(self, command: list[str], **popen_kwargs: Any) -> subprocess.Popen | None:
+    def start(
+        self, launcher: WorkerLauncher, payload_json: str, log: IO[str]
+    ) -> WorkerHandle | None:
         """Starts a worker unless the group is stopping (then returns None)."""
         with self._lock:
             if self.stopping:
                 return None
-            process = subprocess.Popen(
-                command, start_new_session=True, preexec_fn=_die_with_parent, **popen_kwargs
-            )
+            process = launcher.start(payload_json, log)
             self._live.add(process)
             return process
 
@@ -85,7 +147,7 @@ class ProcessGroup:
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(process.pid, signal.SIGKILL)
 
-    def finished(self, process: subprocess.Popen) -> None:
+    def finished(self, process: WorkerHandle) -> None:
         with self._lock:
             self._live.discard(process)
 
@@ -106,8 +168,8 @@ except OSError:  # not Linux, or no libc symbols: the orphan watch in the worker
     _libc = None
 
 
-def _die_with_parent() -> None:
-    """In the forked child: SIGKILL it when the harness dies (even by SIGKILL).
+def die_with_parent() -> None:
+    """In a forked child: SIGKILL it when its parent dies (even by SIGKILL).
 
     The workers run in their own sessions (the terminal's Ctrl-C must not reach them),
     so without this a killed harness would orphan them and they would go on writing
@@ -117,7 +179,7 @@ def _die_with_parent() -> None:
         _libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
 
 
-def kill_process_group(process: subprocess.Popen, grace_s: float = KILL_GRACE_S) -> None:
+def kill_process_group(process: WorkerHandle, grace_s: float = KILL_GRACE_S) -> None:
     """SIGTERM to the worker's process group, SIGKILL if still alive after ``grace_s``."""
     for sig, wait_s in ((signal.SIGTERM, grace_s), (signal.SIGKILL, 5.0)):
         with contextlib.suppress(ProcessLookupError, PermissionError):
@@ -133,7 +195,7 @@ def kill_process_group(process: subprocess.Popen, grace_s: float = KILL_GRACE_S)
 
 
 def run_worker(
-    command: list[str],
+    launcher: WorkerLauncher | list[str],
     payload: dict[str, Any],
     timeout_s: float,
     group: ProcessGroup | None = None,
@@ -141,7 +203,8 @@ def run_worker(
     """Runs one trial worker to its end, its crash or its timeout.
 
     Args:
-        command: the worker command; the payload's JSON is appended as the last argument.
+        launcher: starts the worker; a list is a worker command, the payload's JSON
+            appended as its last argument.
         payload: the trial (``TrialSpec.to_payload``); ``out_dir`` is created.
         timeout_s: wall time after which the worker is killed and the trial failed.
         group: registers the process so the harness can stop it on Ctrl-C.
@@ -152,13 +215,7 @@ def run_worker(
     log_path = out_dir / "worker.log"
     start = time.monotonic()
     with open(log_path, "w") as log:
-        process = group.start(
-            [*command, json.dumps(payload)],
-            stdout=subprocess.PIPE,
-            stderr=log,
-            stdin=subprocess.DEVNULL,
-            text=True,
-        )
+        process = group.start(as_launcher(launcher), json.dumps(payload), log)
         if process is None:
             return WorkerOutcome(None, "not started: the harness is stopping", 0.0, cancelled=True)
         try:
@@ -190,7 +247,7 @@ def run_worker(
 
 
 def run_worker_with_retry(
-    command: list[str],
+    launcher: WorkerLauncher | list[str],
     payload: dict[str, Any],
     timeout_s: float,
     group: ProcessGroup | None = None,
@@ -201,13 +258,13 @@ def run_worker_with_retry(
     nothing about the trial; a second crash is recorded, with ``attempts`` 2.
     """
     group = group or ProcessGroup()
-    first = run_worker(command, payload, timeout_s, group)
+    first = run_worker(launcher, payload, timeout_s, group)
     if not first.crashed or group.stopping:
         return first
     out_dir = Path(payload["out_dir"])
     with contextlib.suppress(OSError):
         shutil.rmtree(out_dir)
-    second = run_worker(command, payload, timeout_s, group)
+    second = run_worker(launcher, payload, timeout_s, group)
     error = second.error
     if error is not None and not second.cancelled:
         error = f"{error} (retried once; first: {first.error})"

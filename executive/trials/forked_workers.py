@@ -1,0 +1,144 @@
+"""Trial workers forked from a server that has already paid the imports.
+
+A trial started as a command pays, in a fresh interpreter, about 1.9 s of imports
+(open3d, casadi, pybullet, the project) and 1.2 s building the whole-body planner's
+casadi problems, in every trial. Here one server process (the standard library's
+``multiprocessing`` forkserver, preloading :mod:`executive.trials.server_preload`)
+pays them once, and each trial is a fork of it.
+
+A trial still runs in a process of its own that no other trial has run in, in a session
+of its own that dies with the server (which dies with the harness): the server never
+runs a mission, and what it holds is the same for every trial, so the same seed gives
+the same outcome as in a fresh interpreter. A crash (a native library's segfault) takes
+only its fork.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import subprocess
+import sys
+import threading
+from collections.abc import Callable
+from pathlib import Path
+from typing import IO, Any
+
+PRELOAD_MODULE = "executive.trials.server_preload"
+STDOUT_NAME = "worker.stdout"
+"""A forked worker's stdout, in its run folder until the harness has read it."""
+
+_server_lock = threading.Lock()
+_context: Any = None
+
+
+def _forkserver() -> Any:
+    """The process-wide forkserver context, its preload set before its first use."""
+    global _context
+    with _server_lock:
+        if _context is None:
+            _context = multiprocessing.get_context("forkserver")
+            _context.set_forkserver_preload([PRELOAD_MODULE])
+        return _context
+
+
+def _run_forked(entry: Callable[[list[str]], int], payload_json: str, out_dir: str) -> None:
+    """In the fork: a session of its own, stdout and stderr to files, then ``entry``.
+
+    The worker's stderr is the ``log`` the harness opened (``worker.log``), reopened
+    here by path: the fork cannot share the harness's file object.
+    """
+    os.setsid()
+    from executive.trials.worker_process import die_with_parent
+
+    die_with_parent()
+    folder = Path(out_dir)
+    for fd, path, mode in (
+        (1, folder / STDOUT_NAME, os.O_WRONLY | os.O_CREAT | os.O_TRUNC),
+        (2, folder / "worker.log", os.O_WRONLY | os.O_CREAT | os.O_APPEND),
+    ):
+        target = os.open(path, mode, 0o644)
+        os.dup2(target, fd)
+        os.close(target)
+    import faulthandler
+
+    faulthandler.enable()
+    from executive.interrupts import handling_signals
+    from executive.trial_worker import watch_for_orphaning
+    from skills.imagination import shutdown_workers
+
+    watch_for_orphaning()
+    try:
+        with handling_signals():
+            code = entry([payload_json])
+    finally:
+        # multiprocessing ends a fork without the interpreter's exit hooks: the
+        # imagination's worker processes (if any) are stopped here.
+        shutdown_workers()
+        sys.stdout.flush()
+        sys.stderr.flush()
+    sys.exit(code)
+
+
+def _trial_entry(argv: list[str]) -> int:
+    from executive.trial_worker import main
+
+    return main(argv)
+
+
+class ForkedWorker:
+    """A forked worker, seen through the part of ``subprocess.Popen`` the harness uses."""
+
+    def __init__(self, process: Any, out_dir: Path) -> None:
+        self._process = process
+        self._stdout_path = out_dir / STDOUT_NAME
+        self.pid: int = process.pid
+
+    @property
+    def returncode(self) -> int | None:
+        return self._process.exitcode
+
+    def wait(self, timeout: float | None = None) -> int:
+        self._process.join(timeout)
+        if self._process.exitcode is None:
+            raise subprocess.TimeoutExpired(f"trial worker {self.pid}", timeout or 0.0)
+        return self._process.exitcode
+
+    def communicate(self, timeout: float | None = None) -> tuple[str, None]:
+        self.wait(timeout)
+        try:
+            text = self._stdout_path.read_text(errors="replace")
+        except OSError:
+            return "", None
+        self._stdout_path.unlink(missing_ok=True)
+        return text, None
+
+
+class PreloadedLauncher:
+    """Starts each trial worker as a fork of the preloaded trial server.
+
+    The server starts (and preloads, about 3 s) on the first trial; it stops when the
+    harness does.
+
+    Args:
+        entry: what the fork runs on ``[payload_json]``, returning its exit status; a
+            module-level function (it is sent to the server by name). The default is
+            the trial worker, ``executive.trial_worker.main``.
+    """
+
+    def __init__(self, entry: Callable[[list[str]], int] = _trial_entry) -> None:
+        self.entry = entry
+
+    def start(self, payload_json: str, log: IO[str]) -> ForkedWorker:
+        import json
+
+        out_dir = Path(json.loads(payload_json)["out_dir"])
+        log.flush()
+        process = _forkserver().Process(
+            target=_run_forked,
+            args=(self.entry, payload_json, str(out_dir)),
+            name="trial",
+            daemon=False,
+        )
+        process.start()
+        return ForkedWorker(process, out_dir)

@@ -1,0 +1,46 @@
+"""What the trial server holds before it forks the first trial (imported only there).
+
+Importing this module is the preloading: the libraries and the project's modules a
+mission imports (about 1.9 s on the 2-core machine), and the whole-body planner's casadi
+problems with their fine trajectory NLP (about 1.2 s), which every mission builds the
+same way. Nothing here depends on a trial: every fork starts from the same state, so a
+trial's outcome is what it would be in a fresh interpreter.
+
+A failure here is printed and swallowed: the trials then import and build on first use,
+as a fresh interpreter would.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import time
+
+PRELOADED_MODULES = (
+    "executive.mission",
+    "executive.trial_worker",
+    "trees.mission",
+)
+"""Imported besides the modules of ``skills.toolbox.SKILL_SOURCES``."""
+
+
+def _preload() -> float:
+    """Imports every module a mission binds and builds the planner's problems; returns
+    the seconds it took."""
+    started = time.perf_counter()
+    from skills.toolbox import SKILL_SOURCES
+
+    for module_name in (*PRELOADED_MODULES, *(s.split(":")[0] for s in SKILL_SOURCES.values())):
+        importlib.import_module(module_name)
+    from skills.planning.wholebody.optimisation import seating_problems
+
+    problems = seating_problems()
+    problems.trajectory_solver(problems.n_knots)
+    return time.perf_counter() - started
+
+
+try:
+    PRELOAD_S: float | None = _preload()
+except Exception as error:  # the server must start all the same
+    PRELOAD_S = None
+    print(f"trial server: preloading failed ({type(error).__name__}: {error})", file=sys.stderr)
