@@ -11,7 +11,7 @@ from py_trees.common import Status
 from behaviours import keys
 from behaviours.skill_behaviour import SkillBehaviour
 from behaviours.tracking import tracked_humanoid_pose
-from skills.geometry import SE2Pose
+from core.se2 import SE2Pose
 from skills.results import AccessibilityResult, SeatReachability
 
 REFUSED = "refused: "

@@ -7,17 +7,17 @@ own blackboard client, so ``bearchair tree --blackboard`` shows who touches what
 key                        value                                                  written by
 ========================== ====================================================== ==========
 /mission/seed              int: the run's seed                                    executive
-/mission/arena             skills.arena.Arena: walls, obstacles, chair area       executive
+/mission/arena             core.arena.Arena: walls, obstacles, chair area       executive
 /mission/failures          list[str]: every leaf failure message, in order        any leaf
 /chair/scan                skills.results.ChairScan                               ScanChair
 /chair/mesh                trimesh.Trimesh: the chair now, world frame            ScanChair, MeasureChairRotation
 /chair/points              (N, 3) ndarray: the chair now, world frame (ICP ref.)  ScanChair, MeasureChairRotation
 /sitting/imagination       skills.results.ImaginationResult                       ImagineSitting
-/sitting/pose              skills.geometry.SittingPose: g now, world frame        ImagineSitting, CheckAccessibility, MeasureChairRotation
-/humanoid/pose             skills.geometry.SE2Pose: last tracked humanoid pose    CheckAccessibility, WalkToChair
+/sitting/pose              core.geometry.SittingPose: g now, world frame        ImagineSitting, CheckAccessibility, MeasureChairRotation
+/humanoid/pose             core.se2.SE2Pose: last tracked humanoid pose    CheckAccessibility, WalkToChair
 /accessibility/reachable   skills.results.SeatReachability: the chair alone       CheckSeatReachable
 /accessibility/result      skills.results.AccessibilityResult (latest check)      CheckAccessibility
-/accessibility/se2_goal    skills.geometry.SE2Pose: where the humanoid stands     CheckAccessibility
+/accessibility/se2_goal    core.se2.SE2Pose: where the humanoid stands     CheckAccessibility
 /assistance/instructions   list[str]: the sentences said, in order                InstructHelper
 /assistance/rotations      int: rotations asked for so far                        InstructHelper
 /assistance/measured       list[ChairRotation]: each measured g_rot               MeasureChairRotation

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import logging
 
+from core.se2 import SE2Pose
 from hardware.interfaces import Robot
-from skills.geometry import SE2Pose
 from skills.toolbox import MissionSkills
 
 logger = logging.getLogger(__name__)

@@ -40,9 +40,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from skills.arena import DEFAULT_ARENA, accessible_sitting_yaws
+from core.arena import DEFAULT_ARENA, accessible_sitting_yaws
+from core.geometry import SittingPose, wrap_angle, yaw_transform
 from skills.chairgen import FAMILIES, GeneratedChair, generate_chair
-from skills.geometry import SittingPose, wrap_angle, yaw_transform
 from skills.planning.se2 import check_accessibility
 from skills.planning.stance import check_seat_reachable
 

@@ -83,10 +83,10 @@ def main(argv: list[str] | None = None) -> int:
     patterns = args.only.split(",")
     entries = [e for e in manifest["meshes"] if any(p in e["file"] for p in patterns)]
 
+    from core.meshes import load_mesh
     from skills.imagination import imagine_sitting_details, warm_up
     from skills.imagination.imagine import choose_sitting_pose
     from skills.imagination.sam import score_drop
-    from skills.meshes import load_mesh
 
     rows = []
     saved: dict[str, tuple] = {}

@@ -38,8 +38,9 @@ import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
 
+from core.geometry import wrap_angle, yaw_of, yaw_transform
+from core.se2 import SE2Pose
 from hardware.sim.world import SimConfig, SimWorld
-from skills.geometry import SE2Pose, wrap_angle, yaw_of, yaw_transform
 from skills.perception import PerceptionError, measure_chair_rotation, scan_chair
 from skills.perception.tags import estimate_tag_pose
 from skills.perception.views import HOME_CONFIGURATION, OVERVIEW_CONFIGURATION

@@ -28,9 +28,9 @@ import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
 
+from core.geometry import wrap_angle, yaw_of, yaw_transform
 from hardware.sim.world import SimConfig, SimWorld
 from skills.chairgen import FAMILIES, generate_chair
-from skills.geometry import wrap_angle, yaw_of, yaw_transform
 from skills.perception import PerceptionError, measure_chair_rotation, scan_chair
 
 ROTATIONS_DEG = (90, -90, 180)

@@ -3,7 +3,7 @@
 Prints, for the box chair and (when ../shared/chairs exists) the calibration chairs:
 
 * accessible placements (sitting direction within ±30 degrees of the NAO, leaving room
-  to stand in front inside the arena: ``skills.arena.accessible_sitting_yaws``): how often a
+  to stand in front inside the arena: ``core.arena.accessible_sitting_yaws``): how often a
   path is found and the planning times (median over the runs, max);
 * inaccessible placements (sitting direction toward the arm, or toward a side edge):
   how many the arena really makes inaccessible, and with a simulated helper who turns the
@@ -36,10 +36,10 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
-from skills.arena import DEFAULT_ARENA, Arena, accessible_sitting_yaws
+from core.arena import DEFAULT_ARENA, Arena, accessible_sitting_yaws
+from core.geometry import SittingPose, yaw_transform
+from core.meshes import box_chair_mesh, load_mesh
 from skills.assistance import compose_instruction
-from skills.geometry import SittingPose, yaw_transform
-from skills.meshes import box_chair_mesh, load_mesh
 from skills.planning.se2 import check_accessibility, reach_validator, seat_support_heights
 from skills.results import AccessibilityResult
 

@@ -28,7 +28,7 @@ SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 
 def box_chair_folder() -> Path:
     """A folder holding the project's box chair and a manifest giving its front (+x)."""
-    from skills.meshes import box_chair_mesh
+    from core.meshes import box_chair_mesh
 
     folder = Path(tempfile.mkdtemp(prefix="bearchair-box-chair-"))
     box_chair_mesh().export(folder / "box-chair.obj")

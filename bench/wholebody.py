@@ -37,8 +37,9 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from skills.geometry import SE2Pose, SittingPose, make_transform, rot_z, wrap_angle
-from skills.meshes import box_chair_mesh, load_mesh
+from core.geometry import SittingPose, make_transform, rot_z, wrap_angle
+from core.meshes import box_chair_mesh, load_mesh
+from core.se2 import SE2Pose
 from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from skills.planning.se2 import default_seating_validator
 from skills.planning.seat import seat_support_heights

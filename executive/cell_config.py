@@ -20,7 +20,7 @@ F frame), not against the end effector set in Desk (``O_T_EE``): the backend rem
 Checks (each failure is one line naming the field): unknown keys are refused (with the
 nearest known name), rotations are proper and orthonormal (a scaled or mirrored matrix
 is refused), translations are bounded (millimetres written as metres are refused), the
-arm's base stands where the scan views assume it (:data:`skills.arena.DEFAULT_ARENA`,
+arm's base stands where the scan views assume it (:data:`core.arena.DEFAULT_ARENA`,
 within :data:`BASE_TOLERANCE_M` and :data:`BASE_TOLERANCE_RAD`), the NAO starts inside
 the arena, headings are radians in [-pi, pi].
 """
@@ -36,9 +36,10 @@ from typing import Any
 
 import numpy as np
 
+from core.arena import DEFAULT_ARENA, Arena
+from core.geometry import yaw_of
+from core.se2 import SE2Pose
 from hardware.real import BackendUnavailable
-from skills.arena import DEFAULT_ARENA, Arena
-from skills.geometry import SE2Pose
 
 ROTATION_TOLERANCE = 1e-3
 """Largest element of R^T R - I (and |det R - 1|) accepted: a 4-decimal matrix passes."""
@@ -265,7 +266,7 @@ def _check_base(T_world_base: np.ndarray, arena: Arena) -> None:
             f"more than {BASE_TOLERANCE_M} m from where the scan views assume it "
             f"({list(arena.arm_base_xy)}, on the floor)"
         )
-    yaw = math.atan2(T_world_base[1, 0], T_world_base[0, 0])
+    yaw = yaw_of(T_world_base)
     tilt = math.acos(float(np.clip(T_world_base[2, 2], -1.0, 1.0)))
     if abs(yaw) > BASE_TOLERANCE_RAD or tilt > BASE_TOLERANCE_RAD:
         raise CellConfigError(

@@ -23,10 +23,10 @@ import traceback
 from pathlib import Path
 from typing import Any, TextIO
 
+from core.errors import BearchairError, InputError, one_line
 from executive.cli_types import positive_seconds, seed_value
 from executive.config import RunConfig
 from executive.interrupts import exit_status, handling_signals, received, signal_name
-from skills.errors import BearchairError, InputError, one_line
 
 # Skill commands live beside their skills' owners: each module has register(subparsers).
 SKILL_COMMANDS = (
@@ -121,6 +121,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from core.meshes import load_chair_mesh
     from executive.mission import (
         StageProgress,
         format_summary,
@@ -128,7 +129,6 @@ def _run(args: argparse.Namespace) -> int:
         run_on_robots,
     )
     from executive.outputs import default_run_dir, prepare_run_dir
-    from skills.meshes import load_chair_mesh
 
     config = RunConfig(
         chair_path=args.chair,
@@ -358,7 +358,7 @@ def _crash_log(args: argparse.Namespace | None) -> Path:
     run_dir = getattr(args, "run_dir", None) if args is not None else None
     if run_dir is not None and Path(run_dir).is_dir():
         return Path(run_dir) / LOG_FILE
-    from skills.meshes import cache_dir
+    from core.meshes import cache_dir
 
     stamp = f"crash-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}.log"
     try:

@@ -176,7 +176,7 @@ def _check_panda(cell: Any, timeout_s: float, report: _Report) -> Any:
 
 
 def _check_camera(arm: Any, timeout_s: float, report: _Report, move: bool) -> None:
-    from skills.arena import HUMANOID_TAG
+    from core.arena import HUMANOID_TAG
     from skills.perception.tags import estimate_tag_pose
     from skills.perception.views import HOME_CONFIGURATION, OVERVIEW_CONFIGURATION
 

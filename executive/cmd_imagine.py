@@ -39,9 +39,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Runs the imagination on ``args.mesh``; returns the exit status."""
+    from core.meshes import load_chair_mesh
     from executive.outputs import check_output_file
     from skills.imagination import imagine_sitting
-    from skills.meshes import load_chair_mesh
 
     mesh = load_chair_mesh(args.mesh)
     if args.image is not None:  # before the minutes of simulation, not after

@@ -38,9 +38,9 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import trimesh
 
+    from core.meshes import load_chair_mesh
     from executive.outputs import atomic_path, ensure_writable_dir
     from hardware.sim.world import SimConfig, SimWorld
-    from skills.meshes import load_chair_mesh
     from skills.perception import PerceptionError, scan_chair
 
     load_chair_mesh(args.chair)

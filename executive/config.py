@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
-from skills.arena import DEFAULT_ARENA, Arena
+from core.arena import DEFAULT_ARENA, Arena
 from skills.imagination import DEFAULT_WORKERS
 
 logger = logging.getLogger(__name__)

@@ -13,15 +13,15 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TextIO
 
+from core.errors import one_line
+from core.geometry import wrap_angle
+from core.meshes import load_mesh
 from executive.config import RunConfig, front_yaw_from_manifest
 from executive.interrupts import raise_if_received, signal_name
 from executive.outputs import atomic_path
 from executive.record import RecordWriteError, RunRecorder
 from executive.recording import open_recording
 from executive.runner import MissionRunner, summarise
-from skills.errors import one_line
-from skills.geometry import wrap_angle
-from skills.meshes import load_mesh
 from skills.toolbox import DefaultSkills, MissionSkills
 from trees.mission import create_tree
 
@@ -106,7 +106,7 @@ def run_in_simulation(
         The summary written to ``summary.json``.
 
     Raises:
-        skills.meshes.MeshLoadError: the chair file is unusable (checked before anything runs).
+        core.meshes.MeshLoadError: the chair file is unusable (checked before anything runs).
     """
     front_yaw_deg = 0.0  # the built-in box chair faces +x
     if config.chair_path is not None:

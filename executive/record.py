@@ -20,10 +20,10 @@ from typing import Any
 
 import py_trees
 
+from core import errors
+from core.errors import OutputError
 from executive.jsonable import to_jsonable
 from executive.outputs import describe_os_error, write_text_atomic
-from skills import errors
-from skills.errors import OutputError
 
 TICKS_FILE = "ticks.jsonl"
 TREE_FILE = "tree.json"

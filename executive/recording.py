@@ -43,9 +43,8 @@ from executive.jsonable import to_jsonable
 from executive.record import tree_nodes
 
 if TYPE_CHECKING:
+    from core.se2 import SE2Pose
     from executive.runner import MissionRunner
-    from skills.geometry import SE2Pose
-
 logger = logging.getLogger(__name__)
 
 RECORDING_FILE = "mission.rrd"

@@ -36,9 +36,10 @@ import numpy as np
 import rerun as rr
 from scipy.spatial.transform import Rotation
 
+from core.arena import Arena, Box2D
+from core.geometry import SittingPose
+from core.se2 import SE2Pose
 from hardware.interfaces import RGBDFrame, SeatingJudgement
-from skills.arena import Arena, Box2D
-from skills.geometry import SE2Pose, SittingPose
 from skills.results import (
     AccessibilityResult,
     ChairRotation,

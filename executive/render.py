@@ -11,8 +11,8 @@ from pathlib import Path
 
 import py_trees
 
+from core import errors
 from executive.outputs import atomic_path
-from skills import errors
 
 TEXT_FORMATS = ("ascii", "unicode")
 GRAPH_FORMATS = ("dot", "svg", "png")

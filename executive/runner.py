@@ -13,6 +13,7 @@ import py_trees
 from py_trees.common import Status
 
 from behaviours import keys
+from core.arena import Arena
 from executive.interrupts import (
     emergency_stop_on_second_signal,
     raise_if_received,
@@ -21,7 +22,6 @@ from executive.interrupts import (
 from executive.jsonable import to_jsonable
 from executive.record import RecordWriteError, RunRecorder
 from hardware.interfaces import Robot
-from skills.arena import Arena
 from skills.toolbox import MissionSkills
 
 logger = logging.getLogger(__name__)

@@ -9,8 +9,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from core.se2 import SE2Pose
 from hardware.interfaces import CameraIntrinsics, RGBDFrame, Robot, SeatingJudgement
-from skills.geometry import SE2Pose
 
 
 class FakeClock:

@@ -14,7 +14,7 @@ from typing import NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
-from skills.geometry import SE2Pose
+from core.se2 import SE2Pose
 
 
 class CameraIntrinsics(NamedTuple):

@@ -15,8 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from skills.geometry import SE2Pose, SittingPose, yaw_transform
-from skills.meshes import box_chair_mesh
+from core.geometry import SittingPose, yaw_transform
+from core.meshes import box_chair_mesh
+from core.se2 import SE2Pose
 from skills.results import (
     AccessibilityResult,
     ChairRotation,

@@ -13,8 +13,9 @@ from typing import Any, NamedTuple
 import numpy as np
 import trimesh
 
+from core.geometry import SittingPose
+from core.se2 import SE2Pose
 from hardware.interfaces import RGBDFrame
-from skills.geometry import SE2Pose, SittingPose
 
 
 class ChairScan(NamedTuple):

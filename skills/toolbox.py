@@ -18,9 +18,10 @@ from typing import Any, Protocol
 import numpy as np
 import trimesh
 
+from core.arena import Arena
+from core.geometry import SittingPose
+from core.se2 import SE2Pose
 from hardware.interfaces import Clock, Humanoid, ScanningArm
-from skills.arena import Arena
-from skills.geometry import SE2Pose, SittingPose
 from skills.imagination import DEFAULT_WORKERS
 from skills.results import (
     AccessibilityResult,

@@ -7,7 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from skills.arena import DEFAULT_ARENA
+from core.arena import DEFAULT_ARENA
+from core.geometry import SittingPose
+from core.meshes import box_chair_mesh
+from core.se2 import SE2Pose
 from skills.assistance import (
     choose_rotation,
     compose_instruction,
@@ -15,8 +18,6 @@ from skills.assistance import (
     rotation_toward,
 )
 from skills.assistance.rotation import turned_about_centre
-from skills.geometry import SE2Pose, SittingPose
-from skills.meshes import box_chair_mesh
 from skills.results import AccessibilityResult
 
 HUMANOID = SE2Pose(1.9, 0.0, math.pi)

@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 import trimesh
 
+from core.geometry import SittingPose, make_transform, rot_z, wrap_angle
+from core.meshes import box_chair_mesh
 from skills.chairgen import FAMILIES, generate_chair
-from skills.geometry import SittingPose, make_transform, rot_z, wrap_angle
 from skills.imagination.backrest import (
     AGREEMENT_RAD,
     MIRROR_MARGIN,
     backrest_yaw,
     check_direction,
 )
-from skills.meshes import box_chair_mesh
 
 BACKLESS = ("stool", "bench")
 

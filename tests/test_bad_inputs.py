@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 import trimesh
 
+from core.meshes import box_chair_mesh, check_chair_mesh
 from executive import cli
 from executive.record import RunRecorder
 from executive.trials.store import campaign_lock
-from skills.meshes import box_chair_mesh, check_chair_mesh
 from trees.mission import create_tree
 
 REPO = Path(__file__).resolve().parents[1]

@@ -18,11 +18,11 @@ from behaviours.imagine import ImagineSitting
 from behaviours.scan import ScanChair
 from behaviours.seat import ReleaseAndStand, SeatBear
 from behaviours.walk import WalkToChair
+from core.arena import DEFAULT_ARENA
+from core.se2 import SE2Pose
 from hardware.fakes import FakeJudge, fake_robot
 from hardware.interfaces import SeatingJudgement
-from skills.arena import DEFAULT_ARENA
 from skills.fakes import ScriptedSkills, default_results
-from skills.geometry import SE2Pose
 from skills.results import (
     AccessibilityResult,
     ImaginationResult,

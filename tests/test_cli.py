@@ -8,11 +8,11 @@ import sys
 
 import pytest
 
+from core.arena import DEFAULT_ARENA
 from executive.cli import main
 from executive.record import RunRecorder
 from executive.runner import MissionRunner, summarise
 from hardware.fakes import FakeJudge, fake_robot
-from skills.arena import DEFAULT_ARENA
 from skills.fakes import ScriptedSkills
 from trees.mission import STAGES, create_tree
 

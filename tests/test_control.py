@@ -8,9 +8,10 @@ import threading
 import numpy as np
 import pytest
 
+from core.geometry import wrap_angle
+from core.se2 import SE2Pose
 from skills.control import PID, WalkError, walk_path
 from skills.control.fakes import FakeClock, FakeHumanoid, FakeTagTracker
-from skills.geometry import SE2Pose, wrap_angle
 
 START = SE2Pose(1.9, 0.0, math.pi)
 PATH = (

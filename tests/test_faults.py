@@ -310,8 +310,8 @@ def test_a_closed_stdout_is_not_a_traceback():
 
 @pytest.fixture(scope="module")
 def recorded_run(tmp_path_factory) -> Path:
+    from core.arena import DEFAULT_ARENA
     from executive.runner import MissionRunner, summarise
-    from skills.arena import DEFAULT_ARENA
 
     out = tmp_path_factory.mktemp("recorded")
     root = create_tree()
@@ -397,7 +397,7 @@ def test_runs_started_in_the_same_second_get_their_own_folders(tmp_path):
 
 
 def test_a_damaged_or_pickled_cache_entry_is_rebuilt_never_executed(tmp_path):
-    from skills.meshes import read_cached_arrays, write_cached_arrays
+    from core.meshes import read_cached_arrays, write_cached_arrays
 
     entry = tmp_path / "entry.npz"
     write_cached_arrays(entry, {"a": np.arange(3.0), "name": np.asarray("box")})
@@ -422,8 +422,8 @@ def test_a_damaged_or_pickled_cache_entry_is_rebuilt_never_executed(tmp_path):
 
 
 def test_the_imagination_cache_survives_a_damaged_entry(tmp_path, monkeypatch):
+    from core.meshes import box_chair_mesh
     from skills.imagination import chair as imagination_chair
-    from skills.meshes import box_chair_mesh
 
     monkeypatch.setenv("BEARCHAIR_CACHE", str(tmp_path))
     # An earlier test may have prepared the same chair into this process's memory.
@@ -612,7 +612,7 @@ def test_a_closed_stderr_does_not_stop_a_campaign(tmp_path, monkeypatch):
 
 
 def test_up_axis_warnings_over_the_calibration_meshes(shared_chairs, shared_manifest):
-    from skills.meshes import check_chair_mesh, load_mesh
+    from core.meshes import check_chair_mesh, load_mesh
 
     turned_up = trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0])
     upright_warned, turned_warned, turned = [], 0, 0

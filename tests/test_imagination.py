@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 import trimesh
 
-from skills.geometry import make_transform, rot_z, wrap_angle
+from core.geometry import make_transform, rot_z, wrap_angle
+from core.meshes import box_chair_mesh, solid_below_surface_boxes
 from skills.imagination import imagine_sitting
 from skills.imagination.agent import JOINTS, LINKS, TOTAL_MASS_KG, agent_urdf_path
 from skills.imagination.chair import prepare_chair, yaw_obb
 from skills.imagination.sam import joint_score, link_score
-from skills.meshes import box_chair_mesh, solid_below_surface_boxes
 
 
 def _placed(mesh: trimesh.Trimesh, yaw_rad: float, xy: tuple[float, float]) -> trimesh.Trimesh:
@@ -179,7 +179,7 @@ def test_solid_below_surface_fills_an_open_scan_like_surface(box_chair: trimesh.
 def test_column_tops_close_cracks_as_a_3d_binary_closing_does() -> None:
     from scipy import ndimage
 
-    from skills.meshes import _column_tops, surface_samples
+    from core.meshes import _column_tops, surface_samples
 
     # A scan-like seat: a 0.3 m plate 0.2 m up, of 1 cm quads with 5 % of them missing
     # (one-cell holes at a 1 cm pitch), on one leg.
@@ -218,7 +218,7 @@ def test_column_tops_close_cracks_as_a_3d_binary_closing_does() -> None:
 def test_a_sliver_is_sampled_in_rows_and_covered_within_the_spacing() -> None:
     from scipy.spatial import cKDTree
 
-    from skills.meshes import surface_samples
+    from core.meshes import surface_samples
 
     # 1 m long, 1 cm wide: a lattice at 5 mm would put 20,000 points on it.
     sliver = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0.5, 0.01, 0]], [[0, 1, 2]], process=False)

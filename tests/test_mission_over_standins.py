@@ -8,10 +8,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from core.arena import DEFAULT_ARENA
 from executive.runner import MissionRunner, summarise
 from hardware.real.panda import wall_limits
 from hardware.sim.world import SimConfig, SimWorld
-from skills.arena import DEFAULT_ARENA
 from skills.toolbox import DefaultSkills
 from trees.mission import create_tree
 

@@ -11,11 +11,11 @@ import pytest
 from py_trees.common import Status
 
 from behaviours import keys
+from core.arena import DEFAULT_ARENA
 from executive.inspect_run import RecordedRun, RunRecordError
 from executive.record import RunRecorder
 from executive.runner import MissionRunner, summarise
 from hardware.fakes import FakeJudge, fake_robot
-from skills.arena import DEFAULT_ARENA
 from skills.fakes import ScriptedSkills, default_results
 from skills.perception.errors import RegistrationError
 from skills.results import AccessibilityResult, SeatReachability

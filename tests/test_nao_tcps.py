@@ -34,8 +34,8 @@ from typing import Any
 
 import pytest
 
+from core.se2 import SE2Pose
 from hardware.real import BackendUnavailable
-from skills.geometry import SE2Pose
 
 pytest.importorskip("qi")
 

@@ -9,10 +9,10 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
+from core.arena import HUMANOID_TAG
+from core.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
+from core.meshes import box_chair_mesh
 from hardware.interfaces import RGBDFrame
-from skills.arena import HUMANOID_TAG
-from skills.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
-from skills.meshes import box_chair_mesh
 from skills.perception import (
     PerceptionError,
     ReconstructionConfig,

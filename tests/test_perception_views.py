@@ -11,9 +11,9 @@ import math
 import numpy as np
 import pytest
 
+from core.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
+from core.meshes import box_chair_mesh
 from skills.chairgen import generate_chair
-from skills.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
-from skills.meshes import box_chair_mesh
 from skills.perception import PerceptionError, ReconstructionConfig, reconstruct_chair
 from skills.perception.clearance import (
     MIN_SCAN_VIEWS,

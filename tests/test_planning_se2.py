@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from skills.arena import DEFAULT_ARENA, Arena, Box2D
-from skills.geometry import SE2Pose, SittingPose, yaw_transform
-from skills.meshes import box_chair_mesh
+from core.arena import DEFAULT_ARENA, Arena, Box2D
+from core.geometry import SittingPose, yaw_transform
+from core.meshes import box_chair_mesh
+from core.se2 import SE2Pose
 from skills.planning import collision
 from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from skills.planning.se2 import (
@@ -364,7 +365,7 @@ def test_nao_too_close_for_the_carried_bear_steps_back_along_the_ray() -> None:
 
 
 def test_accessible_sitting_yaws_leave_room_to_stand_inside_the_arena() -> None:
-    from skills.arena import (
+    from core.arena import (
         ACCESSIBLE_TOLERANCE_RAD,
         STANDING_MARGIN_M,
         STANDING_ROOM_M,
@@ -442,7 +443,7 @@ def test_a_sitting_point_over_a_lost_seat_top_stays_where_it_was_imagined() -> N
 
 
 def test_a_ray_turned_about_p_is_searched_when_the_imagined_one_fails() -> None:
-    from skills.geometry import wrap_angle
+    from core.geometry import wrap_angle
     from skills.planning.stance import MAX_PREPLANS, PREPLANS_PER_TURN, TURNS_RAD
 
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.1, 30.0)

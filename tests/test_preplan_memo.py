@@ -7,8 +7,9 @@ import math
 
 import numpy as np
 
-from skills.geometry import SE2Pose, SittingPose, make_transform, rot_z
-from skills.meshes import box_chair_mesh
+from core.geometry import SittingPose, make_transform, rot_z
+from core.meshes import box_chair_mesh
+from core.se2 import SE2Pose
 from skills.planning.se2 import PREPLANS, PreplanMemo, SeatingCheck, default_seating_validator
 from skills.planning.stance import goal_on_ray
 

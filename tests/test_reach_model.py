@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from skills.geometry import SE2Pose, SittingPose
-from skills.meshes import box_chair_mesh
+from core.geometry import SittingPose
+from core.meshes import box_chair_mesh
+from core.se2 import SE2Pose
 from skills.planning.wholebody import InfeasibleSeating, preplan_approach
 from skills.planning.wholebody.reach_model import (
     ReachModel,

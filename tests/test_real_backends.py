@@ -16,6 +16,7 @@ import time
 import numpy as np
 import pytest
 
+from core.se2 import SE2Pose
 from hardware.interfaces import Humanoid, ScanningArm, Speaker
 from hardware.real import BackendUnavailable, EmergencyStopped, import_sdk
 from hardware.real.camera import CarmineCamera
@@ -26,7 +27,6 @@ from hardware.real.standins import (
     FakePanda,
     panda_flange_pose,
 )
-from skills.geometry import SE2Pose
 from skills.perception.views import SCAN_CONFIGURATIONS
 
 

@@ -17,15 +17,16 @@ import numpy as np
 import pytest
 
 from behaviours import keys
+from core.arena import DEFAULT_ARENA
+from core.geometry import SittingPose, yaw_transform
+from core.meshes import box_chair_mesh
+from core.se2 import SE2Pose
 from executive import cli
 from executive.record import RunRecorder, load_ticks
 from executive.runner import MissionRunner, summarise
 from hardware.fakes import FakeJudge, fake_robot
 from hardware.interfaces import SeatingJudgement
-from skills.arena import DEFAULT_ARENA
 from skills.fakes import ScriptedSkills, default_results
-from skills.geometry import SE2Pose, SittingPose, yaw_transform
-from skills.meshes import box_chair_mesh
 from skills.results import AccessibilityResult
 from trees.mission import create_tree
 

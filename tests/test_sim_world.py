@@ -9,11 +9,12 @@ import cv2
 import numpy as np
 import pytest
 
+from core.arena import DEFAULT_ARENA, HUMANOID_TAG
+from core.geometry import transform_points, wrap_angle, yaw_of
+from core.se2 import SE2Pose
 from hardware.interfaces import Clock, Helper, Humanoid, ScanningArm, SeatingJudge, Speaker
 from hardware.sim.camera import CARMINE_INTRINSICS, T_HAND_CAMERA
 from hardware.sim.world import SimConfig, SimWorld
-from skills.arena import DEFAULT_ARENA, HUMANOID_TAG
-from skills.geometry import SE2Pose, transform_points, wrap_angle, yaw_of
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 
@@ -297,7 +298,7 @@ def test_judge_rejects_a_bear_on_the_floor_and_accepts_one_on_the_seat():
         # Put the bear by hand on the box chair's seat (0.24 m), facing the sitting direction.
         T_world_chair = world.T_world_chair_true()
         seat = T_world_chair @ np.array([-0.03, 0.0, 0.245, 1.0])
-        from skills.geometry import make_transform, rot_z
+        from core.geometry import make_transform, rot_z
 
         world.bear.set_T_world_bear(make_transform(rot_z(world.sitting_yaw_true()), seat[:3]))
         verdict = world.judge.judge(world.sitting_yaw_true(), settle_s=2.0)
@@ -365,7 +366,7 @@ def test_test_built_box_chair_mesh_file_loads(tmp_path):
 
 
 def test_missing_chair_file_is_one_clear_error(tmp_path):
-    from skills.meshes import MeshLoadError
+    from core.meshes import MeshLoadError
 
     with pytest.raises(MeshLoadError, match="no such file"):
         SimWorld(SimConfig(chair_path=tmp_path / "absent.obj"))
@@ -431,8 +432,8 @@ def test_simulated_run_records_the_ground_truth(tmp_path):
 
 
 def test_the_chair_collides_as_its_own_surface_not_as_convex_pieces(tmp_path):
-    from skills.geometry import make_transform, rot_z
-    from skills.meshes import box_chair_mesh
+    from core.geometry import make_transform, rot_z
+    from core.meshes import box_chair_mesh
 
     # An armchair whose armrest panels stand 12 cm above the seat: convex pieces of the
     # seat and its sides would bridge them and hold the bear at the armrests' height.
@@ -467,8 +468,8 @@ def test_the_nao_reaching_into_the_chair_is_recorded(world):
 def test_a_bear_reclining_against_a_reclined_back_is_seated(tmp_path):
     import trimesh
 
+    from core.geometry import make_transform, rot_z
     from hardware.sim.judge import MAX_RECLINE_DEG, MAX_TILT_DEG, _leans_back
-    from skills.geometry import make_transform, rot_z
 
     # A garden chair: seat top 0.24 m, its backrest reclined 38 deg from vertical.
     seat = trimesh.creation.box(extents=(0.28, 0.32, 0.03)).apply_translation((0, 0, 0.225))

@@ -11,13 +11,14 @@ import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from skills.geometry import SE2Pose, SittingPose
-from skills.meshes import box_chair_mesh
-from skills.nao_carrying import (
+from core.geometry import SittingPose
+from core.meshes import box_chair_mesh
+from core.nao_carrying import (
     BEAR_COM_AHEAD_M,
     BEAR_COM_HEIGHT_M,
     BEAR_SEAT_BELOW_HANDS_M,
 )
+from core.se2 import SE2Pose
 from skills.planning.wholebody import (
     RAISED_POSTURE,
     STANCE,

@@ -16,6 +16,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from typing import Any, Protocol
 
+from core.errors import BackendError
 from executive.interrupts import emergency_stop_on_second_signal
 from executive.trials.forked_workers import PreloadedLauncher
 from executive.trials.protocol import TrialSpec
@@ -27,7 +28,6 @@ from executive.trials.worker_process import (
     default_worker_command,
     run_worker_with_retry,
 )
-from skills.errors import BackendError
 
 Job = tuple[TrialSpec, dict[str, Any]]
 """A trial and its worker payload."""

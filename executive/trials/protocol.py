@@ -15,9 +15,9 @@ import math
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from skills import errors
+from core import errors
+from core.meshes import SUPPORTED_SUFFIXES
 from skills.imagination import DEFAULT_WORKERS
-from skills.meshes import SUPPORTED_SUFFIXES
 
 EXPERIMENTS = ("accessible", "inaccessible_obeys", "inaccessible_disobeys")
 """The three experiments of the paper's Table 1, in its row order."""
@@ -207,7 +207,7 @@ def discover_chairs(
         ChairSetError: the folder is missing, holds no supported mesh or no manifest,
             or none takes part.
     """
-    from skills.meshes import MeshLoadError, load_chair_mesh
+    from core.meshes import MeshLoadError, load_chair_mesh
 
     if not chairs_dir.exists():
         raise ChairSetError(f"{chairs_dir}: no such directory")

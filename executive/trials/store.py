@@ -18,8 +18,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from core.errors import RecordStoreError
 from executive.trials.protocol import TrialSpec
-from skills.errors import RecordStoreError
 
 COLUMNS: dict[str, str] = {
     "chair": "TEXT NOT NULL",

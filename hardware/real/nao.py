@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import math
 import threading
 import time
 from collections.abc import Sequence
@@ -36,9 +35,9 @@ from typing import Any
 
 import numpy as np
 
+from core.nao_carrying import CARRYING_POSTURE_RAD
+from core.se2 import SE2Pose
 from hardware.real import BackendUnavailable, EmergencyStopped, import_sdk
-from skills.geometry import SE2Pose, wrap_angle
-from skills.nao_carrying import CARRYING_POSTURE_RAD
 
 log = logging.getLogger(__name__)
 
@@ -166,17 +165,10 @@ class NaoHumanoid:
 
     # --- Humanoid protocol -----------------------------------------------------------
     def pose(self) -> SE2Pose:
-        x, y, theta = np.asarray(self._motion.getRobotPosition(True), dtype=float)
-        x0, y0, theta0 = self._odom_first
-        # Odometry since the first reading, in the first reading's frame.
-        c0, s0 = math.cos(theta0), math.sin(theta0)
-        dx, dy = c0 * (x - x0) + s0 * (y - y0), -s0 * (x - x0) + c0 * (y - y0)
-        c, s = math.cos(self._odom_origin.theta), math.sin(self._odom_origin.theta)
-        return SE2Pose(
-            self._odom_origin.x + c * dx - s * dy,
-            self._odom_origin.y + s * dx + c * dy,
-            wrap_angle(self._odom_origin.theta + theta - theta0),
-        )
+        now = SE2Pose(*map(float, self._motion.getRobotPosition(True)))
+        first = SE2Pose(*map(float, self._odom_first))
+        # The odometry since the first reading, carried from where that reading was.
+        return self._odom_origin.compose(first.between(now))
 
     def set_velocity(self, vx_mps: float, vy_mps: float, omega_radps: float) -> None:
         self._refuse_if_stopped()

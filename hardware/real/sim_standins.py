@@ -18,9 +18,10 @@ from typing import Any
 
 import numpy as np
 
+from core.geometry import make_transform, rot_z
+from core.se2 import SE2Pose
 from hardware.interfaces import Robot
 from hardware.real.standins import FRANKA_HAND_F_T_EE, FakeOpenNI2, FakePanda, NaoqiStandin
-from skills.geometry import SE2Pose, make_transform, rot_z
 
 T_FLANGE_HAND = make_transform(rot_z(-math.pi / 4), np.zeros(3))
 """panda.urdf's ``panda_hand`` in the flange (``panda_link8``): -45 deg about z."""

@@ -15,9 +15,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from core.arena import HUMANOID_TAG
+from core.geometry import transform_points
 from hardware.sim.world import SimConfig, SimWorld
-from skills.arena import HUMANOID_TAG
-from skills.geometry import transform_points
 
 
 def _tag_seen(world: SimWorld) -> bool:

@@ -20,7 +20,7 @@ import numpy as np
 import pybullet
 from pybullet_utils import bullet_client
 
-from skills.meshes import cache_dir
+from core.meshes import cache_dir
 
 
 def sim_cache_dir() -> Path:

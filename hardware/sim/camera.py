@@ -14,9 +14,9 @@ from typing import NamedTuple
 import numpy as np
 import pybullet
 
+from core.geometry import make_transform
 from hardware.interfaces import CameraIntrinsics
 from hardware.sim.bullet import LockedBullet
-from skills.geometry import make_transform
 
 CARMINE_HFOV_DEG = 58.0
 """Horizontal field of view of the Carmine 1.09's depth camera (datasheet: 57.5 deg)."""

@@ -24,13 +24,13 @@ import numpy as np
 import pybullet
 import trimesh
 
+from core.meshes import mesh_digest
 from hardware.sim.bullet import (
     LockedBullet,
     T_world_base_link,
     reset_base_link,
     sim_cache_dir,
 )
-from skills.meshes import mesh_digest
 
 CHAIR_FRICTION = 0.8
 

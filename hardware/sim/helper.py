@@ -9,10 +9,10 @@ from typing import Literal, NamedTuple
 
 import numpy as np
 
+from core.geometry import make_transform, rot_z
 from hardware.interfaces import Speaker
 from hardware.sim.chair import SimChair
 from hardware.sim.clock import SimClock
-from skills.geometry import make_transform, rot_z
 
 log = logging.getLogger(__name__)
 

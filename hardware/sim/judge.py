@@ -7,11 +7,11 @@ from collections.abc import Callable
 
 import numpy as np
 
+from core.geometry import wrap_angle
 from hardware.interfaces import SeatingJudgement
 from hardware.sim.bear import SimBear
 from hardware.sim.bullet import LockedBullet
 from hardware.sim.clock import SimClock
-from skills.geometry import wrap_angle
 
 MAX_TILT_DEG = 30.0
 MAX_RECLINE_DEG = 45.0

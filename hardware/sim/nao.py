@@ -19,6 +19,9 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pybullet
 
+from core.geometry import make_transform, rot_z, wrap_angle
+from core.nao_carrying import CARRYING_POSTURE_RAD
+from core.se2 import SE2Pose
 from hardware.sim.bullet import (
     LockedBullet,
     T_world_link,
@@ -28,8 +31,6 @@ from hardware.sim.bullet import (
 )
 from hardware.sim.clock import SimClock
 from hardware.sim.nao_model import SOLE_TO_TORSO_M, TAG_LINK
-from skills.geometry import SE2Pose, make_transform, rot_z, wrap_angle
-from skills.nao_carrying import CARRYING_POSTURE_RAD
 
 log = logging.getLogger(__name__)
 
@@ -41,7 +42,7 @@ TURN_SCALE_SIGMA = 0.03
 YAW_DRIFT_SIGMA_RADPS = 0.01
 
 HOLDING_POSTURE_RAD: dict[str, float] = {**CARRYING_POSTURE_RAD, "LHand": 0.0, "RHand": 0.0}
-"""Standing straight, carrying the bear (:mod:`skills.nao_carrying`), the hands closed."""
+"""Standing straight, carrying the bear (:mod:`core.nao_carrying`), the hands closed."""
 
 
 class _Trajectory:

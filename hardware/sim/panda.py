@@ -13,6 +13,7 @@ import numpy as np
 import pybullet
 import pybullet_data
 
+from core.geometry import make_transform
 from hardware.interfaces import CameraIntrinsics, RGBDFrame
 from hardware.sim.bullet import LockedBullet, T_world_link, link_index_by_name, sim_cache_dir
 from hardware.sim.camera import (
@@ -24,7 +25,6 @@ from hardware.sim.camera import (
     render_view,
 )
 from hardware.sim.clock import SimClock
-from skills.geometry import make_transform
 
 PANDA_URDF = Path(pybullet_data.getDataPath()) / "franka_panda" / "panda.urdf"
 _PANDA_MESHES = PANDA_URDF.parent / "meshes"

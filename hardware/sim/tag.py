@@ -8,8 +8,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from core.arena import TagSpec
 from hardware.sim.bullet import sim_cache_dir
-from skills.arena import TagSpec
 
 MARKER_MODULES = 6
 """Modules across a 4x4 marker including its one-module black border."""

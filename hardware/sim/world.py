@@ -23,6 +23,11 @@ import pybullet_data
 import trimesh
 from PIL import Image
 
+from core.arena import DEFAULT_ARENA, HUMANOID_TAG, Arena, accessible_sitting_yaws
+from core.geometry import make_transform, rot_z, wrap_angle, yaw_of
+from core.meshes import box_chair_mesh, load_mesh
+from core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, PALM_IN_WRIST_M
+from core.se2 import SE2Pose
 from hardware.interfaces import CameraIntrinsics, Robot, Speaker
 from hardware.sim.bear import SimBear
 from hardware.sim.bullet import LockedBullet, matrix_to_pose, pose_to_matrix
@@ -36,10 +41,6 @@ from hardware.sim.nao import SimNao
 from hardware.sim.nao_model import nao_urdf
 from hardware.sim.panda import SimPanda
 from hardware.sim.tag import tag_assets
-from skills.arena import DEFAULT_ARENA, HUMANOID_TAG, Arena, accessible_sitting_yaws
-from skills.geometry import SE2Pose, make_transform, rot_z, wrap_angle, yaw_of
-from skills.meshes import box_chair_mesh, load_mesh
-from skills.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, PALM_IN_WRIST_M
 
 log = logging.getLogger(__name__)
 
@@ -386,4 +387,4 @@ class SimWorld:
 
 
 _PALM = make_transform(np.eye(3), np.asarray(PALM_IN_WRIST_M))
-"""The palm centre in the NAO's wrist link frames (:mod:`skills.nao_carrying`)."""
+"""The palm centre in the NAO's wrist link frames (:mod:`core.nao_carrying`)."""

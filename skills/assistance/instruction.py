@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import math
 
-from skills.geometry import SE2Pose, SittingPose, wrap_angle
+from core.geometry import SittingPose, wrap_angle
+from core.se2 import SE2Pose
 from skills.results import Instruction
 
 INSTRUCTION_TEMPLATE = (

@@ -18,9 +18,10 @@ from collections.abc import Callable
 import numpy as np
 import trimesh
 
-from skills.arena import Arena
+from core.arena import Arena
+from core.geometry import SittingPose, wrap_angle, yaw_transform
+from core.se2 import SE2Pose
 from skills.assistance.instruction import ANGLE_STEP_DEG, instructed_rotation, rotation_toward
-from skills.geometry import SE2Pose, SittingPose, wrap_angle, yaw_transform
 from skills.results import AccessibilityResult, RotationChoice
 
 AccessibilityCheck = Callable[..., AccessibilityResult]

@@ -13,7 +13,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from skills.geometry import SE2Pose, wrap_angle
+from core.geometry import wrap_angle
+from core.se2 import SE2Pose
 
 
 class FakeHumanoid:
@@ -84,12 +85,7 @@ class FakeHumanoid:
 
 def _integrate(pose: SE2Pose, body_velocity: np.ndarray, dt_s: float) -> SE2Pose:
     vx, vy, omega = body_velocity
-    c, s = math.cos(pose.theta), math.sin(pose.theta)
-    return SE2Pose(
-        pose.x + (c * vx - s * vy) * dt_s,
-        pose.y + (s * vx + c * vy) * dt_s,
-        wrap_angle(pose.theta + omega * dt_s),
-    )
+    return pose.compose(SE2Pose(vx * dt_s, vy * dt_s, omega * dt_s))
 
 
 class FakeClock:

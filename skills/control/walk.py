@@ -26,11 +26,10 @@ import threading
 from collections.abc import Callable
 from typing import NamedTuple
 
-import numpy as np
-
+from core.geometry import wrap_angle
+from core.se2 import SE2Pose
 from hardware.interfaces import Clock, Humanoid
 from skills.control.pid import PID
-from skills.geometry import SE2Pose, wrap_angle
 from skills.results import WalkResult
 
 logger = logging.getLogger(__name__)
@@ -120,9 +119,7 @@ class _PoseEstimate:
             return odometry
         tracked_then, odometry_then = self._anchor
         # T_world_now = T_world_tracked · (T_odom_then⁻¹ · T_odom_now)
-        moved = np.linalg.inv(odometry_then.as_transform()) @ odometry.as_transform()
-        now = tracked_then.as_transform() @ moved
-        return SE2Pose(float(now[0, 3]), float(now[1, 3]), math.atan2(now[1, 0], now[0, 0]))
+        return tracked_then.compose(odometry_then.between(odometry))
 
 
 def _errors(pose: SE2Pose, target: SE2Pose) -> tuple[float, float, float]:

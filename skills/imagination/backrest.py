@@ -49,7 +49,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import trimesh
 
-from skills.geometry import SittingPose, wrap_angle
+from core.geometry import SittingPose, wrap_angle
 from skills.planning.seat import seat_support_heights
 
 ABOVE_SEAT_M = 0.06

@@ -21,8 +21,8 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
-from skills.geometry import make_transform, rot_z
-from skills.meshes import (
+from core.geometry import make_transform, rot_z, yaw_of
+from core.meshes import (
     cache_dir,
     mesh_digest,
     read_cached_arrays,
@@ -104,7 +104,7 @@ def yaw_obb(mesh: trimesh.Trimesh) -> tuple[float, np.ndarray, np.ndarray]:
         raise ChairPreparationError("the mesh has no footprint (fewer than 3 distinct points)")
     T_box_xy, extents_xy = trimesh.bounds.oriented_bounds_2D(footprint_xy)
     # T_box_xy (3x3) maps footprint points into the box frame: a rotation by its angle.
-    gamma = math.atan2(T_box_xy[1, 0], T_box_xy[0, 0])
+    gamma = yaw_of(T_box_xy)
     # Fold into [-π/4, π/4): the 8 drop rotations cover the rest, and a small yaw keeps
     # the OBB frame close to the mesh frame.
     quarter = math.pi / 2.0
@@ -162,7 +162,7 @@ def horizontal_area_m2(prepared: PreparedChair, low_m: float, high_m: float) -> 
 
 
 def _to_cache(prepared: PreparedChair) -> dict[str, np.ndarray]:
-    """The cache entry's arrays (npz, no pickle: see ``skills.meshes.read_cached_arrays``)."""
+    """The cache entry's arrays (npz, no pickle: see ``core.meshes.read_cached_arrays``)."""
     arrays = {name: np.asarray(value) for name, value in prepared._asdict().items()}
     arrays["pieces"] = np.stack([np.asarray(piece, dtype=float) for piece in prepared.pieces])
     return arrays

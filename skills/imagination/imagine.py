@@ -64,7 +64,7 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
-from skills.geometry import SittingPose, transform_points, wrap_angle
+from core.geometry import SittingPose, transform_points, wrap_angle
 from skills.imagination import DEFAULT_WORKERS
 from skills.imagination.agent import LINKS, agent_urdf_path
 from skills.imagination.backrest import check_direction

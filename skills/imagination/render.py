@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from skills.geometry import SittingPose, rot_z
+from core.geometry import SittingPose, rot_z
 from skills.imagination.agent import JOINTS
 
 _MAX_FACES = 6000

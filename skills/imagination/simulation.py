@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
+from core.geometry import yaw_of
 from skills.imagination.agent import (
     BALANCE_FULL_TILT_RAD,
     BALANCE_TORQUE_MAX_NM,
@@ -491,7 +492,7 @@ def _measure(
     R_world_pelvis = np.array(p.getMatrixFromQuaternion(base_quat)).reshape(3, 3)
     R_chair_pelvis = R_chair_world @ R_world_pelvis
     position = to_chair(base_position)
-    yaw = math.atan2(R_chair_pelvis[1, 0], R_chair_pelvis[0, 0])
+    yaw = yaw_of(R_chair_pelvis)
     link_z = [R_chair_pelvis[:, 2]]
     link_poses = np.tile(np.eye(4), (len(item["links"]), 1, 1))
     link_poses[0, :3, :3], link_poses[0, :3, 3] = R_chair_pelvis, position

@@ -107,7 +107,7 @@ def chair_extent(
 class ArmClearance:
     """Distances between the Panda's links and a box, by forward kinematics in pybullet.
 
-    The arm's base stands at the world origin (as in :data:`skills.arena.DEFAULT_ARENA`).
+    The arm's base stands at the world origin (as in :data:`core.arena.DEFAULT_ARENA`).
     Owns a DIRECT pybullet client: call :meth:`close` (or use ``with``).
     """
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from skills.errors import BearchairError
+from core.errors import BearchairError
 
 
 class PerceptionError(RuntimeError):

@@ -26,8 +26,8 @@ import open3d as o3d
 import trimesh
 from scipy import ndimage
 
+from core.arena import DEFAULT_ARENA, Box2D
 from hardware.interfaces import RGBDFrame
-from skills.arena import DEFAULT_ARENA, Box2D
 from skills.perception.camera import clean_depth, depth_to_world, validate_frame
 from skills.perception.determinism import one_open3d_thread
 from skills.perception.errors import PerceptionError

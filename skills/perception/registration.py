@@ -33,8 +33,8 @@ from typing import NamedTuple
 import numpy as np
 import open3d as o3d
 
+from core.geometry import rot_z, transform_points, wrap_angle, yaw_of, yaw_transform
 from hardware.interfaces import RGBDFrame, ScanningArm
-from skills.geometry import rot_z, transform_points, wrap_angle, yaw_of, yaw_transform
 from skills.perception.clearance import capture_views
 from skills.perception.determinism import one_open3d_thread
 from skills.perception.errors import PerceptionError, RegistrationError

@@ -22,8 +22,8 @@ import pybullet
 import pybullet_data
 import trimesh
 
+from core.arena import TagSpec
 from hardware.interfaces import CameraIntrinsics, RGBDFrame
-from skills.arena import TagSpec
 
 if TYPE_CHECKING:
     from skills.perception.hand_eye import BoardSpec

@@ -22,9 +22,10 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
+from core.arena import HUMANOID_TAG, TagSpec
+from core.geometry import yaw_of
+from core.se2 import SE2Pose
 from hardware.interfaces import RGBDFrame, ScanningArm
-from skills.arena import HUMANOID_TAG, TagSpec
-from skills.geometry import SE2Pose
 from skills.perception.views import HOME_CONFIGURATION, OVERVIEW_CONFIGURATION
 
 MAX_TILT_DEG = 35.0
@@ -165,7 +166,7 @@ def _tag_pose_and_corners(
     if planar_heading:
         heading = planar_yaw(corners, frame, float(T_world_tag[2, 3]))
     else:
-        heading = math.atan2(T_world_tag[1, 0], T_world_tag[0, 0])
+        heading = yaw_of(T_world_tag)
     return SE2Pose(float(T_world_tag[0, 3]), float(T_world_tag[1, 3]), heading), corners
 
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from skills.arena import DEFAULT_ARENA, Arena
+from core.arena import DEFAULT_ARENA, Arena
 
 MAX_CHAIR_REACH_M = 0.45
 """How far (metres) any part of a chair reaches horizontally from its centre, whatever

@@ -36,8 +36,9 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
-from skills.arena import Arena
-from skills.geometry import SE2Pose, SittingPose, wrap_angle
+from core.arena import Arena
+from core.geometry import SittingPose, wrap_angle
+from core.se2 import SE2Pose
 from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from skills.planning.seat import seat_support_heights
 from skills.planning.stance import (

@@ -45,8 +45,9 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
-from skills.arena import Arena, Box2D
-from skills.geometry import SE2Pose, SittingPose, wrap_angle
+from core.arena import Arena, Box2D
+from core.geometry import SittingPose, wrap_angle
+from core.se2 import SE2Pose
 from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from skills.planning.seat import STEP_M, SeatRay, seat_ray
 from skills.planning.wholebody.chair_profile import (

@@ -30,8 +30,8 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
-from skills.geometry import transform_points
-from skills.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, BEAR_SEAT_CLEARANCE_M
+from core.geometry import transform_points
+from core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, BEAR_SEAT_CLEARANCE_M
 
 BAND_HALF_WIDTH_M = 0.11
 """Half-width of the lateral band the planar motion sweeps (the hands' centres at

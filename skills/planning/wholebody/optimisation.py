@@ -33,7 +33,7 @@ import casadi as ca
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from skills.nao_carrying import (
+from core.nao_carrying import (
     BEAR_COM_HEIGHT_M,
     BEAR_SEAT_BELOW_HANDS_M,
     CARRYING_POSTURE_RAD,
@@ -45,7 +45,7 @@ from skills.planning.wholebody.nao_model import PlanarNao, link_transforms, plan
 # The bear (0.25 m tall, 0.2 kg, its frame at its seat point: the bottom centre of its
 # torso) is held rigidly between the palms in the pose it had when handed over: upright,
 # its seat point BEAR_SEAT_BELOW_HANDS_M below the palms' middle, with the NAO in
-# CARRYING_POSTURE_RAD (both from skills.nao_carrying, shared with the simulator). See
+# CARRYING_POSTURE_RAD (both from core.nao_carrying, shared with the simulator). See
 # :func:`carrying_grasp`.
 BEAR_HEIGHT_M = 0.25
 BEAR_DEPTH_M = 0.10

@@ -38,7 +38,7 @@ from typing import NamedTuple
 import casadi as ca
 import numpy as np
 
-from skills.nao_carrying import BEAR_SEAT_CLEARANCE_M
+from core.nao_carrying import BEAR_SEAT_CLEARANCE_M
 from skills.planning.wholebody.optimisation import (
     BEAR_CHAIR_MARGIN_M,
     BEAR_TILT_GOAL_RAD,

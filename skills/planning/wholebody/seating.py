@@ -35,9 +35,10 @@ import numpy as np
 import trimesh
 from scipy.optimize import least_squares
 
+from core.geometry import SittingPose, transform_points, wrap_angle
+from core.nao_carrying import BEAR_SEAT_CLEARANCE_M
+from core.se2 import SE2Pose
 from hardware.interfaces import Humanoid
-from skills.geometry import SE2Pose, SittingPose, transform_points, wrap_angle
-from skills.nao_carrying import BEAR_SEAT_CLEARANCE_M
 from skills.planning.seat import slide_on_seat
 from skills.planning.wholebody.chair_profile import (
     ChairProfile,
@@ -61,7 +62,7 @@ from skills.results import SeatingPlan
 
 STANDING_POSTURE = np.array([0.0, 0.0, 0.0, 0.9208, 1.3629])
 """q = (ankle, knee, hip, shoulder, elbow) that starts the seating motion: standing
-straight, the palms where the carrying posture (:data:`skills.nao_carrying.CARRYING_POSTURE_RAD`)
+straight, the palms where the carrying posture (:data:`core.nao_carrying.CARRYING_POSTURE_RAD`)
 has them (within 3 mm and 2 deg, checked by a test), so the bear barely moves when the
 arms switch to the planar posture during the lead-in."""
 RAISED_POSTURE = np.array([0.0, 0.0, 0.0, 0.0, 0.41])

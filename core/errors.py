@@ -6,8 +6,8 @@ folder, a corrupt run record or campaign database) derives from :class:`Bearchai
 escapes a command is a bug: status 3, one line on the terminal, the traceback in the
 run folder's log.
 
-The domain classes live here, below ``skills``, ``hardware`` and ``executive``, so each
-package's own exception (``skills.meshes.MeshLoadError``,
+The domain classes live in the core, below every other package, so each
+package's own exception (``core.meshes.MeshLoadError``,
 ``executive.inspect_run.RunRecordError``, ...) can derive from its domain without
 importing upward. Those existing classes keep their names and their old bases
 (``ValueError`` where they had it), so existing ``except`` clauses still catch them.

@@ -20,7 +20,7 @@ import numpy as np
 import trimesh
 from scipy import ndimage
 
-from skills.errors import MeshError, one_line
+from core.errors import MeshError, one_line
 
 logger = logging.getLogger(__name__)
 

@@ -1,4 +1,4 @@
-"""Poses and frames shared by every skill.
+"""Frames and rigid transforms in 3-D, and the sitting pose.
 
 Conventions:
     * The world frame is z up, metres, radians. Yaw is measured from +x about +z.
@@ -48,41 +48,6 @@ def yaw_of(transform: np.ndarray) -> float:
 def transform_points(transform: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Applies a 4x4 transform to an (N, 3) array of points."""
     return points @ transform[:3, :3].T + transform[:3, 3]
-
-
-class SE2Pose(NamedTuple):
-    """A planar pose in the world frame.
-
-    Attributes:
-        x: metres.
-        y: metres.
-        theta: heading in radians, from +x about +z.
-    """
-
-    x: float
-    y: float
-    theta: float
-
-    def as_transform(self) -> np.ndarray:
-        """``T_world_body`` with the body on the floor (z = 0)."""
-        return yaw_transform(self.theta, np.array([self.x, self.y, 0.0]))
-
-    def transformed(self, T_world_new_old: np.ndarray) -> SE2Pose:
-        """The pose after a rigid motion ``T_world_new_old`` about the world's z axis."""
-        moved = T_world_new_old @ self.as_transform()
-        return SE2Pose(float(moved[0, 3]), float(moved[1, 3]), wrap_angle(yaw_of(moved)))
-
-    def stepped_back(self, distance_m: float) -> SE2Pose:
-        """This pose moved ``distance_m`` metres backwards along its own heading."""
-        return SE2Pose(
-            self.x - distance_m * math.cos(self.theta),
-            self.y - distance_m * math.sin(self.theta),
-            self.theta,
-        )
-
-    def distance_to(self, other: SE2Pose) -> float:
-        """Euclidean distance in metres between the two positions."""
-        return math.hypot(self.x - other.x, self.y - other.y)
 
 
 class SittingPose(NamedTuple):

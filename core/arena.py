@@ -18,7 +18,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from skills.geometry import SE2Pose
+from core.se2 import SE2Pose
 
 
 class Box2D(NamedTuple):

@@ -1,0 +1,108 @@
+"""The house's walls: which package may import which, and no import cycles.
+
+The import graph is grimp's (every ``import`` in the project's modules, those inside
+functions included, ``if TYPE_CHECKING:`` blocks excluded: they never run).
+"""
+
+from __future__ import annotations
+
+import graphlib
+import sys
+from pathlib import Path
+
+import pytest
+
+grimp = pytest.importorskip("grimp")
+
+ROOT = Path(__file__).resolve().parents[1]
+
+MAY_IMPORT: dict[str, set[str]] = {
+    "core": set(),
+    "hardware": {"core"},
+    "skills": {"core", "hardware"},
+    "behaviours": {"core", "hardware", "skills"},
+    "trees": {"core", "hardware", "skills", "behaviours"},
+    "executive": {"core", "hardware", "skills", "behaviours", "trees"},
+}
+"""Each package and the project's packages it may import: a layering, lowest first."""
+
+
+@pytest.fixture(scope="module")
+def graph():
+    sys.path.insert(0, str(ROOT))
+    try:
+        return grimp.build_graph(
+            *MAY_IMPORT,
+            include_external_packages=False,
+            exclude_type_checking_imports=True,
+            cache_dir=None,
+        )
+    finally:
+        sys.path.remove(str(ROOT))
+
+
+def test_every_package_of_the_distribution_has_its_place_in_the_layering():
+    packages = {p.parent.name for p in ROOT.glob("*/__init__.py")} - {"tests"}
+    assert packages == set(MAY_IMPORT)
+
+
+def layering_breaches(graph, may_import: dict[str, set[str]]) -> list[str]:
+    """Every import from one package into another it may not import."""
+    breaches = []
+    for module in sorted(graph.modules):
+        package = module.split(".")[0]
+        for imported in sorted(graph.find_modules_directly_imported_by(module)):
+            other = imported.split(".")[0]
+            if other != package and other not in may_import[package]:
+                line = graph.get_import_details(importer=module, imported=imported)[0]
+                breaches.append(f"{module}:{line['line_number']} imports {imported}")
+    return breaches
+
+
+def import_cycle(graph) -> list[str] | None:
+    """One cycle of modules importing each other, or None."""
+    sorter = graphlib.TopologicalSorter(
+        {module: graph.find_modules_directly_imported_by(module) for module in graph.modules}
+    )
+    try:
+        sorter.prepare()
+    except graphlib.CycleError as error:
+        return list(error.args[1])
+    return None
+
+
+def test_each_package_imports_only_the_packages_below_it(graph):
+    breaches = layering_breaches(graph, MAY_IMPORT)
+    assert not breaches, "imports against the layering:\n" + "\n".join(breaches)
+
+
+def test_no_module_imports_itself_through_others(graph):
+    cycle = import_cycle(graph)
+    assert cycle is None, "import cycle: " + " -> ".join(cycle or [])
+
+
+def test_the_checks_see_a_breach_and_a_cycle(tmp_path):
+    # Packages of their own names: grimp finds packages through the import system, which
+    # already holds the real ``core`` and ``skills``.
+    files = {
+        "toy_core/m.py": "def f():\n    from toy_skills import n\n",  # in a function: counted
+        "toy_skills/n.py": "from toy_skills import o\n",
+        "toy_skills/o.py": "import toy_skills.n\n",
+    }
+    for name, body in files.items():
+        path = tmp_path / name
+        path.parent.mkdir(exist_ok=True)
+        (path.parent / "__init__.py").write_text("")
+        path.write_text(body)
+    sys.path.insert(0, str(tmp_path))
+    try:
+        toy = grimp.build_graph(
+            "toy_core", "toy_skills", include_external_packages=False, cache_dir=None
+        )
+    finally:
+        sys.path.remove(str(tmp_path))
+
+    assert layering_breaches(toy, {"toy_core": set(), "toy_skills": {"toy_core"}}) == [
+        "toy_core.m:2 imports toy_skills.n"
+    ]
+    assert set(import_cycle(toy) or []) == {"toy_skills.n", "toy_skills.o"}
