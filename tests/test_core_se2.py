@@ -16,7 +16,10 @@ def random_poses(count: int, seed: int = 0) -> list[SE2Pose]:
     return [
         SE2Pose(float(x), float(y), float(t))
         for x, y, t in zip(
-            rng.uniform(-3, 3, count), rng.uniform(-3, 3, count), rng.uniform(-4, 4, count)
+            rng.uniform(-3, 3, count),
+            rng.uniform(-3, 3, count),
+            rng.uniform(-4, 4, count),
+            strict=True,
         )
     ]
 
@@ -27,7 +30,7 @@ def same(a: SE2Pose, b: SE2Pose, tol: float = 1e-12) -> bool:
     )
 
 
-@pytest.mark.parametrize("a,b", zip(random_poses(20, 1), random_poses(20, 2)))
+@pytest.mark.parametrize("a,b", zip(random_poses(20, 1), random_poses(20, 2), strict=True))
 def test_compose_is_the_matrix_product(a, b):
     product = a.as_matrix() @ b.as_matrix()
     assert np.allclose((a @ b).as_matrix(), product, atol=1e-12)
@@ -42,7 +45,7 @@ def test_inverse_undoes_the_pose_on_either_side(a):
 
 
 def test_composition_is_associative_and_between_is_the_relative_pose():
-    for a, b, c in zip(random_poses(10, 4), random_poses(10, 5), random_poses(10, 6)):
+    for a, b, c in zip(random_poses(10, 4), random_poses(10, 5), random_poses(10, 6), strict=True):
         assert same((a @ b) @ c, a @ (b @ c), tol=1e-11)
         assert same(a.between(b), a.inverse() @ b)
         assert same(a @ a.between(b), b, tol=1e-11)
