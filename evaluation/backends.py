@@ -106,7 +106,7 @@ def import_ray() -> Any:
         import ray
     except ImportError as error:
         raise BackendUnavailableError(
-            "--backend ray needs Ray, an optional extra: pip install 'bearchair[ray]'"
+            "--backend ray needs Ray, an optional extra: pip install 'bearchair[trials]'"
         ) from error
     return ray
 

@@ -20,6 +20,7 @@ import numpy as np
 SITTER_TORSO_M = 0.25
 SITTER_THIGH_M = 0.16
 SITTER_SHIN_M = 0.15
+PLOTS_HINT = "plots need matplotlib: pip install 'bearchair[trials]'"
 
 
 def trial_picture_name(record: dict[str, Any]) -> str:
@@ -101,6 +102,9 @@ def render_imagined_pose(
         sitting_pose: ``{"position_m": [x, y, z], "yaw_deg": γ}`` in the same frame.
         path: the PNG to write.
         title: the figure's title.
+
+    Raises:
+        ImportError: matplotlib is not installed (the message names the extra).
     """
     plt = _pyplot()
     position = np.asarray(sitting_pose["position_m"], dtype=float)
@@ -124,9 +128,11 @@ def render_imagined_pose(
 
 
 def _pyplot() -> Any:
-    """``matplotlib.pyplot`` on the Agg backend."""
-    import matplotlib
-
+    """``matplotlib.pyplot`` on the Agg backend, or an ImportError naming the extra."""
+    try:
+        import matplotlib
+    except ImportError as error:
+        raise ImportError(PLOTS_HINT) from error
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

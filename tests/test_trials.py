@@ -246,7 +246,7 @@ def test_ray_backend_without_ray_says_how_to_install(tmp_path, capsys, monkeypat
     folder = write_chairs(tmp_path / "c", ["a.obj"])
     assert cli.main(["trials", "--chairs", str(folder), "--backend", "ray"]) == 2
     err = capsys.readouterr().err.strip()
-    assert "pip install 'bearchair[ray]'" in err and len(err.splitlines()) == 1
+    assert "pip install 'bearchair[trials]'" in err and len(err.splitlines()) == 1
 
 
 # --- records, resume, crashes, hangs ---------------------------------------------------
