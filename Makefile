@@ -34,7 +34,7 @@ $(STAMP): pyproject.toml
 	$(MAKE) system
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -e ".[test,robots]"
+	$(BIN)/python -m pip install -q -e ".[test,robots,trials,voice]"
 	touch $(STAMP)
 
 install: $(STAMP)

@@ -20,8 +20,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from evaluation.store import TrialStore
 from executive import cli
-from executive.trials.store import TrialStore
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 

@@ -5,13 +5,15 @@ Subcommands:
     tree      render the mission tree (text, dot, SVG, PNG).
     inspect   replay a recorded run: the tree at any tick, the blackboard, the timeline.
     imagine, scan, ...  skill commands, each registered by its own ``executive.cmd_*``.
+    trials    the evaluation harness: a command of a package above this one
+              (``evaluation``), found through the entry points of :data:`COMMANDS_GROUP`.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
-import importlib
+import importlib.metadata
 import json
 import logging
 import os
@@ -20,24 +22,27 @@ import sys
 import tempfile
 import time
 import traceback
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TextIO
 
 from core.errors import BearchairError, InputError, one_line
+from executive import (
+    cmd_calibrate_hand_eye,
+    cmd_check_hardware,
+    cmd_imagine,
+    cmd_scan,
+    cmd_view,
+)
 from executive.cli_types import positive_seconds, seed_value
 from executive.config import RunConfig
 from executive.interrupts import exit_status, handling_signals, received, signal_name
 
-# Skill commands live beside their skills' owners: each module has register(subparsers).
-SKILL_COMMANDS = (
-    "executive.cmd_imagine",
-    "executive.cmd_scan",
-    "executive.cmd_trials",
-    "executive.cmd_check_hardware",
-    "executive.cmd_calibrate_hand_eye",
-    "executive.cmd_view",
-)
-
+OWN_COMMANDS = (cmd_imagine, cmd_scan, cmd_check_hardware, cmd_calibrate_hand_eye, cmd_view)
+"""executive's own commands: each module has ``register(subparsers)``."""
+COMMANDS_GROUP = "bearchair.commands"
+"""The entry-point group of commands from packages above executive (pyproject.toml):
+each names a ``register(subparsers)``, loaded from the installed metadata."""
 
 EXIT_SUCCESS = 0
 EXIT_MISSION_FAILED = 1
@@ -49,6 +54,10 @@ LOG_FILE = "bearchair.log"
 
 class CliError(InputError):
     """A user error: printed as one line, exit status 2."""
+
+
+class CommandUnavailableError(BearchairError):
+    """A command registered in the installed metadata cannot be loaded (a stale install)."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -109,15 +118,30 @@ def build_parser() -> argparse.ArgumentParser:
     inspect.add_argument("--timeline", action="store_true", help="show every status change")
     inspect.set_defaults(func=_inspect)
 
-    for module_name in SKILL_COMMANDS:
-        try:
-            module = importlib.import_module(module_name)
-        except ModuleNotFoundError as error:
-            if error.name != module_name:
-                raise
-            continue  # that skill's command is not part of this installation yet
+    for module in OWN_COMMANDS:
         module.register(subparsers)
+    for register in registered_commands():
+        register(subparsers)
     return parser
+
+
+def registered_commands() -> list[Callable[[Any], None]]:
+    """The ``register`` function of every command in :data:`COMMANDS_GROUP`, by name.
+
+    Raises:
+        CommandUnavailableError: a registered command's module or function is missing.
+    """
+    found = []
+    entry_points = importlib.metadata.entry_points(group=COMMANDS_GROUP)
+    for entry_point in sorted(entry_points, key=lambda e: e.name):
+        try:
+            found.append(entry_point.load())
+        except (ImportError, AttributeError) as error:
+            raise CommandUnavailableError(
+                f"bearchair: the {entry_point.name!r} command ({entry_point.value}) cannot be "
+                f"loaded: {one_line(error)}; reinstall bearchair (pip install -e .)"
+            ) from error
+    return found
 
 
 def _run(args: argparse.Namespace) -> int:

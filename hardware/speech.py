@@ -2,11 +2,12 @@
 
 :class:`TextToSpeech` implements :class:`hardware.interfaces.Speaker`. Every sentence is
 logged (logger ``hardware.speech``, level INFO) whether or not it is heard. It speaks
-only when it is not muted, pyttsx3 starts, and there is an audio device (pyttsx3 2.99 on
-Linux plays espeak-ng's audio through ``aplay``); otherwise it falls back to text with one
-warning. pyttsx3's ``runAndWait`` can hang with a broken audio setup, so the engine lives
-in its own daemon thread and ``say`` waits for it at most ``timeout_s`` per sentence;
-after a timeout the voice falls back to text for good.
+only when it is not muted, pyttsx3 (the optional extra ``bearchair[voice]``) is installed
+and starts, and there is an audio device (pyttsx3 2.99 on Linux plays espeak-ng's audio
+through ``aplay``); otherwise it falls back to text with one warning. pyttsx3's
+``runAndWait`` can hang with a broken audio setup, so the engine lives in its own daemon
+thread and ``say`` waits for it at most ``timeout_s`` per sentence; after a timeout the
+voice falls back to text for good.
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ import threading
 from pathlib import Path
 
 logger = logging.getLogger(__name__)
+
+VOICE_HINT = "pip install 'bearchair[voice]' to hear the instructions"
 
 
 def audio_device_available() -> bool:
@@ -88,7 +91,11 @@ class TextToSpeech:
         def run() -> None:
             try:
                 import pyttsx3
-
+            except ImportError:
+                failure.append(f"pyttsx3 is not installed ({VOICE_HINT})")
+                started.set()
+                return
+            try:
                 engine = pyttsx3.init()
                 engine.setProperty("rate", self._rate_wpm)
             except Exception as error:

@@ -23,6 +23,7 @@ MAY_IMPORT: dict[str, set[str]] = {
     "behaviours": {"core", "hardware", "skills"},
     "trees": {"core", "hardware", "skills", "behaviours"},
     "executive": {"core", "hardware", "skills", "behaviours", "trees"},
+    "evaluation": {"core", "hardware", "skills", "behaviours", "trees", "executive"},
 }
 """Each package and the project's packages it may import: a layering, lowest first."""
 

@@ -20,9 +20,9 @@ import pytest
 import trimesh
 
 from core.meshes import box_chair_mesh, check_chair_mesh
+from evaluation.store import campaign_lock
 from executive import cli
 from executive.record import RunRecorder
-from executive.trials.store import campaign_lock
 from trees.mission import create_tree
 
 REPO = Path(__file__).resolve().parents[1]
@@ -417,7 +417,7 @@ def test_every_bad_chair_gets_its_line_and_skip_bad_goes_on_without_them(tmp_pat
     assert len(lines) == 2 and "c.off" in lines[0] and "d.obj" in lines[1]
     assert "2 unusable" in lines[1] and "Traceback" not in "".join(lines)
 
-    from executive.trials.protocol import discover_chairs
+    from evaluation.protocol import discover_chairs
 
     chosen, skipped = discover_chairs(folder, check_meshes=True, skip_bad=True)
     assert [c.name for c in chosen] == ["a.obj"]
@@ -514,7 +514,7 @@ def test_a_full_file_system_is_refused_before_the_run(tmp_path, capsys, monkeypa
 
 
 def test_a_read_only_database_is_refused_before_the_first_trial(tmp_path, capsys, monkeypatch):
-    from executive.trials import store
+    from evaluation import store
 
     folder = chair_set(tmp_path, GOOD)
     db = tmp_path / "t.sqlite"

@@ -152,3 +152,67 @@ def test_stage_snapshots_picture_each_stage_end_once(tmp_path) -> None:
     quiet = StageSnapshots(broken, tmp_path / "broken")
     quiet(runner)  # logged, never raised: a missing picture must not stop the mission
     assert quiet.written == []
+
+
+def register_hello(subparsers) -> None:
+    """A command of a package above executive, as an entry point names one."""
+    hello = subparsers.add_parser("hello", help="say hello")
+    hello.set_defaults(func=lambda args: print("hello") or 0)
+
+
+def _registered(monkeypatch, **commands: str) -> None:
+    """Makes the installed metadata hold these commands (name = "module:function")."""
+    from importlib import metadata
+
+    from executive.cli import COMMANDS_GROUP
+
+    found = metadata.EntryPoints(
+        metadata.EntryPoint(name, value, COMMANDS_GROUP) for name, value in commands.items()
+    )
+
+    def entry_points(**selection):
+        assert selection == {"group": COMMANDS_GROUP}
+        return found
+
+    monkeypatch.setattr(metadata, "entry_points", entry_points)
+
+
+def test_commands_of_other_packages_come_from_their_entry_points(monkeypatch, capsys):
+    _registered(monkeypatch, hello="tests.test_cli:register_hello")
+    assert main(["hello"]) == 0
+    assert capsys.readouterr().out == "hello\n"
+    _registered(monkeypatch)
+    assert main(["hello"]) == 2
+    assert "invalid choice: 'hello'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("value", "why"),
+    [
+        ("no_such_package.cli:register", "No module named 'no_such_package'"),
+        ("tests.test_cli:no_such_function", "no_such_function"),
+    ],
+)
+def test_a_registered_command_that_cannot_be_loaded_is_one_line(monkeypatch, capsys, value, why):
+    _registered(monkeypatch, hello="tests.test_cli:register_hello", broken=value)
+    assert main(["hello"]) == 2  # not a silently missing command
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    assert f"the 'broken' command ({value}) cannot be loaded" in err and why in err
+    assert "reinstall bearchair" in err
+
+
+def test_pyproject_registers_the_trials_command_of_evaluation():
+    import argparse
+    import tomllib
+    from importlib import metadata
+    from pathlib import Path
+
+    from executive.cli import COMMANDS_GROUP
+
+    pyproject = Path(__file__).resolve().parents[1] / "pyproject.toml"
+    declared = tomllib.loads(pyproject.read_text())["project"]["entry-points"][COMMANDS_GROUP]
+    assert declared == {"trials": "evaluation.cli:register"}
+    subparsers = argparse.ArgumentParser().add_subparsers()
+    metadata.EntryPoint("trials", declared["trials"], COMMANDS_GROUP).load()(subparsers)
+    assert list(subparsers.choices) == ["trials"]

@@ -24,10 +24,10 @@ import numpy as np
 import pytest
 import trimesh
 
+from evaluation.store import TrialStore, campaign_lock
 from executive import cli, mission
 from executive.inspect_run import RecordedRun
 from executive.record import RunRecorder
-from executive.trials.store import TrialStore, campaign_lock
 from hardware.fakes import FakeJudge, fake_robot
 from skills.fakes import ScriptedSkills
 from tests.test_trials import (
@@ -525,9 +525,9 @@ CRASH_ONCE = FAKE_WORKER.replace(
 
 
 def test_a_killed_worker_is_retried_once_and_marked(tmp_path, monkeypatch):
-    from executive.trials.backends import LocalBackend
-    from executive.trials.campaign import run_campaign
-    from executive.trials.protocol import ChairEntry, expand_protocol
+    from evaluation.backends import LocalBackend
+    from evaluation.campaign import run_campaign
+    from evaluation.protocol import ChairEntry, expand_protocol
 
     command = fake_worker_command(tmp_path, monkeypatch, CRASH_ONCE).split()
     chairs = [ChairEntry(tmp_path / name, "chair", 90.0) for name in ("flaky.obj", "crash.obj")]

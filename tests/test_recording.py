@@ -352,10 +352,10 @@ def test_run_record_and_live_flags(tmp_path, monkeypatch, capsys):
 
 def test_trials_pass_record_to_each_worker(tmp_path, monkeypatch, capsys):
     import executive.mission
-    from executive import trial_worker
-    from executive.trials.campaign import run_campaign
-    from executive.trials.protocol import ChairEntry, expand_protocol
-    from executive.trials.store import TrialStore
+    from evaluation import worker
+    from evaluation.campaign import run_campaign
+    from evaluation.protocol import ChairEntry, expand_protocol
+    from evaluation.store import TrialStore
 
     class Backend:
         def run(self, jobs, record):
@@ -374,7 +374,7 @@ def test_trials_pass_record_to_each_worker(tmp_path, monkeypatch, capsys):
     )
     for record in (True, False):
         payload = {**backend.payloads[0], "record": record, "out_dir": str(tmp_path / "w")}
-        assert trial_worker.main([json.dumps(payload)]) == 0
+        assert worker.main([json.dumps(payload)]) == 0
     assert [config.record for config in configs] == [True, False]
     capsys.readouterr()
 

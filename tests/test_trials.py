@@ -17,20 +17,20 @@ import numpy as np
 import pytest
 import trimesh
 
-from executive import cli
-from executive.trials.backends import LocalBackend
-from executive.trials.campaign import run_campaign
-from executive.trials.pictures import copy_trial_scenes, render_chair_pictures
-from executive.trials.progress import Progress, format_duration
-from executive.trials.protocol import (
+from evaluation.backends import LocalBackend
+from evaluation.campaign import run_campaign
+from evaluation.pictures import copy_trial_scenes, render_chair_pictures
+from evaluation.progress import Progress, format_duration
+from evaluation.protocol import (
     ChairEntry,
     ChairSetError,
     discover_chairs,
     expand_protocol,
     trial_seed,
 )
-from executive.trials.report import compute_table, failure_kind, format_table, markdown_report
-from executive.trials.store import TrialStore, record_from_error, record_from_summary
+from evaluation.report import compute_table, failure_kind, format_table, markdown_report
+from evaluation.store import TrialStore, record_from_error, record_from_summary
+from executive import cli
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -157,7 +157,7 @@ def test_trial_seeds_are_deterministic_across_processes_and_depend_on_the_campai
         t.seed for t in expand_protocol(chairs, "paper", 8)
     ]
     # Another interpreter (another hash salt) derives the same seed.
-    code = "from executive.trials.protocol import trial_seed; print(trial_seed(7, 'a.obj', 4))"
+    code = "from evaluation.protocol import trial_seed; print(trial_seed(7, 'a.obj', 4))"
     other = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=REPO
     )
@@ -246,7 +246,7 @@ def test_ray_backend_without_ray_says_how_to_install(tmp_path, capsys, monkeypat
     folder = write_chairs(tmp_path / "c", ["a.obj"])
     assert cli.main(["trials", "--chairs", str(folder), "--backend", "ray"]) == 2
     err = capsys.readouterr().err.strip()
-    assert "pip install 'bearchair[ray]'" in err and len(err.splitlines()) == 1
+    assert "pip install 'bearchair[trials]'" in err and len(err.splitlines()) == 1
 
 
 # --- records, resume, crashes, hangs ---------------------------------------------------
@@ -613,8 +613,8 @@ def test_ray_backend_runs_the_same_trials_with_the_same_records(tmp_path, fake_w
 
 
 def test_the_real_worker_reports_an_unusable_chair_as_an_error(tmp_path, capsys):
-    from executive import trial_worker
-    from executive.trials.worker_process import RESULT_MARKER
+    from evaluation import worker
+    from evaluation.worker_process import RESULT_MARKER
 
     payload = {
         "chair_path": str(tmp_path / "missing.obj"),
@@ -625,18 +625,18 @@ def test_the_real_worker_reports_an_unusable_chair_as_an_error(tmp_path, capsys)
         "out_dir": str(tmp_path / "run"),
         "timeout_s": 300,
     }
-    assert trial_worker.main([json.dumps(payload)]) == 3
+    assert worker.main([json.dumps(payload)]) == 3
     line = capsys.readouterr().out.strip().splitlines()[-1]
     assert line.startswith(RESULT_MARKER)
     assert "no such file" in json.loads(line[len(RESULT_MARKER) :])["error"]
-    assert trial_worker.main([]) == 2
-    assert trial_worker.mission_timeout_s(300) == 270 and trial_worker.mission_timeout_s(20) == 16
+    assert worker.main([]) == 2
+    assert worker.mission_timeout_s(300) == 270 and worker.mission_timeout_s(20) == 16
 
 
 def test_an_interrupted_run_worker_kills_its_trial_process(tmp_path, fake_worker, monkeypatch):
     import threading
 
-    from executive.trials.worker_process import run_worker
+    from evaluation.worker_process import run_worker
 
     monkeypatch.setenv("FAKE_SLEEP_S", "30")
     spec = expand_protocol(entries(["a.obj"], tmp_path), "paper", 0)[0]
@@ -716,11 +716,11 @@ def test_each_trials_imagination_gets_the_cores_the_other_trials_leave(
 ):
     import argparse
 
-    from executive import cmd_trials
+    from evaluation import cli as trials_cli
 
-    monkeypatch.setattr(cmd_trials.os, "cpu_count", lambda: cores)
+    monkeypatch.setattr(trials_cli.os, "cpu_count", lambda: cores)
     args = argparse.Namespace(backend=backend, workers=workers)
-    assert cmd_trials.imagination_workers(args) == expected
+    assert trials_cli.imagination_workers(args) == expected
 
 
 def test_the_imagination_workers_reach_the_trials_payload_and_the_skills(tmp_path):

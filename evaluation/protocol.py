@@ -207,8 +207,39 @@ def discover_chairs(
         ChairSetError: the folder is missing, holds no supported mesh or no manifest,
             or none takes part.
     """
-    from core.meshes import MeshLoadError, load_chair_mesh
+    meshes = _mesh_files(chairs_dir)
+    manifest = read_manifest(chairs_dir)
+    if manifest is None:
+        raise ChairSetError(
+            f"{chairs_dir}: no manifest.json; trials need each chair's front_yaw_deg to place "
+            "it accessibly or not (see ../shared/chairs/README.md for the format)"
+        )
+    chosen: list[ChairEntry] = []
+    skipped: list[SkippedChair] = []
+    problems: list[str] = []
+    for path in meshes:
+        verdict = _verdict(path, manifest, chairs_dir, len(chosen), max_chairs, check_meshes)
+        if isinstance(verdict, ChairEntry):
+            chosen.append(verdict)
+        elif isinstance(verdict, SkippedChair):
+            skipped.append(verdict)
+        elif skip_bad:
+            skipped.append(SkippedChair(path.name, f"unusable: {verdict}"))
+        else:
+            problems.append(verdict)
+    if problems:
+        raise BadChairsError(problems)
+    if not chosen:
+        raise ChairSetError(f"{chairs_dir}: none of its {len(meshes)} meshes has a usable front")
+    return chosen, skipped
 
+
+def _mesh_files(chairs_dir: Path) -> list[Path]:
+    """The folder's files with a supported mesh suffix, sorted.
+
+    Raises:
+        ChairSetError: the folder is missing, unlistable or holds no such file.
+    """
     if not chairs_dir.exists():
         raise ChairSetError(f"{chairs_dir}: no such directory")
     if not chairs_dir.is_dir():
@@ -225,51 +256,39 @@ def discover_chairs(
         raise ChairSetError(
             f"{chairs_dir}: no chair meshes ({', '.join(SUPPORTED_SUFFIXES)}) in this directory"
         )
-    manifest = read_manifest(chairs_dir)
-    if manifest is None:
-        raise ChairSetError(
-            f"{chairs_dir}: no manifest.json; trials need each chair's front_yaw_deg to place "
-            "it accessibly or not (see ../shared/chairs/README.md for the format)"
-        )
-    chosen: list[ChairEntry] = []
-    skipped: list[SkippedChair] = []
-    problems: list[str] = []
+    return meshes
 
-    def bad(path: Path, problem: str) -> None:
-        if skip_bad:
-            skipped.append(SkippedChair(path.name, f"unusable: {problem}"))
-        else:
-            problems.append(problem)
 
-    for path in meshes:
-        if path.name not in manifest:
-            skipped.append(SkippedChair(path.name, "not in manifest.json"))
-            continue
-        info = manifest[path.name]
-        problem = manifest_entry_problem(info)
-        if problem is not None:
-            bad(path, f"{chairs_dir / 'manifest.json'}: {path.name}: {problem}")
-            continue
-        front = info.get("front_yaw_deg")
-        kind = str(info.get("kind", "unknown"))
-        if front is None:
-            skipped.append(SkippedChair(path.name, f"{kind} without a front (front_yaw_deg null)"))
-            continue
-        if max_chairs is not None and len(chosen) >= max_chairs:
-            skipped.append(SkippedChair(path.name, f"beyond --max-chairs {max_chairs}"))
-            continue
-        if check_meshes:
-            try:
-                load_chair_mesh(path)
-            except MeshLoadError as error:
-                bad(path, str(error))
-                continue
-        chosen.append(ChairEntry(path, kind, float(front)))
-    if problems:
-        raise BadChairsError(problems)
-    if not chosen:
-        raise ChairSetError(f"{chairs_dir}: none of its {len(meshes)} meshes has a usable front")
-    return chosen, skipped
+def _verdict(
+    path: Path,
+    manifest: dict[str, dict[str, Any]],
+    chairs_dir: Path,
+    chosen_so_far: int,
+    max_chairs: int | None,
+    check_meshes: bool,
+) -> ChairEntry | SkippedChair | str:
+    """What one mesh of the folder is: a chair that takes part, a mesh skipped, or (a
+    ``str``) the one-line problem of an unusable manifest entry or mesh."""
+    from core.meshes import MeshLoadError, load_chair_mesh
+
+    if path.name not in manifest:
+        return SkippedChair(path.name, "not in manifest.json")
+    info = manifest[path.name]
+    problem = manifest_entry_problem(info)
+    if problem is not None:
+        return f"{chairs_dir / 'manifest.json'}: {path.name}: {problem}"
+    front = info.get("front_yaw_deg")
+    kind = str(info.get("kind", "unknown"))
+    if front is None:
+        return SkippedChair(path.name, f"{kind} without a front (front_yaw_deg null)")
+    if max_chairs is not None and chosen_so_far >= max_chairs:
+        return SkippedChair(path.name, f"beyond --max-chairs {max_chairs}")
+    if check_meshes:
+        try:
+            load_chair_mesh(path)
+        except MeshLoadError as error:
+            return str(error)
+    return ChairEntry(path, kind, float(front))
 
 
 class BadChairsError(ChairSetError):

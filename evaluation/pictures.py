@@ -20,6 +20,7 @@ import numpy as np
 SITTER_TORSO_M = 0.25
 SITTER_THIGH_M = 0.16
 SITTER_SHIN_M = 0.15
+PLOTS_HINT = "plots need matplotlib: pip install 'bearchair[trials]'"
 
 
 def trial_picture_name(record: dict[str, Any]) -> str:
@@ -101,13 +102,11 @@ def render_imagined_pose(
         sitting_pose: ``{"position_m": [x, y, z], "yaw_deg": γ}`` in the same frame.
         path: the PNG to write.
         title: the figure's title.
+
+    Raises:
+        ImportError: matplotlib is not installed (the message names the extra).
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.collections import PolyCollection
-
+    plt = _pyplot()
     position = np.asarray(sitting_pose["position_m"], dtype=float)
     yaw = math.radians(float(sitting_pose["yaw_deg"]))
     forward = np.array([math.cos(yaw), math.sin(yaw)])
@@ -115,42 +114,8 @@ def render_imagined_pose(
     triangles = np.asarray(vertices, dtype=float)[np.asarray(faces, dtype=int)]
 
     figure, (top, side) = plt.subplots(1, 2, figsize=(10, 4.8))
-    # Top view: x right, y up.
-    top.add_collection(
-        PolyCollection(triangles[:, :, :2], facecolors="0.75", edgecolors="none", alpha=0.35)
-    )
-    top.plot(sitter[1:, 0], sitter[1:, 1], "-", color="tab:red", lw=2)
-    top.plot(*position[:2], "o", color="tab:red")
-    top.annotate(
-        "",
-        xy=tuple(position[:2] + 0.25 * forward),
-        annotation_clip=False,
-        xytext=tuple(position[:2]),
-        arrowprops={"arrowstyle": "->", "color": "tab:red", "lw": 2},
-    )
-    top.set_title("from above (world x, y)")
-    top.set_xlabel("x (m)")
-    top.set_ylabel("y (m)")
-    arrow_tip = position[:2] + 0.25 * forward
-    _fit(top, np.vstack([triangles[:, :, :2].reshape(-1, 2), sitter[:, :2], arrow_tip]))
-
-    # Side view: horizontal axis along the sitting direction, vertical = z.
-    def along(points: np.ndarray) -> np.ndarray:
-        return (points[..., :2] - position[:2]) @ forward
-
-    side_polys = np.stack([along(triangles), triangles[:, :, 2]], axis=-1)
-    side.add_collection(
-        PolyCollection(side_polys, facecolors="0.75", edgecolors="none", alpha=0.35)
-    )
-    side.plot(along(sitter), sitter[:, 2], "-o", color="tab:red", lw=2, ms=3)
-    side.axhline(0.0, color="0.4", lw=1)
-    side.set_title("from the side (sitting direction to the right)")
-    side.set_xlabel("along the sitting direction (m)")
-    side.set_ylabel("z (m)")
-    _fit(
-        side, np.vstack([side_polys.reshape(-1, 2), np.column_stack([along(sitter), sitter[:, 2]])])
-    )
-
+    _draw_from_above(top, triangles, sitter, position, forward)
+    _draw_from_the_side(side, triangles, sitter, position, forward)
     figure.suptitle(
         (title + "\n" if title else "")
         + f"pelvis ({position[0]:.2f}, {position[1]:.2f}, {position[2]:.2f}) m, "
@@ -160,6 +125,66 @@ def render_imagined_pose(
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(path, dpi=90)
     plt.close(figure)
+
+
+def _pyplot() -> Any:
+    """``matplotlib.pyplot`` on the Agg backend, or an ImportError naming the extra."""
+    try:
+        import matplotlib
+    except ImportError as error:
+        raise ImportError(PLOTS_HINT) from error
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _draw_from_above(
+    axes: Any, triangles: np.ndarray, sitter: np.ndarray, position: np.ndarray, forward: np.ndarray
+) -> None:
+    """The top view, x right and y up: the chair, the sitter's legs and the sitting direction."""
+    from matplotlib.collections import PolyCollection
+
+    axes.add_collection(
+        PolyCollection(triangles[:, :, :2], facecolors="0.75", edgecolors="none", alpha=0.35)
+    )
+    axes.plot(sitter[1:, 0], sitter[1:, 1], "-", color="tab:red", lw=2)
+    axes.plot(*position[:2], "o", color="tab:red")
+    axes.annotate(
+        "",
+        xy=tuple(position[:2] + 0.25 * forward),
+        annotation_clip=False,
+        xytext=tuple(position[:2]),
+        arrowprops={"arrowstyle": "->", "color": "tab:red", "lw": 2},
+    )
+    axes.set_title("from above (world x, y)")
+    axes.set_xlabel("x (m)")
+    axes.set_ylabel("y (m)")
+    arrow_tip = position[:2] + 0.25 * forward
+    _fit(axes, np.vstack([triangles[:, :, :2].reshape(-1, 2), sitter[:, :2], arrow_tip]))
+
+
+def _draw_from_the_side(
+    axes: Any, triangles: np.ndarray, sitter: np.ndarray, position: np.ndarray, forward: np.ndarray
+) -> None:
+    """The side view: horizontal along the sitting direction, vertical z; chair and sitter."""
+    from matplotlib.collections import PolyCollection
+
+    def along(points: np.ndarray) -> np.ndarray:
+        return (points[..., :2] - position[:2]) @ forward
+
+    side_polys = np.stack([along(triangles), triangles[:, :, 2]], axis=-1)
+    axes.add_collection(
+        PolyCollection(side_polys, facecolors="0.75", edgecolors="none", alpha=0.35)
+    )
+    axes.plot(along(sitter), sitter[:, 2], "-o", color="tab:red", lw=2, ms=3)
+    axes.axhline(0.0, color="0.4", lw=1)
+    axes.set_title("from the side (sitting direction to the right)")
+    axes.set_xlabel("along the sitting direction (m)")
+    axes.set_ylabel("z (m)")
+    _fit(
+        axes, np.vstack([side_polys.reshape(-1, 2), np.column_stack([along(sitter), sitter[:, 2]])])
+    )
 
 
 def _fit(axes: Any, points: np.ndarray, margin_m: float = 0.08) -> None:

@@ -18,7 +18,7 @@ import time
 
 PRELOADED_MODULES = (
     "executive.mission",
-    "executive.trial_worker",
+    "evaluation.worker",
     "trees.mission",
 )
 """Imported besides the modules of ``skills.toolbox.SKILL_SOURCES``."""

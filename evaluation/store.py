@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from core.errors import RecordStoreError
-from executive.trials.protocol import TrialSpec
+from evaluation.protocol import TrialSpec
 
 COLUMNS: dict[str, str] = {
     "chair": "TEXT NOT NULL",

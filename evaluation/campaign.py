@@ -12,11 +12,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from executive.trials.backends import Backend
-from executive.trials.progress import Progress
-from executive.trials.protocol import TrialSpec
-from executive.trials.store import TrialStore, record_from_error, record_from_summary
-from executive.trials.worker_process import WorkerOutcome
+from evaluation.backends import Backend, Job
+from evaluation.progress import Progress
+from evaluation.protocol import TrialSpec
+from evaluation.store import TrialStore, record_from_error, record_from_summary
+from evaluation.worker_process import WorkerOutcome
 from skills.imagination import DEFAULT_WORKERS
 
 
@@ -65,6 +65,41 @@ def run_campaign(
     finished = store.finished_keys()
     todo = [spec for spec in specs if spec.key not in finished]
     already_done = len(specs) - len(todo)
+    jobs = _jobs(todo, runs_dir, timeout_s, record, imagination_workers)
+    ran = 0
+
+    def on_result(spec: TrialSpec, outcome: WorkerOutcome) -> None:
+        nonlocal ran
+        if outcome.cancelled:
+            return
+        row = _row(spec, outcome, str(runs_dir / spec.run_dir_name()))
+        store.add(row)
+        ran += 1
+        if progress is not None:
+            progress.update(row)
+        if on_record is not None:
+            on_record(row)
+
+    if progress is not None:
+        progress.start()
+    try:
+        backend.run(jobs, on_result)
+    except KeyboardInterrupt:
+        return CampaignResult(ran, already_done, interrupted=True)
+    finally:
+        if progress is not None:
+            progress.finish()
+    return CampaignResult(ran, already_done, interrupted=False)
+
+
+def _jobs(
+    todo: list[TrialSpec],
+    runs_dir: Path,
+    timeout_s: float,
+    record: bool,
+    imagination_workers: int,
+) -> list[Job]:
+    """Each trial with its worker payload, its run folder emptied of an interrupted run's."""
     jobs = []
     for spec in todo:
         run_dir = runs_dir / spec.run_dir_name()
@@ -78,39 +113,19 @@ def run_campaign(
                 ),
             )
         )
-    ran = 0
+    return jobs
 
-    def record(spec: TrialSpec, outcome: WorkerOutcome) -> None:
-        nonlocal ran
-        if outcome.cancelled:
-            return
-        run_dir = str(runs_dir / spec.run_dir_name())
-        if outcome.summary is not None:
-            row = record_from_summary(
-                spec, outcome.summary, outcome.wall_seconds, run_dir, outcome.attempts
-            )
-        else:
-            row = record_from_error(
-                spec,
-                outcome.error or "unknown error",
-                outcome.wall_seconds,
-                run_dir,
-                outcome.attempts,
-            )
-        store.add(row)
-        ran += 1
-        if progress is not None:
-            progress.update(row)
-        if on_record is not None:
-            on_record(row)
 
-    if progress is not None:
-        progress.start()
-    try:
-        backend.run(jobs, record)
-    except KeyboardInterrupt:
-        return CampaignResult(ran, already_done, interrupted=True)
-    finally:
-        if progress is not None:
-            progress.finish()
-    return CampaignResult(ran, already_done, interrupted=False)
+def _row(spec: TrialSpec, outcome: WorkerOutcome, run_dir: str) -> dict[str, Any]:
+    """The record of a finished trial: from its summary, else from its error."""
+    if outcome.summary is not None:
+        return record_from_summary(
+            spec, outcome.summary, outcome.wall_seconds, run_dir, outcome.attempts
+        )
+    return record_from_error(
+        spec,
+        outcome.error or "unknown error",
+        outcome.wall_seconds,
+        run_dir,
+        outcome.attempts,
+    )

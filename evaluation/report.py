@@ -18,8 +18,8 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from behaviours.accessibility import REFUSED
-from executive.trials.pictures import trial_picture_name
-from executive.trials.protocol import EXPERIMENT_LABELS, EXPERIMENTS, SkippedChair
+from evaluation.pictures import trial_picture_name
+from evaluation.protocol import EXPERIMENT_LABELS, EXPERIMENTS, SkippedChair
 from trees.mission import STAGES
 
 
@@ -67,7 +67,7 @@ class TrialsTable(NamedTuple):
 
 
 def compute_table(records: list[dict[str, Any]]) -> TrialsTable:
-    """Table 1, stage medians and failure causes from records of ``executive.trials.store``."""
+    """Table 1, stage medians and failure causes from records of ``evaluation.store``."""
     seating = []
     for experiment in EXPERIMENTS:
         rows = [r for r in records if r["experiment"] == experiment]
@@ -217,7 +217,22 @@ def markdown_report(
     out = [f"# {title}", ""]
     if settings:
         out += [", ".join(f"{k}: {v}" for k, v in settings.items()), ""]
-    out += [
+    out += _md_table_1(table)
+    out += _md_stage_medians(table, len(records))
+    out += _md_failures(table)
+    if skipped:
+        out += ["", "## Meshes not in the campaign", ""]
+        out += [f"- {s.name}: {s.reason}" for s in skipped]
+    out += _md_trials(records)
+    if chair_pictures:
+        out += ["", "## Imagined sitting poses", ""]
+        out += [f"![{chair}]({path})" for chair, path in sorted(chair_pictures.items())]
+    return "\n".join(out) + "\n"
+
+
+def _md_table_1(table: TrialsTable) -> list[str]:
+    """The report's lines of Table 1: (1) seating success, (2) accessible after assistance."""
+    out = [
         "## (1) Seating bear success",
         "",
         "| Experiment | Trial num. | Successes | Rate |",
@@ -242,7 +257,12 @@ def markdown_report(
             f"{table.assisted_accessible_trials} accessible placement(s) were judged "
             "inaccessible and assisted (not counted above)."
         )
-    out += [
+    return out
+
+
+def _md_stage_medians(table: TrialsTable, trials: int) -> list[str]:
+    """The report's lines of the median stage times, the whole trial's among them."""
+    out = [
         "",
         "## Median time per stage",
         "",
@@ -251,7 +271,13 @@ def markdown_report(
     ]
     out += [f"| {s} | {m:.1f} | {n} |" for s, (m, n) in table.stage_median_s.items()]
     if table.trial_median_s is not None:
-        out.append(f"| whole trial (wall) | {table.trial_median_s:.1f} | {len(records)} |")
+        out.append(f"| whole trial (wall) | {table.trial_median_s:.1f} | {trials} |")
+    return out
+
+
+def _md_failures(table: TrialsTable) -> list[str]:
+    """The report's lines of the refused chairs and the causes of failure."""
+    out: list[str] = []
     if table.refusals:
         out += ["", "## Refused chairs (no stance reaches the seat)", ""]
         out += [f"- {chair} ({n} trials): {_md(reason)}" for chair, reason, n in table.refusals]
@@ -267,10 +293,12 @@ def markdown_report(
         out += [f"- {count} x {_md(kind)}" for kind, count in table.failure_kinds]
         out += ["", "Every cause:", ""]
     out += [f"- {count} x {_md(cause)}" for cause, count in table.failure_causes]
-    if skipped:
-        out += ["", "## Meshes not in the campaign", ""]
-        out += [f"- {s.name}: {s.reason}" for s in skipped]
-    out += [
+    return out
+
+
+def _md_trials(records: list[dict[str, Any]]) -> list[str]:
+    """The report's table of every trial, with a link to its final scene when there is one."""
+    out = [
         "",
         "## Trials",
         "",
@@ -293,10 +321,7 @@ def markdown_report(
             f"{'' if facing is None else f'{facing:.1f}'} | {r.get('wall_seconds') or 0:.1f} | "
             f"{picture} |"
         )
-    if chair_pictures:
-        out += ["", "## Imagined sitting poses", ""]
-        out += [f"![{chair}]({path})" for chair, path in sorted(chair_pictures.items())]
-    return "\n".join(out) + "\n"
+    return out
 
 
 def _md(text: str) -> str:

@@ -1,6 +1,6 @@
-"""One trial of a campaign, in its own process: ``python -m executive.trial_worker '<json>'``.
+"""One trial of a campaign, in its own process: ``python -m evaluation.worker '<json>'``.
 
-The JSON is ``executive.trials.protocol.TrialSpec.to_payload``: chair_path, placement,
+The JSON is ``evaluation.protocol.TrialSpec.to_payload``: chair_path, placement,
 helper, seed, trial_index, out_dir, timeout_s, record. The worker runs the whole mission in the
 simulated world (``executive.mission.run_in_simulation``), which writes the run record
 into out_dir, keeps the robot's reconstructed chair (``chair_reconstructed.ply``) for the
@@ -21,7 +21,7 @@ import traceback
 from pathlib import Path
 from typing import Any
 
-from executive.trials.worker_process import RESULT_MARKER
+from evaluation.worker_process import RESULT_MARKER
 from skills.imagination import DEFAULT_WORKERS
 
 MISSION_TIMEOUT_MARGIN_S = 30.0
@@ -88,7 +88,7 @@ def watch_for_orphaning(poll_s: float = 0.5) -> None:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) != 1:
-        print("usage: python -m executive.trial_worker '<trial json>'", file=sys.stderr)
+        print("usage: python -m evaluation.worker '<trial json>'", file=sys.stderr)
         return 2
     try:
         payload = json.loads(argv[0])

@@ -1,7 +1,7 @@
 """Where trial subprocesses run: here (a few at once) or as Ray tasks.
 
-Both backends run the same trial worker (``executive.trials.worker_process``): here as
-forks of a preloaded trial server (``executive.trials.forked_workers``), on Ray as a
+Both backends run the same trial worker (``evaluation.worker_process``): here as
+forks of a preloaded trial server (``evaluation.forked_workers``), on Ray as a
 command on the node that runs the task. They hand each :class:`WorkerOutcome` back to
 the caller in the caller's thread, as soon as it is ready, so the harness alone writes
 the records. On Ctrl-C (KeyboardInterrupt in
@@ -17,10 +17,9 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from typing import Any, Protocol
 
 from core.errors import BackendError
-from executive.interrupts import emergency_stop_on_second_signal
-from executive.trials.forked_workers import PreloadedLauncher
-from executive.trials.protocol import TrialSpec
-from executive.trials.worker_process import (
+from evaluation.forked_workers import PreloadedLauncher
+from evaluation.protocol import TrialSpec
+from evaluation.worker_process import (
     ProcessGroup,
     WorkerLauncher,
     WorkerOutcome,
@@ -28,6 +27,7 @@ from executive.trials.worker_process import (
     default_worker_command,
     run_worker_with_retry,
 )
+from executive.interrupts import emergency_stop_on_second_signal
 
 Job = tuple[TrialSpec, dict[str, Any]]
 """A trial and its worker payload."""
@@ -106,7 +106,7 @@ def import_ray() -> Any:
         import ray
     except ImportError as error:
         raise BackendUnavailableError(
-            "--backend ray needs Ray, an optional extra: pip install 'bearchair[ray]'"
+            "--backend ray needs Ray, an optional extra: pip install 'bearchair[trials]'"
         ) from error
     return ray
 

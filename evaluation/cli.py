@@ -14,10 +14,17 @@ import os
 import shlex
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from executive.cli import CliError
 from executive.cli_types import positive_int, positive_seconds, seed_value
 from skills.imagination import DEFAULT_WORKERS
+
+if TYPE_CHECKING:
+    from evaluation.backends import Backend
+    from evaluation.campaign import CampaignResult
+    from evaluation.protocol import ChairEntry, SkippedChair, TrialSpec
+    from evaluation.store import TrialStore
 
 DEFAULT_OUT = Path("trials")
 DEFAULT_TIMEOUT_S = 300.0
@@ -67,7 +74,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--worker-cmd",
-        help="run each trial with this command instead of 'python -m executive.trial_worker' "
+        help="run each trial with this command instead of 'python -m evaluation.worker' "
         "(the trial's JSON is appended)",
     )
     parser.set_defaults(func=run)
@@ -122,20 +129,45 @@ def run(args: argparse.Namespace) -> int:
     manifest entry (one line per bad one; ``--skip-bad`` goes on without them), the
     output folder and the database (readable, of this schema, writable, not in use).
     """
-    from executive.cli import CliError
+    from evaluation.protocol import expand_protocol
+    from evaluation.store import TrialStore, campaign_lock
     from executive.interrupts import exit_status
     from executive.outputs import ensure_writable_dir
-    from executive.trials.backends import BackendUnavailableError, LocalBackend, RayBackend
-    from executive.trials.campaign import run_campaign
-    from executive.trials.progress import Progress
-    from executive.trials.protocol import (
-        BadChairsError,
-        ChairSetError,
-        discover_chairs,
-        expand_protocol,
-    )
-    from executive.trials.store import TrialStore, campaign_lock
 
+    _check_arguments(args)
+    chairs, skipped = _chairs(args)
+    backend = _backend(args)
+    record = args.record and _recording_available()
+    specs = expand_protocol(chairs, args.protocol, args.seed)
+    db_path = _db_path(args)
+    ensure_writable_dir(args.out, "--out")
+    ensure_writable_dir(db_path.parent, "folder of --db")
+    with campaign_lock(db_path), TrialStore(db_path) as store:
+        done_before = len(store.finished_keys() & {spec.key for spec in specs})
+        print(
+            f"{len(chairs)} chairs x {len(specs) // len(chairs)} trials = {len(specs)} trials "
+            f"({done_before} already recorded in {db_path}); "
+            f"{len(skipped)} mesh(es) skipped; backend {args.backend}, {args.workers} worker(s)",
+            file=sys.stderr,
+        )
+        result = _run_campaign(args, specs, store, backend, done_before, record)
+        records = store.records(specs)
+    if result.interrupted:
+        print(
+            f"bearchair trials: interrupted; {len(records)} of {len(specs)} trials are recorded in "
+            f"{db_path} (none lost). Resume with:\n  {resume_command(args)}",
+            file=sys.stderr,
+        )
+        return exit_status()
+    # The report goes to its file first: a closed stdout must not lose it.
+    table_text = write_report(args, records, skipped)
+    print(f"report: {args.out / 'report.md'}", file=sys.stderr)
+    print(table_text)
+    return 0
+
+
+def _check_arguments(args: argparse.Namespace) -> None:
+    """What argparse cannot check alone: the timeout's floor, --address without Ray."""
     if args.timeout < MIN_TIMEOUT_S:
         raise CliError(
             f"bearchair trials: --timeout {args.timeout:g} s leaves a trial no time to build "
@@ -143,6 +175,12 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.address and args.backend != "ray":
         raise CliError("bearchair trials: --address only applies to --backend ray")
+
+
+def _chairs(args: argparse.Namespace) -> tuple[list[ChairEntry], list[SkippedChair]]:
+    """The campaign's chairs and the skipped meshes; one stderr line per bad chair."""
+    from evaluation.protocol import BadChairsError, ChairSetError, discover_chairs
+
     try:
         chairs, skipped = discover_chairs(
             args.chairs, args.max_chairs, check_meshes=True, skip_bad=args.skip_bad
@@ -159,62 +197,58 @@ def run(args: argparse.Namespace) -> int:
     for chair in skipped:
         if chair.reason.startswith("unusable: "):
             print(f"bearchair trials: skipped {chair.name}: {chair.reason}", file=sys.stderr)
+    return chairs, skipped
+
+
+def _backend(args: argparse.Namespace) -> Backend:
+    """The backend of ``--backend``, with ``--worker-cmd`` if given."""
+    from evaluation.backends import BackendUnavailableError, LocalBackend, RayBackend
+
     command = shlex.split(args.worker_cmd) if args.worker_cmd else None
     try:
         if args.backend == "ray":
-            backend: Any = RayBackend(args.workers, args.timeout, args.address, command=command)
-        else:
-            backend = LocalBackend(args.workers, args.timeout, command)
+            return RayBackend(args.workers, args.timeout, args.address, command=command)
+        return LocalBackend(args.workers, args.timeout, command)
     except BackendUnavailableError as error:
         raise CliError(f"bearchair trials: {error}") from error
 
-    record = args.record and _recording_available()
-    specs = expand_protocol(chairs, args.protocol, args.seed)
-    db_path = _db_path(args)
-    ensure_writable_dir(args.out, "--out")
-    ensure_writable_dir(db_path.parent, "folder of --db")
-    with campaign_lock(db_path), TrialStore(db_path) as store:
-        done_before = len(store.finished_keys() & {spec.key for spec in specs})
-        print(
-            f"{len(chairs)} chairs x {len(specs) // len(chairs)} trials = {len(specs)} trials "
-            f"({done_before} already recorded in {db_path}); "
-            f"{len(skipped)} mesh(es) skipped; backend {args.backend}, {args.workers} worker(s)",
-            file=sys.stderr,
+
+def _run_campaign(
+    args: argparse.Namespace,
+    specs: list[TrialSpec],
+    store: TrialStore,
+    backend: Backend,
+    done_before: int,
+    record: bool,
+) -> CampaignResult:
+    """``run_campaign`` with a progress bar; a backend that fails to start is one line."""
+    from evaluation.backends import BackendUnavailableError
+    from evaluation.campaign import run_campaign
+    from evaluation.progress import Progress
+
+    progress = Progress(len(specs), done_before)
+    try:
+        return run_campaign(
+            specs,
+            store,
+            backend,
+            args.out / "runs",
+            args.timeout,
+            progress=progress,
+            record=record,
+            imagination_workers=imagination_workers(args),
         )
-        progress = Progress(len(specs), done_before)
-        try:
-            result = run_campaign(
-                specs,
-                store,
-                backend,
-                args.out / "runs",
-                args.timeout,
-                progress=progress,
-                record=record,
-                imagination_workers=imagination_workers(args),
-            )
-        except BackendUnavailableError as error:
-            raise CliError(f"bearchair trials: {error}") from error
-        records = store.records(specs)
-    if result.interrupted:
-        print(
-            f"bearchair trials: interrupted; {len(records)} of {len(specs)} trials are recorded in "
-            f"{db_path} (none lost). Resume with:\n  {resume_command(args)}",
-            file=sys.stderr,
-        )
-        return exit_status()
-    # The report goes to its file first: a closed stdout must not lose it.
-    table_text = write_report(args, records, skipped)
-    print(f"report: {args.out / 'report.md'}", file=sys.stderr)
-    print(table_text)
-    return 0
+    except BackendUnavailableError as error:
+        raise CliError(f"bearchair trials: {error}") from error
 
 
-def write_report(args: argparse.Namespace, records: list[dict], skipped: list) -> str:
+def write_report(
+    args: argparse.Namespace, records: list[dict[str, Any]], skipped: list[SkippedChair]
+) -> str:
     """Writes OUT/report.md and the pictures; returns the table as text."""
+    from evaluation.pictures import copy_trial_scenes, render_chair_pictures
+    from evaluation.report import compute_table, format_table, markdown_report
     from executive.outputs import write_text_atomic
-    from executive.trials.pictures import copy_trial_scenes, render_chair_pictures
-    from executive.trials.report import compute_table, format_table, markdown_report
 
     table = compute_table(records)
     args.out.mkdir(parents=True, exist_ok=True)

@@ -3,7 +3,7 @@
 A trial started as a command pays, in a fresh interpreter, about 1.9 s of imports
 (open3d, casadi, pybullet, the project) and 1.2 s building the whole-body planner's
 casadi problems, in every trial. Here one server process (the standard library's
-``multiprocessing`` forkserver, preloading :mod:`executive.trials.server_preload`)
+``multiprocessing`` forkserver, preloading :mod:`evaluation.server_preload`)
 pays them once, and each trial is a fork of it.
 
 A trial still runs in a process of its own that no other trial has run in, in a session
@@ -24,7 +24,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
-PRELOAD_MODULE = "executive.trials.server_preload"
+PRELOAD_MODULE = "evaluation.server_preload"
 STDOUT_NAME = "worker.stdout"
 """A forked worker's stdout, in its run folder until the harness has read it."""
 
@@ -49,7 +49,7 @@ def _run_forked(entry: Callable[[list[str]], int], payload_json: str, out_dir: s
     here by path: the fork cannot share the harness's file object.
     """
     os.setsid()
-    from executive.trials.worker_process import die_with_parent
+    from evaluation.worker_process import die_with_parent
 
     die_with_parent()
     folder = Path(out_dir)
@@ -63,8 +63,8 @@ def _run_forked(entry: Callable[[list[str]], int], payload_json: str, out_dir: s
     import faulthandler
 
     faulthandler.enable()
+    from evaluation.worker import watch_for_orphaning
     from executive.interrupts import handling_signals
-    from executive.trial_worker import watch_for_orphaning
     from skills.imagination import shutdown_workers
 
     watch_for_orphaning()
@@ -81,7 +81,7 @@ def _run_forked(entry: Callable[[list[str]], int], payload_json: str, out_dir: s
 
 
 def _trial_entry(argv: list[str]) -> int:
-    from executive.trial_worker import main
+    from evaluation.worker import main
 
     return main(argv)
 
@@ -123,7 +123,7 @@ class PreloadedLauncher:
     Args:
         entry: what the fork runs on ``[payload_json]``, returning its exit status; a
             module-level function (it is sent to the server by name). The default is
-            the trial worker, ``executive.trial_worker.main``.
+            the trial worker, ``evaluation.worker.main``.
     """
 
     def __init__(self, entry: Callable[[list[str]], int] = _trial_entry) -> None:
