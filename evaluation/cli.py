@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from executive.cli import CliError
+from core.errors import InputError
 from executive.cli_types import positive_int, positive_seconds, seed_value
 from skills.imagination import DEFAULT_WORKERS
 
@@ -169,12 +169,12 @@ def run(args: argparse.Namespace) -> int:
 def _check_arguments(args: argparse.Namespace) -> None:
     """What argparse cannot check alone: the timeout's floor, --address without Ray."""
     if args.timeout < MIN_TIMEOUT_S:
-        raise CliError(
+        raise InputError(
             f"bearchair trials: --timeout {args.timeout:g} s leaves a trial no time to build "
             f"its world and write its record; give at least {MIN_TIMEOUT_S:.0f} s"
         )
     if args.address and args.backend != "ray":
-        raise CliError("bearchair trials: --address only applies to --backend ray")
+        raise InputError("bearchair trials: --address only applies to --backend ray")
 
 
 def _chairs(args: argparse.Namespace) -> tuple[list[ChairEntry], list[SkippedChair]]:
@@ -188,12 +188,12 @@ def _chairs(args: argparse.Namespace) -> tuple[list[ChairEntry], list[SkippedCha
     except BadChairsError as error:
         for problem in error.problems[:-1]:
             print(f"bearchair trials: {problem}", file=sys.stderr)
-        raise CliError(
+        raise InputError(
             f"bearchair trials: {error.problems[-1]} ({len(error.problems)} unusable; fix "
             "them, or pass --skip-bad to run without them)"
         ) from error
     except ChairSetError as error:
-        raise CliError(f"bearchair trials: {error}") from error
+        raise InputError(f"bearchair trials: {error}") from error
     for chair in skipped:
         if chair.reason.startswith("unusable: "):
             print(f"bearchair trials: skipped {chair.name}: {chair.reason}", file=sys.stderr)
@@ -210,7 +210,7 @@ def _backend(args: argparse.Namespace) -> Backend:
             return RayBackend(args.workers, args.timeout, args.address, command=command)
         return LocalBackend(args.workers, args.timeout, command)
     except BackendUnavailableError as error:
-        raise CliError(f"bearchair trials: {error}") from error
+        raise InputError(f"bearchair trials: {error}") from error
 
 
 def _run_campaign(
@@ -239,7 +239,7 @@ def _run_campaign(
             imagination_workers=imagination_workers(args),
         )
     except BackendUnavailableError as error:
-        raise CliError(f"bearchair trials: {error}") from error
+        raise InputError(f"bearchair trials: {error}") from error
 
 
 def write_report(

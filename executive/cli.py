@@ -37,6 +37,7 @@ from executive import (
 from executive.cli_types import positive_seconds, seed_value
 from executive.config import RunConfig
 from executive.interrupts import exit_status, handling_signals, received, signal_name
+from executive.operator import ask_operator
 
 OWN_COMMANDS = (cmd_imagine, cmd_scan, cmd_check_hardware, cmd_calibrate_hand_eye, cmd_view)
 """executive's own commands: each module has ``register(subparsers)``."""
@@ -52,17 +53,13 @@ LOG_FILE = "bearchair.log"
 """The run folder's log: warnings of the run, and the traceback of an internal error."""
 
 
-class CliError(InputError):
-    """A user error: printed as one line, exit status 2."""
-
-
 class CommandUnavailableError(BearchairError):
     """A command registered in the installed metadata cannot be loaded (a stale install)."""
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, not a usage dump
-        raise CliError(f"{self.prog}: {message} (see --help)")
+        raise InputError(f"{self.prog}: {message} (see --help)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -170,9 +167,9 @@ def _run(args: argparse.Namespace) -> int:
     # Every input and the output place are checked before anything runs.
     if args.robots is not None:
         if args.chair is not None:
-            raise CliError("bearchair run: --chair is for the simulation; not with --robots")
+            raise InputError("bearchair run: --chair is for the simulation; not with --robots")
         if not args.robots.is_file():
-            raise CliError(f"bearchair run: --robots {args.robots}: no such file")
+            raise InputError(f"bearchair run: --robots {args.robots}: no such file")
     elif args.chair is not None:
         load_chair_mesh(args.chair)
     if args.out is not None:
@@ -184,7 +181,10 @@ def _run(args: argparse.Namespace) -> int:
     with _log_to(out_dir / LOG_FILE):
         if args.robots is not None:
             summary = run_on_robots(
-                config, args.robots, on_tick=StageProgress(), confirm=None if args.yes else _ask
+                config,
+                args.robots,
+                on_tick=StageProgress(),
+                confirm=None if args.yes else ask_operator,
             )
         else:
             summary = run_in_simulation(config, on_tick=StageProgress())
@@ -214,14 +214,6 @@ def _log_to(path: Path):
             handler.close()
 
 
-def _ask(question: str) -> bool:
-    """The operator's yes (no terminal: no)."""
-    try:
-        return input(question).strip().lower() in ("y", "yes")
-    except EOFError:
-        return False
-
-
 def add_recording_arguments(parser: argparse.ArgumentParser, *, record_default: bool) -> None:
     """``--record/--no-record`` and ``--live`` (Rerun recordings, ``executive.recording``)."""
     parser.add_argument(
@@ -248,14 +240,14 @@ def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
     live = getattr(args, "live", None)
     if (args.record or live) and not rerun_available():
         flag = "--record" if args.record else "--live"
-        raise CliError(f"{command}: {flag} needs rerun-sdk: {INSTALL_HINT}")
+        raise InputError(f"{command}: {flag} needs rerun-sdk: {INSTALL_HINT}")
     if live == "spawn" and not has_display():
-        raise CliError(
+        raise InputError(
             f"{command}: --live: no display for the native viewer; use --live web "
             "(a web viewer on a port) or --live rerun+http://HOST:9876/proxy"
         )
     if live not in (None, "spawn", "web") and not live.startswith(("rerun://", "rerun+http")):
-        raise CliError(
+        raise InputError(
             f"{command}: --live takes no value, 'web', or a viewer URL "
             f"(rerun+http://HOST:9876/proxy), not {live!r}"
         )
@@ -268,7 +260,9 @@ def _tree(args: argparse.Namespace) -> int:
 
     if args.format in TEXT_FORMATS:
         if args.out is not None:
-            raise CliError(f"bearchair tree: --out is for dot/svg/png, not --format {args.format}")
+            raise InputError(
+                f"bearchair tree: --out is for dot/svg/png, not --format {args.format}"
+            )
         print(render_text(create_tree(), args.format, args.blackboard))
         return 0
     out = check_output_file(

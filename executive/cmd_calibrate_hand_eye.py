@@ -110,9 +110,9 @@ class View(NamedTuple):
 
 
 def _error(message: str) -> Exception:
-    from executive.cli import CliError
+    from core.errors import InputError
 
-    return CliError(f"bearchair calibrate-hand-eye: {message}")
+    return InputError(f"bearchair calibrate-hand-eye: {message}")
 
 
 def _board(args: argparse.Namespace, recorded: dict[str, Any] | None = None) -> Any:
@@ -187,9 +187,9 @@ def _write_board(args: argparse.Namespace) -> int:
 def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     """Connects, asks, moves through the views and captures; always ends at HOME."""
     from executive.cell_config import load_cell_config
-    from executive.cli import _ask
     from executive.cmd_check_hardware import MOVE_SPEED_FACTOR, _within
     from executive.interrupts import emergency_stop_on_second_signal
+    from executive.operator import ask_operator
     from hardware.real import BackendUnavailable, robots
     from skills.perception.hand_eye import BOARD_CENTRE_BASE_XY_M, CALIBRATION_CONFIGURATIONS
     from skills.perception.views import HOME_CONFIGURATION
@@ -214,7 +214,7 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
         f"{MOVE_SPEED_FACTOR:g} of its speed limits.",
         flush=True,
     )
-    if not args.yes and not _ask("The Panda will move now. Go on? [y/N] "):
+    if not args.yes and not ask_operator("The Panda will move now. Go on? [y/N] "):
         raise _error("the operator did not confirm: nothing moved")
     arm._speed_factor = MOVE_SPEED_FACTOR  # as check-hardware --move: slow, near a person
     T_base_world = np.linalg.inv(cell.T_world_base)

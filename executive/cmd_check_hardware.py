@@ -79,9 +79,9 @@ def check_hardware(args: argparse.Namespace) -> int:
     from hardware.real.panda import into_walls
 
     if not args.timeout > 0:
-        from executive.cli import CliError
+        from core.errors import InputError
 
-        raise CliError("bearchair check-hardware: --timeout must be positive")
+        raise InputError("bearchair check-hardware: --timeout must be positive")
     report = _Report()
     cell = load_cell_config(args.robots)  # CellConfigError: one line, exit 2
     report.line("ok", "cell", f"{args.robots} (NAO {cell.nao_url}, Panda {cell.panda_host})")

@@ -93,15 +93,15 @@ def _free_port() -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    from executive.cli import CliError
+    from core.errors import InputError
 
     if not rerun_available():
-        raise CliError(f"bearchair view: needs rerun-sdk: {INSTALL_HINT}")
+        raise InputError(f"bearchair view: needs rerun-sdk: {INSTALL_HINT}")
     if not 0 < args.port < 65536:
-        raise CliError(f"bearchair view: --port must be 1..65535, not {args.port}")
+        raise InputError(f"bearchair view: --port must be 1..65535, not {args.port}")
     path = recording_path(args.run_dir)
     if not args.web and not has_display():
-        raise CliError(
+        raise InputError(
             "bearchair view: no display for the native viewer; use --web and open the "
             "printed address in a browser"
         )
@@ -113,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
         )
     command = viewer_command(path, web=args.web, port=args.port)
     if not Path(command[0]).is_file():
-        raise CliError(
+        raise InputError(
             f"bearchair view: rerun-sdk's viewer is missing ({command[0]}): reinstall it"
         )
     if os.name == "posix":
