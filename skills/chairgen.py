@@ -136,6 +136,34 @@ def _four_legs(
     ]
 
 
+class _Seat(NamedTuple):
+    """The seat drawn for a chair (metres; the seat centred on the origin, +x its front).
+
+    Attributes:
+        top: height of the seat's top.
+        bottom: height of its underside.
+        thickness: top - bottom.
+        depth: along x (the diameter for a round seat).
+        width: along y.
+        round: a round seat (a cylinder), else a box.
+    """
+
+    top: float
+    bottom: float
+    thickness: float
+    depth: float
+    width: float
+    round: bool
+
+    @property
+    def front_x(self) -> float:
+        return self.depth / 2.0
+
+    @property
+    def back_x(self) -> float:
+        return -self.depth / 2.0
+
+
 def generate_chair(seed: int, family: str | None = None) -> GeneratedChair:
     """A random chair of ``family`` (drawn from :data:`FAMILIES` when None).
 
@@ -146,12 +174,39 @@ def generate_chair(seed: int, family: str | None = None) -> GeneratedChair:
     Raises:
         ValueError: an unknown family.
     """
+    # The draws below come in one fixed order per family: the seed's chair stays the same.
     rng = np.random.default_rng(seed)
     if family is None:
         family = str(rng.choice(FAMILIES))
     if family not in FAMILIES:
         raise ValueError(f"unknown chair family {family!r} (known: {', '.join(FAMILIES)})")
+    seat = _draw_seat(rng, family)
+    if seat.round:
+        parts = [_cylinder(seat.depth / 2.0, seat.bottom, seat.top)]
+    else:
+        parts = [
+            _box(
+                (seat.depth, seat.width, seat.thickness),
+                (0.0, 0.0, seat.bottom + seat.thickness / 2.0),
+            )
+        ]
+    base, protrusion = _base(rng, family, seat)
+    parts += base
+    if family == "footrest":
+        footrest, protrusion = _footrest(rng, seat)
+        parts += footrest
+    front_yaw: float | None = 0.0
+    if family in ("stool", "bench"):
+        front_yaw = None
+    else:
+        parts += _backrest(rng, seat.top, seat.back_x, seat.width)
+    if family == "armchair":
+        parts += _armrests(rng, seat)
+    return _placed(parts, family, seed, front_yaw, seat, protrusion)
 
+
+def _draw_seat(rng: np.random.Generator, family: str) -> _Seat:
+    """The seat's height, thickness, depth and width, and whether it is round."""
     seat_top = float(rng.uniform(*SEAT_HEIGHT_RANGE_M))
     thickness = float(rng.uniform(0.02, 0.05))
     seat_bottom = seat_top - thickness
@@ -162,20 +217,24 @@ def generate_chair(seed: int, family: str | None = None) -> GeneratedChair:
         width = float(rng.uniform(0.5, 0.8))
     if round_seat:
         width = depth
-    front_x = depth / 2.0
-    back_x = -depth / 2.0
+    return _Seat(seat_top, seat_bottom, thickness, depth, width, round_seat)
+
+
+def _base(
+    rng: np.random.Generator, family: str, seat: _Seat
+) -> tuple[list[trimesh.Trimesh], float]:
+    """What holds the seat up: legs, runners, a column and foot, or a closed box.
+
+    Returns:
+        (the parts, how far they reach in front of the seat's front edge in metres).
+    """
+    parts: list[trimesh.Trimesh] = []
     protrusion = 0.0
-    front_yaw: float | None = 0.0
-
-    if round_seat:
-        parts = [_cylinder(depth / 2.0, seat_bottom, seat_top)]
-    else:
-        parts = [_box((depth, width, thickness), (0.0, 0.0, seat_bottom + thickness / 2.0))]
-
+    seat_bottom, depth, width = seat.bottom, seat.depth, seat.width
     if family in ("four_legs", "armchair", "round", "footrest", "bench"):
-        inset = 0.0 if round_seat else float(rng.uniform(0.0, 0.03))
+        inset = 0.0 if seat.round else float(rng.uniform(0.0, 0.03))
         # Legs of a round seat stand inside its circle.
-        leg_depth, leg_width = (depth / math.sqrt(2.0),) * 2 if round_seat else (depth, width)
+        leg_depth, leg_width = (depth / math.sqrt(2.0),) * 2 if seat.round else (depth, width)
         parts += _four_legs(rng, seat_bottom, leg_depth, leg_width, inset)
     elif family == "sled":
         runner_length = depth + float(rng.uniform(0.0, 0.08))
@@ -183,9 +242,9 @@ def generate_chair(seed: int, family: str | None = None) -> GeneratedChair:
         for sy in (-1.0, 1.0):
             y = sy * (width / 2.0 - 0.02)
             parts.append(_box((runner_length, 0.025, 0.02), (runner_x, y, 0.01)))
-            for x in (back_x + 0.03, front_x - 0.03):
+            for x in (seat.back_x + 0.03, seat.front_x - 0.03):
                 parts.append(_box((0.025, 0.025, seat_bottom), (x, y, seat_bottom / 2.0)))
-        protrusion = max(0.0, runner_x + runner_length / 2.0 - front_x)
+        protrusion = max(0.0, runner_x + runner_length / 2.0 - seat.front_x)
     elif family in ("pedestal", "stool"):
         column = float(rng.uniform(0.025, 0.05))
         foot = float(rng.uniform(0.12, min(0.2, depth / 2.0 + 0.02)))
@@ -194,37 +253,52 @@ def generate_chair(seed: int, family: str | None = None) -> GeneratedChair:
         else:
             parts.append(_cylinder(column, 0.02, seat_bottom))
             parts.append(_cylinder(foot, 0.0, 0.02))
-            protrusion = max(0.0, foot - front_x)
+            protrusion = max(0.0, foot - seat.front_x)
     elif family == "box_base":
         parts.append(_box((depth * 0.9, width * 0.9, seat_bottom), (0.0, 0.0, seat_bottom / 2.0)))
+    return parts, protrusion
 
-    if family == "footrest":
-        reach = float(rng.uniform(0.04, 0.12))
-        bar_z = float(rng.uniform(0.06, max(0.07, seat_top - 0.12)))
-        parts.append(_box((0.02, width, 0.02), (front_x + reach, 0.0, bar_z)))
-        for sy in (-1.0, 1.0):
-            parts.append(
-                _box(
-                    (reach, 0.02, 0.02),
-                    (front_x + reach / 2.0, sy * (width / 2.0 - 0.01), bar_z),
-                )
+
+def _footrest(rng: np.random.Generator, seat: _Seat) -> tuple[list[trimesh.Trimesh], float]:
+    """A bar in front of the seat on two side rails (a high chair's).
+
+    Returns:
+        (the parts, how far they reach in front of the seat's front edge in metres).
+    """
+    reach = float(rng.uniform(0.04, 0.12))
+    bar_z = float(rng.uniform(0.06, max(0.07, seat.top - 0.12)))
+    parts = [_box((0.02, seat.width, 0.02), (seat.front_x + reach, 0.0, bar_z))]
+    for sy in (-1.0, 1.0):
+        parts.append(
+            _box(
+                (reach, 0.02, 0.02),
+                (seat.front_x + reach / 2.0, sy * (seat.width / 2.0 - 0.01), bar_z),
             )
-        protrusion = reach + 0.01
+        )
+    return parts, reach + 0.01
 
-    if family in ("stool", "bench"):
-        front_yaw = None
-    else:
-        parts += _backrest(rng, seat_top, back_x, width)
-    if family == "armchair":
-        arm_height = float(rng.uniform(0.10, 0.18))
-        for sy in (-1.0, 1.0):
-            parts.append(
-                _box(
-                    (depth, 0.03, arm_height),
-                    (0.0, sy * (width / 2.0 - 0.015), seat_top + arm_height / 2.0),
-                )
-            )
 
+def _armrests(rng: np.random.Generator, seat: _Seat) -> list[trimesh.Trimesh]:
+    """Two armrest panels along the seat's sides, 10-18 cm high."""
+    arm_height = float(rng.uniform(0.10, 0.18))
+    return [
+        _box(
+            (seat.depth, 0.03, arm_height),
+            (0.0, sy * (seat.width / 2.0 - 0.015), seat.top + arm_height / 2.0),
+        )
+        for sy in (-1.0, 1.0)
+    ]
+
+
+def _placed(
+    parts: list[trimesh.Trimesh],
+    family: str,
+    seed: int,
+    front_yaw: float | None,
+    seat: _Seat,
+    protrusion: float,
+) -> GeneratedChair:
+    """The parts as one mesh in the calibration meshes' frame, with the truth about it."""
     mesh = trimesh.util.concatenate(parts)
     # The calibration meshes' frame: centred in x and y, lowest point at z = 0.
     centre = mesh.bounds.mean(axis=0)
@@ -235,10 +309,10 @@ def generate_chair(seed: int, family: str | None = None) -> GeneratedChair:
         family=family,
         seed=seed,
         front_yaw_rad=front_yaw,
-        seat_height_m=seat_top + float(shift[2]),
-        seat_depth_m=depth,
-        seat_width_m=width,
-        seat_front_x_m=front_x + float(shift[0]),
+        seat_height_m=seat.top + float(shift[2]),
+        seat_depth_m=seat.depth,
+        seat_width_m=seat.width,
+        seat_front_x_m=seat.front_x + float(shift[0]),
         front_protrusion_m=protrusion,
     )
 

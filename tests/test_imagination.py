@@ -82,6 +82,34 @@ def test_preparation_is_cached(box_chair: trimesh.Trimesh) -> None:
     assert first.mass_kg > 0 and len(first.pieces) >= 1
 
 
+def test_the_chair_memory_keeps_the_most_recently_used_chairs(tmp_path, monkeypatch) -> None:
+    from skills.imagination import chair as imagination_chair
+
+    prepared: list[str] = []
+
+    def prepare(mesh: trimesh.Trimesh, digest: str) -> str:
+        prepared.append(digest)
+        return digest
+
+    monkeypatch.setenv("BEARCHAIR_CACHE", str(tmp_path))
+    monkeypatch.setattr(imagination_chair, "_memory", {})
+    monkeypatch.setattr(imagination_chair, "read_cached_arrays", lambda path: None)
+    monkeypatch.setattr(imagination_chair, "write_cached_arrays", lambda path, arrays: None)
+    monkeypatch.setattr(imagination_chair, "_to_cache", lambda chair: {})
+    monkeypatch.setattr(imagination_chair, "_prepare", prepare)
+    limit = imagination_chair.MEMORY_MAX_CHAIRS
+    meshes = [trimesh.creation.box(extents=(0.3, 0.3, 0.4 + 0.01 * i)) for i in range(limit + 1)]
+    for mesh in meshes[:limit]:
+        prepare_chair(mesh)
+    prepare_chair(meshes[0])  # used again: now the most recent
+    prepare_chair(meshes[limit])  # one too many: the least recently used (1) goes
+    assert len(prepared) == limit + 1 and len(imagination_chair._memory) == limit
+    prepare_chair(meshes[0])
+    assert len(prepared) == limit + 1
+    prepare_chair(meshes[1])
+    assert len(prepared) == limit + 2 and len(imagination_chair._memory) == limit
+
+
 def test_chair_stands_and_tips_over_on_its_support_hull(box_chair: trimesh.Trimesh) -> None:
     from skills.imagination.simulation import (
         ChairBody,

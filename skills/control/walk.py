@@ -19,6 +19,7 @@ that measurement is within the final tolerance (3 cm, 5 degrees).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import logging
 import math
@@ -158,85 +159,151 @@ def walk_path(
     Raises:
         WalkError: an empty path or a non-positive ``dt_s``.
     """
-    if not path:
-        raise WalkError("cannot walk an empty path")
-    if dt_s <= 0.0:
-        raise WalkError(f"the control period must be positive, got {dt_s}")
+    _check_walk(path, dt_s)
     estimate = _PoseEstimate(humanoid, locate)
     began = clock.now()
     pose = estimate()
     limit_s = timeout_s if timeout_s is not None else walk_timeout_s(path, gains, pose)
-    pid_x = PID(gains.kp_xy, gains.ki_xy, gains.kd_xy, integral_limit=0.05)
-    pid_y = PID(gains.kp_xy, gains.ki_xy, gains.kd_xy, integral_limit=0.05)
-    pid_theta = PID(gains.kp_theta, gains.ki_theta, gains.kd_theta, integral_limit=0.2)
+    pids = _controllers(gains)
     goal = path[-1]
     index = 0
     last_frame_s = clock.now()
-
-    def finish(reached: bool, final_pose: SE2Pose, reason: str = "") -> WalkResult:
-        humanoid.stop()
-        error_m = final_pose.distance_to(goal)
-        error_rad = abs(wrap_angle(goal.theta - final_pose.theta))
-        if estimate.unseen_steps:
-            logger.info(
-                "walk: tag not seen in %d of %d steps (odometry used)",
-                estimate.unseen_steps,
-                estimate.steps,
-            )
-        return WalkResult(reached, error_m, error_rad, clock.now() - began, reason)
-
+    finish = functools.partial(_finish, humanoid, clock, estimate, goal, began)
     try:
         while True:
             if cancel is not None and cancel.is_set():
                 return finish(False, pose, "cancelled")
             if clock.now() - began > limit_s:
-                return finish(
-                    False,
-                    pose,
-                    f"timed out after {limit_s:.0f} s at {pose.distance_to(goal):.3f} m from the goal"
-                    f" (tag unseen in {estimate.unseen_steps} of {estimate.steps} steps)",
-                )
+                return finish(False, pose, _timed_out(limit_s, pose, goal, estimate))
             target = path[index]
             ex, ey, etheta = _errors(pose, target)
             distance = math.hypot(ex, ey)
             last = index == len(path) - 1
-            if not last and (
-                distance < gains.waypoint_tolerance_m and abs(etheta) < gains.waypoint_tolerance_rad
+            if not last and _within(
+                distance, etheta, gains.waypoint_tolerance_m, gains.waypoint_tolerance_rad
             ):
                 index += 1
-                for pid in (pid_x, pid_y, pid_theta):
-                    pid.reset()
+                _reset(pids)
                 continue
-            if (
-                last
-                and distance < gains.stop_tolerance_m
-                and abs(etheta) < gains.stop_tolerance_rad
-            ):
-                humanoid.stop()
-                clock.sleep(gains.settle_s)
-                last_frame_s = clock.now()
-                pose = estimate()
-                if (
-                    pose.distance_to(goal) <= gains.final_tolerance_m
-                    and abs(wrap_angle(goal.theta - pose.theta)) <= gains.final_tolerance_rad
-                ):
+            if last and _within(distance, etheta, gains.stop_tolerance_m, gains.stop_tolerance_rad):
+                last_frame_s, pose = _stop_and_settle(humanoid, clock, estimate, gains)
+                if _at_goal(pose, goal, gains):
                     return finish(True, pose)
-                for pid in (pid_x, pid_y, pid_theta):
-                    pid.reset()
+                _reset(pids)
                 continue
-            vx = pid_x.update(ex, dt_s)
-            vy = pid_y.update(ey, dt_s)
-            omega = pid_theta.update(etheta, dt_s)
-            # Scale x and y together so the walking direction is kept under saturation.
-            scale = max(1.0, abs(vx) / gains.max_vx_mps, abs(vy) / gains.max_vy_mps)
-            omega = max(-gains.max_omega_radps, min(gains.max_omega_radps, omega))
-            humanoid.set_velocity(vx / scale, vy / scale, omega)
+            _command(humanoid, pids, (ex, ey, etheta), dt_s, gains)
             clock.sleep(dt_s)
-            period_s = gains.track_period_s if estimate.seen else gains.lost_track_period_s
-            fresh = clock.now() - last_frame_s >= period_s - 1e-6
-            if fresh:
-                last_frame_s = clock.now()
+            fresh, last_frame_s = _frame_due(clock, estimate, last_frame_s, gains)
             pose = estimate(fresh=fresh)
     except BaseException:
         humanoid.stop()
         raise
+
+
+def _check_walk(path: tuple[SE2Pose, ...], dt_s: float) -> None:
+    """Raises WalkError for an empty path or a non-positive control period."""
+    if not path:
+        raise WalkError("cannot walk an empty path")
+    if dt_s <= 0.0:
+        raise WalkError(f"the control period must be positive, got {dt_s}")
+
+
+def _within(distance_m: float, error_rad: float, tolerance_m: float, tolerance_rad: float) -> bool:
+    """Whether a distance and a yaw error are both strictly inside their tolerances."""
+    return distance_m < tolerance_m and abs(error_rad) < tolerance_rad
+
+
+def _frame_due(
+    clock: Clock, estimate: _PoseEstimate, last_frame_s: float, gains: WalkGains
+) -> tuple[bool, float]:
+    """Whether a tag frame is due now (one per tracking period: shorter while the tag is
+    seen), and the clock time of the last frame (seconds), now if it is due."""
+    period_s = gains.track_period_s if estimate.seen else gains.lost_track_period_s
+    fresh = clock.now() - last_frame_s >= period_s - 1e-6
+    if fresh:
+        last_frame_s = clock.now()
+    return fresh, last_frame_s
+
+
+def _controllers(gains: WalkGains) -> tuple[PID, PID, PID]:
+    """The PIDs on the forward, left and yaw errors."""
+    pid_x = PID(gains.kp_xy, gains.ki_xy, gains.kd_xy, integral_limit=0.05)
+    pid_y = PID(gains.kp_xy, gains.ki_xy, gains.kd_xy, integral_limit=0.05)
+    pid_theta = PID(gains.kp_theta, gains.ki_theta, gains.kd_theta, integral_limit=0.2)
+    return pid_x, pid_y, pid_theta
+
+
+def _reset(pids: tuple[PID, PID, PID]) -> None:
+    for pid in pids:
+        pid.reset()
+
+
+def _command(
+    humanoid: Humanoid,
+    pids: tuple[PID, PID, PID],
+    errors: tuple[float, float, float],
+    dt_s: float,
+    gains: WalkGains,
+) -> None:
+    """Sends the PIDs' velocity for the (forward m, left m, yaw rad) errors, saturated."""
+    pid_x, pid_y, pid_theta = pids
+    ex, ey, etheta = errors
+    vx = pid_x.update(ex, dt_s)
+    vy = pid_y.update(ey, dt_s)
+    omega = pid_theta.update(etheta, dt_s)
+    # Scale x and y together so the walking direction is kept under saturation.
+    scale = max(1.0, abs(vx) / gains.max_vx_mps, abs(vy) / gains.max_vy_mps)
+    omega = max(-gains.max_omega_radps, min(gains.max_omega_radps, omega))
+    humanoid.set_velocity(vx / scale, vy / scale, omega)
+
+
+def _stop_and_settle(
+    humanoid: Humanoid, clock: Clock, estimate: _PoseEstimate, gains: WalkGains
+) -> tuple[float, SE2Pose]:
+    """Stops, lets the robot settle and measures it from a fresh tag frame.
+
+    Returns:
+        (the clock's time of that frame in seconds, the pose measured).
+    """
+    humanoid.stop()
+    clock.sleep(gains.settle_s)
+    last_frame_s = clock.now()
+    return last_frame_s, estimate()
+
+
+def _at_goal(pose: SE2Pose, goal: SE2Pose, gains: WalkGains) -> bool:
+    """Whether ``pose`` is within the final tolerances of ``goal``."""
+    return (
+        pose.distance_to(goal) <= gains.final_tolerance_m
+        and abs(wrap_angle(goal.theta - pose.theta)) <= gains.final_tolerance_rad
+    )
+
+
+def _timed_out(limit_s: float, pose: SE2Pose, goal: SE2Pose, estimate: _PoseEstimate) -> str:
+    return (
+        f"timed out after {limit_s:.0f} s at {pose.distance_to(goal):.3f} m from the goal"
+        f" (tag unseen in {estimate.unseen_steps} of {estimate.steps} steps)"
+    )
+
+
+def _finish(
+    humanoid: Humanoid,
+    clock: Clock,
+    estimate: _PoseEstimate,
+    goal: SE2Pose,
+    began: float,
+    reached: bool,
+    final_pose: SE2Pose,
+    reason: str = "",
+) -> WalkResult:
+    """Stops the robot and reports the walk begun at ``began`` (clock seconds)."""
+    humanoid.stop()
+    error_m = final_pose.distance_to(goal)
+    error_rad = abs(wrap_angle(goal.theta - final_pose.theta))
+    if estimate.unseen_steps:
+        logger.info(
+            "walk: tag not seen in %d of %d steps (odometry used)",
+            estimate.unseen_steps,
+            estimate.steps,
+        )
+    return WalkResult(reached, error_m, error_rad, clock.now() - began, reason)

@@ -124,7 +124,6 @@ _JOINT_TABLE = (
 # fmt: on
 JOINTS: tuple[AgentJoint, ...] = tuple(AgentJoint(*row) for row in _JOINT_TABLE)
 
-JOINT_NAMES: tuple[str, ...] = tuple(joint.name for joint in JOINTS)
 LINK_NAMES: tuple[str, ...] = tuple(link.name for link in LINKS)
 TOTAL_MASS_KG = sum(link.mass_kg for link in LINKS)
 

@@ -7,8 +7,9 @@ box among the yaw-only boxes is the minimum-area rectangle of the footprint (the
 vertices projected on the floor) times the full height, found exactly by rotating
 calipers (``trimesh.bounds.oriented_bounds_2D``).
 
-Everything is cached by the mesh's digest: in memory for this process and on disk
-(``cache_dir()/imagination``), so a second call on the same chair skips it.
+Everything is cached by the mesh's digest: in memory for this process (the last
+``MEMORY_MAX_CHAIRS`` chairs) and on disk (``cache_dir()/imagination``), so a second
+call on the same chair skips it.
 """
 
 from __future__ import annotations
@@ -82,7 +83,14 @@ class PreparedChair(NamedTuple):
     inertia_diag: np.ndarray
 
 
+MEMORY_MAX_CHAIRS = 4
+"""Prepared chairs kept in memory, least recently used dropped first. A mission imagines
+at most two chairs (the one scanned and, once the helper has turned it, its new scan),
+so four keep both chairs of the mission before too; an older one is read back from the
+disk cache, which holds every chair prepared."""
 _memory: dict[str, PreparedChair] = {}
+"""This process's prepared chairs by mesh digest, at most ``MEMORY_MAX_CHAIRS``, the most
+recently used last (a dict keeps its insertion order)."""
 _memory_lock = threading.Lock()
 
 
@@ -131,6 +139,7 @@ def prepare_chair(mesh: trimesh.Trimesh) -> PreparedChair:
     digest = mesh_digest(mesh)
     with _memory_lock:
         if digest in _memory:
+            _memory[digest] = _memory.pop(digest)
             return _memory[digest]
     path = cache_dir() / "imagination" / f"{digest}-{PREPARATION_VERSION}.npz"
     prepared = _from_cache(read_cached_arrays(path))
@@ -142,7 +151,10 @@ def prepare_chair(mesh: trimesh.Trimesh) -> PreparedChair:
         prepared = _prepare(mesh, digest)
         write_cached_arrays(path, _to_cache(prepared))
     with _memory_lock:
+        _memory.pop(digest, None)
         _memory[digest] = prepared
+        while len(_memory) > MEMORY_MAX_CHAIRS:
+            del _memory[next(iter(_memory))]
     return prepared
 
 

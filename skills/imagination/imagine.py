@@ -58,6 +58,7 @@ import math
 import multiprocessing
 import threading
 import time
+from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from typing import NamedTuple
 
@@ -87,6 +88,11 @@ from skills.imagination.simulation import (
     worker_initializer,
 )
 from skills.results import DropOutcome, ImaginationResult, RotationVote
+
+_Runner = Callable[
+    [list[TaskSpec], threading.Event | None], tuple[list[list[RawDrop]], float, bool]
+]
+"""Runs tasks until cancelled: (the drops per task run, physics seconds, cancelled)."""
 
 N_ROTATIONS = 8
 FIRST_POSITIONS = (0, -1, 1)
@@ -177,81 +183,23 @@ def imagine_sitting_details(
     try:
         prepared = prepare_chair(chair_mesh)
     except ChairPreparationError as error:
-        total = time.perf_counter() - started
-        result = ImaginationResult(
-            False,
-            None,
-            0,
-            0,
-            (),
-            {"prepare": total, "simulate": 0.0, "total": total},
-            f"not simulated: {error}",
-        )
-        return ImaginationDetails(result, (), 0, 0.0, None)
-    urdf = str(agent_urdf_path())
-    body = ChairBody.of(prepared)
+        return _not_simulated(error, started)
+    drops = _Drops(prepared, seed, settings, _runner(workers), cancel)
     prepared_at = time.perf_counter()
 
-    runner = _runner(workers)
-    raw: list[RawDrop] = []
-    physics_seconds = 0.0
-    cancelled = False
-    for positions in (FIRST_POSITIONS, EXTRA_POSITIONS):
-        tasks = [
-            TaskSpec(body, urdf, _drop_specs(prepared, i, positions, seed), settings)
-            for i in range(N_ROTATIONS)
-        ]
-        outcomes, seconds, cancelled = runner(tasks, cancel)
-        physics_seconds += seconds
-        raw.extend(drop for task_drops in outcomes for drop in task_drops)
-        if cancelled:
-            break
-        n_correct = sum(score_drop(drop, thresholds).correct for drop in raw)
-        if n_correct > MORE_POSITIONS_MAX_CORRECT:
-            break
+    n_correct = _drop_leaning_back(drops, thresholds)
     upright = False
-    if not cancelled and n_correct == 0 and _offers_seat(prepared, thresholds):
+    if not drops.cancelled and n_correct == 0 and _offers_seat(prepared, thresholds):
         # No sitter leaning back found a backrest: is it a seat without one (a stool,
         # a bench)? Drop upright sitters, which balance instead of leaning back.
         upright = True
-        tasks = [
-            TaskSpec(
-                body,
-                urdf,
-                _drop_specs(prepared, i, FIRST_POSITIONS, seed, upright=True),
-                settings,
-            )
-            for i in range(N_ROTATIONS)
-        ]
-        outcomes, seconds, cancelled = runner(tasks, cancel)
-        physics_seconds += seconds
-        raw.extend(drop for task_drops in outcomes for drop in task_drops)
+        drops.run([drops.task(i, FIRST_POSITIONS, upright=True) for i in range(N_ROTATIONS)])
     extra = 0
-    if not cancelled:
-        # A split vote: drop again where the votes disagree.
-        by_rotation = _correct_by_rotation(tuple(score_drop(d, thresholds) for d in raw))
-        if max(len(v) for v in by_rotation.values()) >= MIN_CORRECT:
-            _, contested, holes = _vote(by_rotation, WINDOW_HALF_WIDTH)
-            if len(contested) > 1 or holes:
-                tasks = [
-                    TaskSpec(
-                        body,
-                        urdf,
-                        _drop_specs(
-                            prepared, i, FIRST_POSITIONS, seed, repeat=repeat, upright=upright
-                        ),
-                        settings,
-                    )
-                    for i in sorted(set(contested) | set(holes))
-                    for repeat in range(1, SPLIT_SETTLE_REPEATS + 1)
-                ]
-                outcomes, seconds, cancelled = runner(tasks, cancel)
-                physics_seconds += seconds
-                more = [drop for task_drops in outcomes for drop in task_drops]
-                raw.extend(more)
-                extra = len(more)
+    if not drops.cancelled:
+        extra = _settle_split_vote(drops, thresholds, upright)
     simulated_at = time.perf_counter()
 
+    raw = drops.raw
     raw.sort(
         key=lambda d: (
             d.spec.upright,
@@ -260,22 +208,140 @@ def imagine_sitting_details(
             _position_order(d.spec.position_index),
         )
     )
-    drops = tuple(score_drop(drop, thresholds) for drop in raw)
     seconds = {
         "prepare": prepared_at - started,
         "simulate": simulated_at - prepared_at,
         "total": simulated_at - started,
     }
+    result = _imagined(chair_mesh, prepared, raw, drops.cancelled, extra, seconds, thresholds, seed)
     steps = sum(drop.steps for drop in raw)
+    return ImaginationDetails(result, tuple(raw), steps, drops.physics_seconds, prepared)
+
+
+def _not_simulated(error: ChairPreparationError, started: float) -> ImaginationDetails:
+    """The details of a chair that could not be prepared (``started``: perf_counter s)."""
+    total = time.perf_counter() - started
+    result = ImaginationResult(
+        False,
+        None,
+        0,
+        0,
+        (),
+        {"prepare": total, "simulate": 0.0, "total": total},
+        f"not simulated: {error}",
+    )
+    return ImaginationDetails(result, (), 0, 0.0, None)
+
+
+class _Drops:
+    """The drops of one imagination: their tasks, run by ``runner``, and what came back.
+
+    Attributes:
+        raw: every drop simulated so far, in the order the tasks returned them.
+        physics_seconds: wall time spent stepping physics, summed over the runs.
+        cancelled: whether the last run was cancelled.
+    """
+
+    def __init__(
+        self,
+        prepared: PreparedChair,
+        seed: int,
+        settings: SimulationSettings,
+        runner: _Runner,
+        cancel: threading.Event | None,
+    ) -> None:
+        self._prepared = prepared
+        self._seed = seed
+        self._settings = settings
+        self._urdf = str(agent_urdf_path())
+        self._body = ChairBody.of(prepared)
+        self._runner = runner
+        self._cancel = cancel
+        self.raw: list[RawDrop] = []
+        self.physics_seconds = 0.0
+        self.cancelled = False
+
+    def task(
+        self,
+        rotation_index: int,
+        positions: tuple[int, ...],
+        repeat: int = 0,
+        upright: bool = False,
+    ) -> TaskSpec:
+        """The drops of one rotation as one task (see ``_drop_specs``)."""
+        specs = _drop_specs(
+            self._prepared, rotation_index, positions, self._seed, repeat=repeat, upright=upright
+        )
+        return TaskSpec(self._body, self._urdf, specs, self._settings)
+
+    def run(self, tasks: list[TaskSpec]) -> list[RawDrop]:
+        """Runs the tasks (until cancelled); keeps and returns the drops that came back."""
+        outcomes, seconds, self.cancelled = self._runner(tasks, self._cancel)
+        self.physics_seconds += seconds
+        more = [drop for task_drops in outcomes for drop in task_drops]
+        self.raw.extend(more)
+        return more
+
+
+def _drop_leaning_back(drops: _Drops, thresholds: SamThresholds) -> int:
+    """The paper's drops: the first positions of every rotation, then the extra positions
+    if at most ``MORE_POSITIONS_MAX_CORRECT`` were correct sittings.
+
+    Returns:
+        The correct sittings among the drops so far (0 when cancelled first).
+    """
+    n_correct = 0
+    for positions in (FIRST_POSITIONS, EXTRA_POSITIONS):
+        drops.run([drops.task(i, positions) for i in range(N_ROTATIONS)])
+        if drops.cancelled:
+            break
+        n_correct = sum(score_drop(drop, thresholds).correct for drop in drops.raw)
+        if n_correct > MORE_POSITIONS_MAX_CORRECT:
+            break
+    return n_correct
+
+
+def _settle_split_vote(drops: _Drops, thresholds: SamThresholds, upright: bool) -> int:
+    """A split vote: drops again at every contested rotation and hole (module doc, 5).
+
+    Returns:
+        How many drops were added (0 when the vote is not split).
+    """
+    by_rotation = _correct_by_rotation(tuple(score_drop(d, thresholds) for d in drops.raw))
+    if max(len(v) for v in by_rotation.values()) < MIN_CORRECT:
+        return 0
+    _, contested, holes = _vote(by_rotation, WINDOW_HALF_WIDTH)
+    if not (len(contested) > 1 or holes):
+        return 0
+    tasks = [
+        drops.task(i, FIRST_POSITIONS, repeat=repeat, upright=upright)
+        for i in sorted(set(contested) | set(holes))
+        for repeat in range(1, SPLIT_SETTLE_REPEATS + 1)
+    ]
+    return len(drops.run(tasks))
+
+
+def _imagined(
+    chair_mesh: trimesh.Trimesh,
+    prepared: PreparedChair,
+    raw: list[RawDrop],
+    cancelled: bool,
+    extra_drops: int,
+    seconds: dict[str, float],
+    thresholds: SamThresholds,
+    seed: int,
+) -> ImaginationResult:
+    """The result from the sorted raw drops: scored, voted on, the direction checked."""
+    drops = tuple(score_drop(drop, thresholds) for drop in raw)
     if cancelled:
         result = ImaginationResult(False, None, 0, len(drops), drops, seconds, "cancelled")
     else:
-        result = choose_sitting_pose(prepared, drops, seconds, raw, extra_drops=extra)
+        result = choose_sitting_pose(prepared, drops, seconds, raw, extra_drops=extra_drops)
     result = result._replace(T_mesh_chair=np.linalg.inv(prepared.T_obb_mesh))
     if result.sitting_pose is not None:
         sitting_pose, backrest = check_direction(chair_mesh, result.sitting_pose, seed=seed)
         result = result._replace(sitting_pose=sitting_pose, backrest=backrest)
-    return ImaginationDetails(result, tuple(raw), steps, physics_seconds, prepared)
+    return result
 
 
 def choose_sitting_pose(
@@ -314,33 +380,56 @@ def choose_sitting_pose(
     )
     share = counts[best] / sum(counts)
     split = extra_drops > 0 or len(contested) > 1 or bool(holes)
-    resolved_by = ""
+    best, chosen, resolved_by = _resolve_vote(
+        best, holes, by_rotation, counts, split, window_half_width
+    )
+    vote = RotationVote(counts, best, runner_up, share, split, resolved_by, extra_drops)
+    pose = _weighted_pose(prepared, chosen)
+    return ImaginationResult(True, pose, len(chosen), len(drops), drops, seconds, "", vote=vote)
+
+
+def _resolve_vote(
+    best: int,
+    holes: list[int],
+    by_rotation: dict[int, list[DropOutcome]],
+    counts: tuple[int, ...],
+    split: bool,
+    window_half_width: int,
+) -> tuple[int, list[DropOutcome], str]:
+    """The rotation a vote settles on, the sittings its pose is averaged over, and what
+    decided it ("" for an unsplit vote).
+
+    A hole whose neighbours' sitters turned toward it replaces ``best`` (module doc, 5).
+    """
     chosen = by_rotation[best]
     hole = next((h for h in holes if _pulled_toward(h, by_rotation, window_half_width)), None)
     if hole is not None:
         # Both neighbours of a rotation sit, the rotation itself never does, and the
         # sitters dropped beside it turned toward it: its window's sittings give the pose.
-        best = hole
         chosen = [
             d
             for offset in range(-window_half_width, window_half_width + 1)
-            for d in by_rotation[(best + offset) % N_ROTATIONS]
+            for d in by_rotation[(hole + offset) % N_ROTATIONS]
         ]
-        resolved_by = "sitters on either side turning toward a rotation without its own"
-    elif holes:
-        resolved_by = "the chosen rotation (sitters beside the gap did not turn toward it)"
-    elif split:
+        return hole, chosen, "sitters on either side turning toward a rotation without its own"
+    if holes:
+        return best, chosen, "the chosen rotation (sitters beside the gap did not turn toward it)"
+    if not split:
+        return best, chosen, ""
 
-        def key(i: int) -> tuple[int, int]:
-            window = sum(
-                counts[(i + offset) % N_ROTATIONS]
-                for offset in range(-window_half_width, window_half_width + 1)
-            )
-            return window, counts[i]
+    def key(i: int) -> tuple[int, int]:
+        window = sum(
+            counts[(i + offset) % N_ROTATIONS]
+            for offset in range(-window_half_width, window_half_width + 1)
+        )
+        return window, counts[i]
 
-        tied = any(key(i) == key(best) for i in range(N_ROTATIONS) if i != best and counts[i])
-        resolved_by = "mean J + L (the paper's tie-break)" if tied else "the window vote"
-    vote = RotationVote(counts, best, runner_up, share, split, resolved_by, extra_drops)
+    tied = any(key(i) == key(best) for i in range(N_ROTATIONS) if i != best and counts[i])
+    return best, chosen, "mean J + L (the paper's tie-break)" if tied else "the window vote"
+
+
+def _weighted_pose(prepared: PreparedChair, chosen: list[DropOutcome]) -> SittingPose:
+    """The 1 / (J + L) weighted mean of the chosen sittings, in the mesh frame (p, γ)."""
     weights = np.array([1.0 / max(_jl(d), 1e-6) for d in chosen])
     position_chair = (weights[:, None] * np.array([d.position for d in chosen])).sum(
         0
@@ -351,8 +440,7 @@ def choose_sitting_pose(
     )
     T_mesh_obb = np.linalg.inv(prepared.T_obb_mesh)
     position = transform_points(T_mesh_obb, position_chair[None, :])[0]
-    pose = SittingPose(position, wrap_angle(yaw_chair - prepared.gamma_obb_rad))
-    return ImaginationResult(True, pose, len(chosen), len(drops), drops, seconds, "", vote=vote)
+    return SittingPose(position, wrap_angle(yaw_chair - prepared.gamma_obb_rad))
 
 
 def _offers_seat(prepared: PreparedChair, thresholds: SamThresholds) -> bool:
@@ -491,13 +579,13 @@ def _drop_specs(
     return tuple(specs)
 
 
-# Runners: the same tasks, in this process or in a pool of worker processes.
-_Runner = "callable(tasks, cancel) -> (outcomes per task, physics seconds, cancelled)"
 _pools: dict[int, ProcessPoolExecutor] = {}
+"""One pool per worker count asked for (in practice one: ``DEFAULT_WORKERS``)."""
 _pools_lock = threading.Lock()
 
 
-def _runner(workers: int):
+def _runner(workers: int) -> _Runner:
+    """The same tasks, in this process or in a pool of worker processes."""
     if workers <= 1:
         return _run_here
     return lambda tasks, cancel: _run_in_pool(_pool(workers), tasks, cancel)
@@ -533,6 +621,7 @@ def _run_in_pool(
 
 
 _pings: dict[int, list[Future]] = {}
+"""Each pool's start-up no-ops (one per worker), as many pools as ``_pools``."""
 
 
 def _pool(workers: int) -> ProcessPoolExecutor:

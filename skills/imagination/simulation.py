@@ -172,6 +172,7 @@ TRUNK_LINKS = ("pelvis", "chest", "head")
 """Links whose contact with the floor ends a drop as fallen."""
 
 _client: dict[str, Any] = {}
+"""This process's pybullet module and DIRECT client id: two keys, bounded by design."""
 
 
 def _pybullet() -> Any:
@@ -234,6 +235,17 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
         spent stepping the physics.
     """
     p, cid = _connection()
+    floor, chair_shape, support_shape = _reset_world(p, cid, task)
+    active = _place_drops(p, cid, task, floor, chair_shape, support_shape)
+    return _simulate(p, cid, task, active)
+
+
+def _reset_world(p: Any, cid: int, task: TaskSpec) -> tuple[int, int, int]:
+    """Empties the world and sets its physics; adds the floor and the chair's shapes.
+
+    Returns:
+        (floor body id, the chair's boxes' collision shape, their hull's collision shape).
+    """
     settings = task.settings
     chair = task.chair
     p.resetSimulation(physicsClientId=cid)
@@ -255,6 +267,20 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
     support_shape = p.createCollisionShape(
         p.GEOM_MESH, fileName=chair.support_obj, physicsClientId=cid
     )
+    return floor, chair_shape, support_shape
+
+
+def _place_drops(
+    p: Any, cid: int, task: TaskSpec, floor: int, chair_shape: int, support_shape: int
+) -> list[dict[str, Any]]:
+    """Adds every drop's chair copy and agent, posed and driven, ready to fall.
+
+    Returns:
+        One record per drop, in ``task.drops`` order (what ``_stop_reason`` and
+        ``_measure`` read).
+    """
+    settings = task.settings
+    chair = task.chair
     spacing = float(max(chair.extents_m[:2])) + 2.5
     agent_joint_indices: list[int] = []
     link_indices: list[int] = []
@@ -264,17 +290,7 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
     for j, drop in enumerate(task.drops):
         origin = np.array([0.0, j * spacing, 0.0])
         chair_body = add_chair(p, cid, chair, chair_shape, support_shape, floor, origin, settings)
-        quat = p.getQuaternionFromEuler([0.0, 0.0, drop.yaw_rad])
-        z = chair.z_top_m + settings.drop_clearance_m
-        agent = p.loadURDF(
-            task.urdf_path,
-            basePosition=[origin[0] + drop.xy_m[0], origin[1] + drop.xy_m[1], z],
-            baseOrientation=quat,
-            # Cached graphics shapes: the agent's visuals (which a DIRECT world never
-            # draws) are built once per world, not per drop: half of loadURDF's 3.5 ms.
-            flags=p.URDF_USE_INERTIA_FROM_FILE | p.URDF_ENABLE_CACHED_GRAPHICS_SHAPES,
-            physicsClientId=cid,
-        )
+        agent, z, quat = _load_agent(p, cid, task, drop, origin)
         if not agent_joint_indices:
             agent_joint_indices, link_indices = _index_maps(p, cid, agent)
             trunk = {link_indices[LINK_NAMES.index(name)] for name in TRUNK_LINKS}
@@ -286,30 +302,8 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
         targets = upright_targets() if drop.upright else [joint.pre_sitting_rad for joint in JOINTS]
         for index, angle in zip(agent_joint_indices, targets, strict=True):
             p.resetJointState(agent, index, angle, physicsClientId=cid)
-        # Raise the agent until it starts clear of the chair: the legs hang below the
-        # pelvis and would otherwise start inside a tall backrest.
-        for _ in range(20):
-            if not p.getClosestPoints(agent, chair_body, 0.005, linkIndexB=-1, physicsClientId=cid):
-                break
-            z += 0.05
-            p.resetBasePositionAndOrientation(
-                agent,
-                [origin[0] + drop.xy_m[0], origin[1] + drop.xy_m[1], z],
-                quat,
-                physicsClientId=cid,
-            )
-        for link_index in link_indices:
-            p.changeDynamics(
-                agent, link_index, lateralFriction=settings.chair_friction, physicsClientId=cid
-            )
-        p.setJointMotorControlArray(
-            agent,
-            agent_joint_indices,
-            p.POSITION_CONTROL,
-            targetPositions=targets,
-            forces=torques,
-            physicsClientId=cid,
-        )
+        _lift_clear_of_chair(p, cid, agent, chair_body, origin, drop, z, quat)
+        _drive(p, cid, agent, agent_joint_indices, link_indices, targets, torques, settings)
         active.append(
             {
                 "index": j,
@@ -323,7 +317,89 @@ def run_task(task: TaskSpec) -> tuple[list[RawDrop], float]:
                 "trunk": trunk,
             }
         )
+    return active
 
+
+def _load_agent(
+    p: Any, cid: int, task: TaskSpec, drop: DropSpec, origin: np.ndarray
+) -> tuple[int, float, Any]:
+    """Loads one drop's agent above its chair copy at ``origin`` (metres, world frame).
+
+    Returns:
+        (the agent's body id, its pelvis start height in metres, its start quaternion).
+    """
+    quat = p.getQuaternionFromEuler([0.0, 0.0, drop.yaw_rad])
+    z = task.chair.z_top_m + task.settings.drop_clearance_m
+    agent = p.loadURDF(
+        task.urdf_path,
+        basePosition=[origin[0] + drop.xy_m[0], origin[1] + drop.xy_m[1], z],
+        baseOrientation=quat,
+        # Cached graphics shapes: the agent's visuals (which a DIRECT world never
+        # draws) are built once per world, not per drop: half of loadURDF's 3.5 ms.
+        flags=p.URDF_USE_INERTIA_FROM_FILE | p.URDF_ENABLE_CACHED_GRAPHICS_SHAPES,
+        physicsClientId=cid,
+    )
+    return agent, z, quat
+
+
+def _drive(
+    p: Any,
+    cid: int,
+    agent: int,
+    joint_indices: list[int],
+    link_indices: list[int],
+    targets: list[float],
+    torques: list[float],
+    settings: SimulationSettings,
+) -> None:
+    """Gives the agent's links their friction and holds its joints at ``targets``
+    (radians) with position motors of at most ``torques`` (N m)."""
+    for link_index in link_indices:
+        p.changeDynamics(
+            agent, link_index, lateralFriction=settings.chair_friction, physicsClientId=cid
+        )
+    p.setJointMotorControlArray(
+        agent,
+        joint_indices,
+        p.POSITION_CONTROL,
+        targetPositions=targets,
+        forces=torques,
+        physicsClientId=cid,
+    )
+
+
+def _lift_clear_of_chair(
+    p: Any,
+    cid: int,
+    agent: int,
+    chair_body: int,
+    origin: np.ndarray,
+    drop: DropSpec,
+    z: float,
+    quat: Any,
+) -> None:
+    """Raises the agent by 5 cm steps (20 at most) from height ``z`` (metres) until it
+    starts clear of the chair: the legs hang below the pelvis and would otherwise start
+    inside a tall backrest."""
+    for _ in range(20):
+        if not p.getClosestPoints(agent, chair_body, 0.005, linkIndexB=-1, physicsClientId=cid):
+            break
+        z += 0.05
+        p.resetBasePositionAndOrientation(
+            agent,
+            [origin[0] + drop.xy_m[0], origin[1] + drop.xy_m[1], z],
+            quat,
+            physicsClientId=cid,
+        )
+
+
+def _simulate(
+    p: Any, cid: int, task: TaskSpec, active: list[dict[str, Any]]
+) -> tuple[list[RawDrop], float]:
+    """Steps the world until every drop has stopped, measuring and removing each as it
+    stops (see ``run_task``)."""
+    settings = task.settings
+    chair = task.chair
     results: list[RawDrop | None] = [None] * len(task.drops)
     max_steps = math.ceil(settings.max_time_s / settings.time_step_s)
     min_steps = int(settings.min_time_s / settings.time_step_s)

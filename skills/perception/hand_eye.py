@@ -313,6 +313,30 @@ def detect_board(
         BoardNotSeenError: fewer than :data:`MIN_BOARD_CORNERS` corners, corners on one
             line, no pose, or a pose that reprojects worse than :data:`MAX_REPROJECTION_PX`.
     """
+    object_points, image_points, found = _board_corners(rgb, board)
+    K = intrinsics.matrix()
+    dist = np.zeros(5) if distortion is None else np.asarray(distortion, dtype=float)
+    rvec, tvec = _planar_pose(object_points, image_points, K, dist, found)
+    projected, _ = cv2.projectPoints(object_points, rvec, tvec, K, dist)
+    offsets = projected.reshape(-1, 2) - np.asarray(image_points).reshape(-1, 2)
+    rms = float(np.sqrt(np.mean(np.sum(offsets**2, axis=1))))
+    if rms > MAX_REPROJECTION_PX:
+        raise BoardNotSeenError(
+            f"calibration board: its {found} corners reproject {rms:.2f} px RMS from the best "
+            f"pose (at most {MAX_REPROJECTION_PX} px): wrong intrinsics or a bent board"
+        )
+    T_camera_board = np.eye(4)
+    T_camera_board[:3, :3] = cv2.Rodrigues(rvec)[0]
+    T_camera_board[:3, 3] = np.asarray(tvec).reshape(3)
+    return BoardDetection(T_camera_board, found, rms)
+
+
+def _board_corners(rgb: np.ndarray, board: BoardSpec) -> tuple[np.ndarray, np.ndarray, int]:
+    """The ChArUco corners found in the image: (board points, image points, how many).
+
+    Raises:
+        BoardNotSeenError: fewer than :data:`MIN_BOARD_CORNERS` corners, or on one line.
+    """
     image = np.ascontiguousarray(rgb)
     gray = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) if image.ndim == 3 else image
     corners_px, ids, _, marker_ids = _detector(board).detectBoard(gray)
@@ -329,29 +353,29 @@ def detect_board(
             f"calibration board seen edge-on: its {found} corners found lie on one line"
         )
     object_points, image_points = cv_board.matchImagePoints(corners_px, ids)
-    K = intrinsics.matrix()
-    dist = np.zeros(5) if distortion is None else np.asarray(distortion, dtype=float)
+    return object_points, image_points, found
+
+
+def _planar_pose(
+    object_points: np.ndarray,
+    image_points: np.ndarray,
+    K: np.ndarray,
+    dist: np.ndarray,
+    found: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(rvec, tvec) of the board from its ``found`` corners: the better IPPE solution,
+    refined by Levenberg-Marquardt.
+
+    Raises:
+        BoardNotSeenError: no pose fits the corners.
+    """
     count, rvecs, tvecs, errors = cv2.solvePnPGeneric(
         object_points, image_points, K, dist, flags=cv2.SOLVEPNP_IPPE
     )
     if not count:
         raise BoardNotSeenError(f"calibration board: no pose fits its {found} corners")
     best = int(np.argmin(np.asarray(errors).reshape(-1)))
-    rvec, tvec = cv2.solvePnPRefineLM(
-        object_points, image_points, K, dist, rvecs[best], tvecs[best]
-    )
-    projected, _ = cv2.projectPoints(object_points, rvec, tvec, K, dist)
-    offsets = projected.reshape(-1, 2) - np.asarray(image_points).reshape(-1, 2)
-    rms = float(np.sqrt(np.mean(np.sum(offsets**2, axis=1))))
-    if rms > MAX_REPROJECTION_PX:
-        raise BoardNotSeenError(
-            f"calibration board: its {found} corners reproject {rms:.2f} px RMS from the best "
-            f"pose (at most {MAX_REPROJECTION_PX} px): wrong intrinsics or a bent board"
-        )
-    T_camera_board = np.eye(4)
-    T_camera_board[:3, :3] = cv2.Rodrigues(rvec)[0]
-    T_camera_board[:3, 3] = np.asarray(tvec).reshape(3)
-    return BoardDetection(T_camera_board, found, rms)
+    return cv2.solvePnPRefineLM(object_points, image_points, K, dist, rvecs[best], tvecs[best])
 
 
 def board_depth_ratio(

@@ -97,7 +97,6 @@ def fuse_tsdf(
         block_count=40000,
         device=device,
     )
-    trunc = config.sdf_trunc_voxels * config.voxel_size_m
     for frame, depth_m in zip(frames, depths, strict=True):
         if not np.any(depth_m):
             continue
@@ -121,7 +120,6 @@ def fuse_tsdf(
             depth_max=config.depth_max_m,
             trunc_voxel_multiplier=config.sdf_trunc_voxels,
         )
-    del trunc
     return grid
 
 
@@ -236,11 +234,7 @@ def reconstruct_chair(frames: Sequence[RGBDFrame], config: ReconstructionConfig)
         raise PerceptionError("no frames to reconstruct from")
     seconds: dict[str, float] = {}
     started = time.perf_counter()
-    for index, frame in enumerate(frames):
-        validate_frame(frame, index)
-    depths = [crop_depth(frame, config) for frame in frames]
-    if sum(int(np.count_nonzero(d)) for d in depths) < config.min_chair_points:
-        raise PerceptionError("the frames show nothing inside the scan volume")
+    depths = _cropped_depths(frames, config)
     seconds["crop"] = time.perf_counter() - started
 
     tick = time.perf_counter()
@@ -252,9 +246,7 @@ def reconstruct_chair(frames: Sequence[RGBDFrame], config: ReconstructionConfig)
         raise PerceptionError(f"the fused scan has only {len(points)} points")
 
     tick = time.perf_counter()
-    plane = fit_floor(points, config)
-    height = points @ plane[:3] + plane[3]
-    above = points[height > config.floor_band_m]
+    plane, above = _above_floor(points, config)
     seconds["floor"] = time.perf_counter() - tick
 
     tick = time.perf_counter()
@@ -278,6 +270,27 @@ def reconstruct_chair(frames: Sequence[RGBDFrame], config: ReconstructionConfig)
         seconds["mesh"] = time.perf_counter() - tick
     seconds["total"] = time.perf_counter() - started
     return ChairScan(chair_mesh, chair_points, len(frames), seconds)
+
+
+def _cropped_depths(frames: Sequence[RGBDFrame], config: ReconstructionConfig) -> list[np.ndarray]:
+    """Every frame validated and its depth cropped to the scan volume (``crop_depth``).
+
+    Raises:
+        PerceptionError: a bad frame, or too few depth pixels inside the volume.
+    """
+    for index, frame in enumerate(frames):
+        validate_frame(frame, index)
+    depths = [crop_depth(frame, config) for frame in frames]
+    if sum(int(np.count_nonzero(d)) for d in depths) < config.min_chair_points:
+        raise PerceptionError("the frames show nothing inside the scan volume")
+    return depths
+
+
+def _above_floor(points: np.ndarray, config: ReconstructionConfig) -> tuple[np.ndarray, np.ndarray]:
+    """The floor plane (``fit_floor``) and the points more than ``floor_band_m`` above it."""
+    plane = fit_floor(points, config)
+    height = points @ plane[:3] + plane[3]
+    return plane, points[height > config.floor_band_m]
 
 
 def _chair_mesh(

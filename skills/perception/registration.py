@@ -133,6 +133,14 @@ def _planar(T: np.ndarray, pivot: np.ndarray) -> np.ndarray:
     return planar
 
 
+class _FineClouds(NamedTuple):
+    """The fine stage's clouds: the new points (source) and the reference (target)."""
+
+    source: o3d.geometry.PointCloud
+    target: o3d.geometry.PointCloud
+    centre_new: np.ndarray
+
+
 @one_open3d_thread()
 def register_chair(
     new_points: np.ndarray,
@@ -157,9 +165,59 @@ def register_chair(
         raise RegistrationError(
             f"too few points to register ({len(new_points)} new, {len(reference_points)} reference)"
         )
+    centre_new = np.asarray(new_points).mean(axis=0)
+    hypotheses = _yaw_hypotheses(new_points, reference_points, centre_new, config)
+    fine = _FineClouds(
+        _cloud(new_points, config.fine_voxel_m),
+        _cloud(reference_points, config.fine_voxel_m),
+        centre_new,
+    )
+    T_old_new, fitness, rmse = _refine(hypotheses[0][1], fine, config)
+    if not new_frames:
+        if fitness >= config.min_fitness and rmse <= config.max_rmse_m:
+            return Registration(np.linalg.inv(T_old_new), fitness, rmse)
+        visible = math.nan
+    else:
+        # Judged by what the views could see; if the best-fitting hypothesis fails, the
+        # best of other yaws and the global registration are judged too.
+        reference = np.asarray(fine.target.points)
+        visible = _seen(T_old_new, reference, new_frames, config)
+        if visible < config.min_visible_fitness or rmse > config.max_rmse_m:
+            T_old_new, fitness, rmse, visible = _most_visible_fit(
+                (T_old_new, fitness, rmse, visible),
+                hypotheses,
+                new_points,
+                reference_points,
+                fine,
+                new_frames,
+                config,
+            )
+        accepted = visible >= config.min_visible_fitness or (
+            visible >= config.min_peak_visible_fitness
+            and is_visible_peak(
+                transform_points(np.linalg.inv(T_old_new), reference), new_frames, config
+            )
+        )
+        if accepted and rmse <= config.max_rmse_m:
+            return _refined_on_visible(
+                T_old_new, fitness, rmse, visible, new_points, fine, new_frames, config
+            )
+    raise _rejection(fitness, rmse, visible, config)
+
+
+def _yaw_hypotheses(
+    new_points: np.ndarray,
+    reference_points: np.ndarray,
+    centre_new: np.ndarray,
+    config: RegistrationConfig,
+) -> list[tuple[tuple[float, float], np.ndarray]]:
+    """Every ``hypothesis_step_deg`` yaw refined by a coarse ICP, best first.
+
+    Returns:
+        ((fitness rounded to 0.001, -inlier RMSE), T_old_new) per yaw, sorted by the key.
+    """
     source_coarse = _cloud(new_points, config.coarse_voxel_m)
     target_coarse = _cloud(reference_points, config.coarse_voxel_m)
-    centre_new = np.asarray(new_points).mean(axis=0)
     centre_old = np.asarray(reference_points).mean(axis=0)
     hypotheses = []
     steps = round(360.0 / config.hypothesis_step_deg)
@@ -174,81 +232,108 @@ def register_chair(
             ((round(fit.fitness, 3), -fit.inlier_rmse), np.asarray(fit.transformation))
         )
     hypotheses.sort(key=lambda h: h[0], reverse=True)
-    source_fine = _cloud(new_points, config.fine_voxel_m)
-    target_fine = _cloud(reference_points, config.fine_voxel_m)
+    return hypotheses
 
-    def refine(T_old_new: np.ndarray) -> tuple[np.ndarray, float, float]:
-        T_old_new = _planar(T_old_new, centre_new)
+
+def _refine(
+    T_old_new: np.ndarray, fine: _FineClouds, config: RegistrationConfig
+) -> tuple[np.ndarray, float, float]:
+    """A fit made planar and refined by two fine ICP stages: (T_old_new, fitness, RMSE)."""
+    T_old_new = _planar(T_old_new, fine.centre_new)
+    for distance in (config.fine_distance_m, 0.5 * config.fine_distance_m):
+        fit = _icp(fine.source, fine.target, T_old_new, distance, 30)
+        T_old_new = _planar(np.asarray(fit.transformation), fine.centre_new)
+    quality = o3d.pipelines.registration.evaluate_registration(
+        fine.source, fine.target, config.inlier_distance_m, T_old_new
+    )
+    return T_old_new, float(quality.fitness), float(quality.inlier_rmse)
+
+
+def _seen(
+    T_old_new: np.ndarray,
+    reference: np.ndarray,
+    frames: list[RGBDFrame],
+    config: RegistrationConfig,
+) -> float:
+    """The visible fitness of the reference carried by the fit into the new frames."""
+    return visible_fitness(transform_points(np.linalg.inv(T_old_new), reference), frames, config)
+
+
+def _most_visible_fit(
+    first: tuple[np.ndarray, float, float, float],
+    hypotheses: list[tuple[tuple[float, float], np.ndarray]],
+    new_points: np.ndarray,
+    reference_points: np.ndarray,
+    fine: _FineClouds,
+    frames: list[RGBDFrame],
+    config: RegistrationConfig,
+) -> tuple[np.ndarray, float, float, float]:
+    """The fit the views see best among ``first`` (T_old_new, fitness, RMSE, visible
+    fitness), the best three other yaws (15 degrees apart at least) and the global
+    registration, each refined; ties go to the higher fitness.
+
+    Returns:
+        (T_old_new, fitness, RMSE, visible fitness) of the best.
+    """
+    T_old_new, fitness, rmse, visible = first
+    reference = np.asarray(fine.target.points)
+    candidates = [T_old_new]
+    for _, T in hypotheses[1:]:
+        if all(abs(wrap_angle(yaw_of(T) - yaw_of(c))) > math.radians(15) for c in candidates):
+            candidates.append(T)
+        if len(candidates) == 4:
+            break
+    candidates.append(_global_registration(new_points, reference_points, config))
+    best = ((round(visible, 3), fitness), T_old_new, fitness, rmse, visible)
+    for candidate in candidates[1:]:
+        T, fit_fitness, fit_rmse = _refine(candidate, fine, config)
+        score = _seen(T, reference, frames, config)
+        key = (round(score, 3), fit_fitness)
+        if key > best[0]:
+            best = (key, T, fit_fitness, fit_rmse, score)
+    _, T_old_new, fitness, rmse, visible = best
+    return T_old_new, fitness, rmse, visible
+
+
+def _refined_on_visible(
+    T_old_new: np.ndarray,
+    fitness: float,
+    rmse: float,
+    visible: float,
+    new_points: np.ndarray,
+    fine: _FineClouds,
+    frames: list[RGBDFrame],
+    config: RegistrationConfig,
+) -> Registration:
+    """An accepted fit refined on what the new views saw of the reference: every such
+    point has its counterpart in the new cloud, unlike new points on sides the reference
+    lacks, which pull the fit along the chair. Fewer than 100 such points: as it is."""
+    reference = np.asarray(fine.target.points)
+    T_new_old = np.linalg.inv(T_old_new)
+    carried = transform_points(T_new_old, reference)
+    mask, _ = _visibility(carried, frames, config)
+    if mask.sum() >= 100:
+        target = _cloud(new_points, config.fine_voxel_m)
+        source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(reference[mask]))
+        centre = reference[mask].mean(axis=0)
         for distance in (config.fine_distance_m, 0.5 * config.fine_distance_m):
-            fit = _icp(source_fine, target_fine, T_old_new, distance, 30)
-            T_old_new = _planar(np.asarray(fit.transformation), centre_new)
+            fit = _icp(source, target, T_new_old, distance, 30)
+            T_new_old = _planar(np.asarray(fit.transformation), centre)
+        T_old_new = np.linalg.inv(T_new_old)
         quality = o3d.pipelines.registration.evaluate_registration(
-            source_fine, target_fine, config.inlier_distance_m, T_old_new
+            fine.source, fine.target, config.inlier_distance_m, T_old_new
         )
-        return T_old_new, float(quality.fitness), float(quality.inlier_rmse)
+        fitness, rmse = float(quality.fitness), float(quality.inlier_rmse)
+        visible = _seen(T_old_new, reference, frames, config)
+    return Registration(np.linalg.inv(T_old_new), fitness, rmse, visible)
 
-    T_old_new, fitness, rmse = refine(hypotheses[0][1])
-    if not new_frames:
-        if fitness >= config.min_fitness and rmse <= config.max_rmse_m:
-            return Registration(np.linalg.inv(T_old_new), fitness, rmse)
-        visible = math.nan
-    else:
-        # Judged by what the views could see; if the best-fitting hypothesis fails, the
-        # best of other yaws and the global registration are judged too.
-        reference = np.asarray(target_fine.points)
 
-        def seen(T: np.ndarray) -> float:
-            return visible_fitness(
-                transform_points(np.linalg.inv(T), reference), new_frames, config
-            )
-
-        visible = seen(T_old_new)
-        if visible < config.min_visible_fitness or rmse > config.max_rmse_m:
-            candidates = [T_old_new]
-            for _, T in hypotheses[1:]:
-                if all(
-                    abs(wrap_angle(yaw_of(T) - yaw_of(c))) > math.radians(15) for c in candidates
-                ):
-                    candidates.append(T)
-                if len(candidates) == 4:
-                    break
-            candidates.append(_global_registration(new_points, reference_points, config))
-            best = ((round(visible, 3), fitness), T_old_new, fitness, rmse, visible)
-            for candidate in candidates[1:]:
-                T, fit_fitness, fit_rmse = refine(candidate)
-                score = seen(T)
-                key = (round(score, 3), fit_fitness)
-                if key > best[0]:
-                    best = (key, T, fit_fitness, fit_rmse, score)
-            _, T_old_new, fitness, rmse, visible = best
-        accepted = visible >= config.min_visible_fitness or (
-            visible >= config.min_peak_visible_fitness
-            and is_visible_peak(
-                transform_points(np.linalg.inv(T_old_new), reference), new_frames, config
-            )
-        )
-        if accepted and rmse <= config.max_rmse_m:
-            # Refine on what the new views saw of the reference: every such point has
-            # its counterpart in the new cloud, unlike new points on sides the
-            # reference lacks, which pull the fit along the chair.
-            T_new_old = np.linalg.inv(T_old_new)
-            carried = transform_points(T_new_old, reference)
-            mask, _ = _visibility(carried, new_frames, config)
-            if mask.sum() >= 100:
-                target = _cloud(new_points, config.fine_voxel_m)
-                source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(reference[mask]))
-                centre = reference[mask].mean(axis=0)
-                for distance in (config.fine_distance_m, 0.5 * config.fine_distance_m):
-                    fit = _icp(source, target, T_new_old, distance, 30)
-                    T_new_old = _planar(np.asarray(fit.transformation), centre)
-                T_old_new = np.linalg.inv(T_new_old)
-                quality = o3d.pipelines.registration.evaluate_registration(
-                    source_fine, target_fine, config.inlier_distance_m, T_old_new
-                )
-                fitness, rmse = float(quality.fitness), float(quality.inlier_rmse)
-                visible = seen(T_old_new)
-            return Registration(np.linalg.inv(T_old_new), fitness, rmse, visible)
-    raise RegistrationError(
+def _rejection(
+    fitness: float, rmse: float, visible: float, config: RegistrationConfig
+) -> RegistrationError:
+    """The error of a rejected fit, with its numbers and the bounds they failed
+    (``visible`` NaN: judged without frames, by the fitness)."""
+    return RegistrationError(
         "chair registration rejected: "
         + (
             f"fitness {fitness:.2f} (need {config.min_fitness:.2f})"

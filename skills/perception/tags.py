@@ -192,7 +192,8 @@ class _Sighting(NamedTuple):
 
 
 _sightings: weakref.WeakKeyDictionary[object, _Sighting] = weakref.WeakKeyDictionary()
-"""The last sighting per arm: the next tag frame is read out around it (arms that can)."""
+"""The last sighting per arm: the next tag frame is read out around it (arms that can).
+Weak keys: an arm's entry goes with the arm, so there are as many as live arms."""
 
 
 def _window_around(corners_px: np.ndarray, image_width: int, image_height: int) -> _Sighting:
