@@ -73,7 +73,7 @@ class CheckAccessibility(SkillBehaviour):
     def __init__(self, name: str = "CheckAccessibility"):
         super().__init__(
             name,
-            reads=(keys.SEED, keys.ARENA, keys.CHAIR_MESH),
+            reads=(keys.SEED, keys.ARENA, keys.CHAIR_MESH, keys.SITTING_POSE),
             writes=(keys.ACCESSIBILITY, keys.SE2_GOAL, keys.SITTING_POSE, keys.HUMANOID_POSE),
         )
 

@@ -24,8 +24,8 @@ class InstructHelper(SkillBehaviour):
     fails, saying why, when no rotation helps and the chair already faces the humanoid.
 
     Blackboard:
-        reads ``/sitting/pose``, ``/chair/mesh``, ``/mission/arena``, ``/mission/seed``;
-        writes ``/assistance/instructions``, ``/assistance/rotations``, ``/humanoid/pose``.
+        reads ``/sitting/pose``, ``/chair/mesh``, ``/mission/arena``, ``/mission/seed``,
+        ``/assistance/instructions``, ``/assistance/rotations``; writes the last two.
     """
 
     activity = "instructing the helper"
@@ -33,8 +33,15 @@ class InstructHelper(SkillBehaviour):
     def __init__(self, name: str = "InstructHelper"):
         super().__init__(
             name,
-            reads=(keys.SITTING_POSE, keys.CHAIR_MESH, keys.ARENA, keys.SEED),
-            writes=(keys.INSTRUCTIONS, keys.ROTATIONS, keys.HUMANOID_POSE),
+            reads=(
+                keys.SITTING_POSE,
+                keys.CHAIR_MESH,
+                keys.ARENA,
+                keys.SEED,
+                keys.INSTRUCTIONS,
+                keys.ROTATIONS,
+            ),
+            writes=(keys.INSTRUCTIONS, keys.ROTATIONS),
         )
 
     def prepare(self) -> Callable[[], tuple[RotationChoice, Instruction | None]]:
@@ -93,17 +100,15 @@ class MeasureChairRotation(SkillBehaviour):
     """Measures g_rot by ICP and carries the chair and the sitting pose along with it.
 
     Blackboard:
-        reads ``/chair/points``, ``/chair/mesh``, ``/sitting/pose``;
-        writes them back moved by g_rot, and appends to ``/assistance/measured``.
+        reads ``/chair/points``, ``/chair/mesh``, ``/sitting/pose``, ``/assistance/measured``;
+        writes the first three back moved by g_rot, and appends to ``/assistance/measured``.
     """
 
     activity = "measuring the chair's rotation"
 
     def __init__(self, name: str = "MeasureChairRotation"):
-        super().__init__(
-            name,
-            writes=(keys.CHAIR_POINTS, keys.CHAIR_MESH, keys.SITTING_POSE, keys.MEASURED_ROTATIONS),
-        )
+        moved = (keys.CHAIR_POINTS, keys.CHAIR_MESH, keys.SITTING_POSE, keys.MEASURED_ROTATIONS)
+        super().__init__(name, reads=moved, writes=moved)
 
     def prepare(self) -> Callable[[], ChairRotation]:
         skills, robot = self.need()
@@ -130,28 +135,35 @@ class GiveUp(py_trees.behaviour.Behaviour):
     """Fails with the reason the chair could not be made accessible.
 
     It sits last in the assistance selector, so it is ticked only when every rotation
-    allowed has been asked for and the chair is still not accessible.
+    allowed has been asked for and the chair is still not accessible. The last failure
+    it names is the tip of the sibling ticked before it (the rotations' loop): the leaf
+    whose failure ended the last attempt.
+
+    Blackboard:
+        reads ``/assistance/rotations``.
     """
 
     def __init__(self, name: str = "GiveUp"):
         super().__init__(name=name)
         self.blackboard = self.attach_blackboard_client(name=name)
-        for key in (keys.ROTATIONS, keys.FAILURES):
-            self.blackboard.register_key(key=key, access=Access.WRITE)
+        self.blackboard.register_key(key=keys.ROTATIONS, access=Access.READ)
 
     def update(self) -> Status:
         rotations = (
             self.blackboard.get(keys.ROTATIONS) if self.blackboard.exists(keys.ROTATIONS) else 0
         )
-        failures = (
-            self.blackboard.get(keys.FAILURES) if self.blackboard.exists(keys.FAILURES) else []
-        )
-        last = failures[-1] if failures else "no reason recorded"
+        last = self._last_failure()
         self.feedback_message = (
             f"chair not accessible after {rotations} rotation(s) "
             f"(at most {keys.MAX_ROTATIONS}); last failure: {last}"
         )
-        self.blackboard.set(
-            keys.FAILURES, [*failures, f"{self.name}: {self.feedback_message}"], overwrite=True
-        )
         return Status.FAILURE
+
+    def _last_failure(self) -> str:
+        """``<leaf>: <why>`` of the failure GiveUp gives up after, or that there is none."""
+        siblings = self.parent.children if self.parent is not None else [self]
+        index = siblings.index(self)
+        tip = siblings[index - 1].tip() if index > 0 else None
+        if tip is None or tip.status != Status.FAILURE:
+            return "no reason recorded"
+        return f"{tip.name}: {tip.feedback_message}"

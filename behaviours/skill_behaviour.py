@@ -5,7 +5,7 @@ tick and returns a job; the job runs in the worker and may block) and what its r
 means for the tree (:meth:`SkillBehaviour.conclude`, which runs in the tick and must
 not block). The base class owns the rest: the worker, the
 RUNNING feedback, cancellation on interruption, and turning an exception into FAILURE
-with the error in the feedback message and on the blackboard.
+with the error in the feedback message (the runner collects failures from the tree).
 """
 
 from __future__ import annotations
@@ -19,7 +19,6 @@ from typing import Any
 import py_trees
 from py_trees.common import Access, Status
 
-from behaviours import keys
 from hardware.interfaces import Robot
 from skills.toolbox import MissionSkills
 
@@ -29,8 +28,9 @@ class SkillBehaviour(py_trees.behaviour.Behaviour):
 
     Args:
         name: the leaf's name in the tree.
-        reads: blackboard keys this leaf reads.
-        writes: blackboard keys this leaf writes.
+        reads: blackboard keys this leaf reads (registered with READ access).
+        writes: blackboard keys this leaf writes (WRITE access); a key it reads and
+            writes is in both.
 
     Dependencies arrive at ``setup(skills=..., robot=...)`` so that the tree can be
     built, rendered and inspected with no hardware and no skills at all.
@@ -44,7 +44,7 @@ class SkillBehaviour(py_trees.behaviour.Behaviour):
         self.blackboard = self.attach_blackboard_client(name=name)
         for key in reads:
             self.blackboard.register_key(key=key, access=Access.READ)
-        for key in (*writes, keys.FAILURES):
+        for key in writes:
             self.blackboard.register_key(key=key, access=Access.WRITE)
         self.skills: MissionSkills | None = None
         self.robot: Robot | None = None
@@ -83,18 +83,18 @@ class SkillBehaviour(py_trees.behaviour.Behaviour):
     def update(self) -> Status:
         future = self._future
         if future is None:
-            return self._fail(self._error or "the worker was never started")
+            return self.fail(self._error or "the worker was never started")
         if not future.done():
             self.feedback_message = f"{self.activity} ({time.monotonic() - self._started_at:.1f} s)"
             return Status.RUNNING
         self._future = None
         error = future.exception()
         if error is not None:
-            return self._fail(_describe(error))
+            return self.fail(_describe(error))
         try:
             return self.conclude(future.result())
         except Exception as error:
-            return self._fail(_describe(error))
+            return self.fail(_describe(error))
 
     def terminate(self, new_status: Status) -> None:
         # INVALID means we were interrupted by a higher priority or a stop: cancel the work.
@@ -142,14 +142,9 @@ class SkillBehaviour(py_trees.behaviour.Behaviour):
         self.feedback_message = message
         return Status.SUCCESS
 
-    def _fail(self, message: str) -> Status:
+    def fail(self, message: str) -> Status:
         self.feedback_message = message
-        failures = list(self._optional(keys.FAILURES, []))
-        failures.append(f"{self.name}: {message}")
-        self.blackboard.set(keys.FAILURES, failures, overwrite=True)
         return Status.FAILURE
-
-    fail = _fail
 
     def _optional(self, key: str, default: Any) -> Any:
         try:

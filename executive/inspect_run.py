@@ -6,10 +6,11 @@ import json
 from pathlib import Path
 from typing import Any
 
-from executive.record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, RunRecordError, read_ticks
+import py_trees
+from py_trees.common import Status
 
-STATUS_MARKS = {"SUCCESS": "✓", "FAILURE": "✕", "RUNNING": "*", "INVALID": "-"}
-STRUCTURE_MARKS = {"Sequence": "[-]", "Selector": "[o]", "Retry": "(-)", "Parallel": "[=]"}
+from executive.record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, RunRecordError, read_ticks
+from executive.render import render_text
 
 __all__ = ["RecordedRun", "RunRecordError"]
 
@@ -90,19 +91,13 @@ class RecordedRun:
         return state
 
     def tree_text(self, tick: int | None) -> str:
-        """The tree with each node's status and feedback at ``tick``."""
+        """The tree with each node's status and feedback at ``tick``, drawn as
+        ``bearchair tree`` draws it (py_trees' Unicode art)."""
         state = {node["path"]: node for node in self.at(tick)["nodes"]}
-        lines = []
-        for node in self.shape:
-            recorded = state.get(node["path"], {})
-            status = recorded.get("status", "INVALID")
-            mark = STRUCTURE_MARKS.get(node["type"], "-->")
-            feedback = recorded.get("feedback") or ""
-            line = (
-                f"{'    ' * node['depth']}{mark} {node['name']} [{STATUS_MARKS.get(status, '?')}]"
-            )
-            lines.append(f"{line} -- {feedback}" if feedback else line)
-        return "\n".join(lines)
+        return "\n".join(
+            render_text(root, "unicode", with_blackboard=False, show_status=True).rstrip()
+            for root in _rebuild(self.shape, state)
+        )
 
     def blackboard_text(self, tick: int | None) -> str:
         board = self.at(tick)["blackboard"]
@@ -135,6 +130,62 @@ class RecordedRun:
             f"{t:8.2f} s  tick {tick:5d}  {name:<36} {old} -> {new}"
             for t, tick, name, old, new in self.timeline()
         )
+
+
+def _rebuild(
+    shape: list[dict[str, Any]], state: dict[str, dict[str, Any]]
+) -> list[py_trees.behaviour.Behaviour]:
+    """The recorded tree as py_trees behaviours (its roots), each node of its recorded
+    kind, with the status and feedback recorded in ``state`` (path -> node)."""
+    children: list[list[py_trees.behaviour.Behaviour]] = [[]]  # per open depth, then roots
+    opened: list[dict[str, Any]] = []
+
+    def close_to(depth: int) -> None:
+        while len(opened) > depth:
+            node, below = opened.pop(), children.pop()
+            children[-1].append(_recorded_node(node, below, state.get(node["path"], {})))
+
+    for node in shape:
+        close_to(node["depth"])
+        opened.append(node)
+        children.append([])
+    close_to(0)
+    return children[0]
+
+
+def _recorded_node(
+    node: dict[str, Any], children: list[py_trees.behaviour.Behaviour], recorded: dict[str, Any]
+) -> py_trees.behaviour.Behaviour:
+    """One node of the recorded tree: a composite, a decorator or a leaf like the one run."""
+    kind = getattr(py_trees.composites, node["type"], None) or getattr(
+        py_trees.decorators, node["type"], None
+    )
+    kind = kind if isinstance(kind, type) else py_trees.behaviour.Behaviour
+    name, memory = node["name"], bool(node.get("memory", False))
+    built: py_trees.behaviour.Behaviour
+    if issubclass(kind, py_trees.composites.Parallel):
+        built = py_trees.composites.Parallel(
+            name, policy=py_trees.common.ParallelPolicy.SuccessOnAll(), children=children
+        )
+    elif issubclass(kind, py_trees.composites.Selector):
+        built = py_trees.composites.Selector(name, memory=memory, children=children)
+    elif issubclass(kind, py_trees.decorators.Decorator) and len(children) == 1:
+        built = py_trees.decorators.PassThrough(name, child=children[0])
+    elif children:
+        built = py_trees.composites.Sequence(name, memory=memory, children=children)
+    else:
+        built = py_trees.behaviours.Dummy(name)
+    status = recorded.get("status", "INVALID")
+    built.status = py_trees.common.Status(status) if status in _STATUSES else Status.INVALID
+    built.feedback_message = recorded.get("feedback") or ""
+    if isinstance(built, py_trees.composites.Composite):
+        # The tip py_trees draws in bold: the last child that ran.
+        active = [child for child in children if child.status != Status.INVALID]
+        built.current_child = active[-1] if active else None
+    return built
+
+
+_STATUSES = {status.value for status in Status}
 
 
 def _reason(error: BaseException) -> str:

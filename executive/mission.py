@@ -11,7 +11,7 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 from core.errors import one_line
 from core.geometry import wrap_angle
@@ -24,6 +24,9 @@ from executive.recording import open_recording
 from executive.runner import MissionRunner, summarise
 from skills.toolbox import DefaultSkills, MissionSkills
 from trees.mission import create_tree
+
+if TYPE_CHECKING:
+    from hardware.sim.world import SimConfig, SimWorld
 
 logger = logging.getLogger(__name__)
 
@@ -108,15 +111,7 @@ def run_in_simulation(
     Raises:
         core.meshes.MeshLoadError: the chair file is unusable (checked before anything runs).
     """
-    front_yaw_deg = 0.0  # the built-in box chair faces +x
-    if config.chair_path is not None:
-        load_mesh(config.chair_path)  # fail fast, with one line, on a bad file
-        front_yaw_deg = front_yaw_from_manifest(config.chair_path)
-
-    from hardware.sim.world import SimConfig, SimWorld
-    from hardware.speech import TextToSpeech
-
-    voice = TextToSpeech(mute=config.mute)
+    sim_config = _sim_config(config)
     root = create_tree()
     recorder = RunRecorder(config.out_dir, root)
     run_info = {
@@ -127,24 +122,9 @@ def run_in_simulation(
         "backend": "sim",
         "started_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
-    sim_config = SimConfig(
-        chair_path=config.chair_path,
-        placement=config.placement,
-        helper=config.helper,
-        seed=config.seed,
-        gui=config.gui,
-        front_yaw_deg=front_yaw_deg,
-        arena=config.arena,
-        voice=voice,
-    )
-    world = None
     try:
-        raise_if_received()
-        world = SimWorld(sim_config)
-        raise_if_received()
+        world = _open_world(sim_config)
     except BaseException as error:
-        if world is not None:
-            world.close()
         # Interrupted (or failed) before the first tick: the record still gets a summary.
         summary = summary_before_start(root, run_info, error, "building the simulated world")
         try:
@@ -170,6 +150,47 @@ def run_in_simulation(
         )
     finally:
         world.close()
+
+
+def _sim_config(config: RunConfig) -> SimConfig:
+    """The simulated world's configuration, with its voice.
+
+    Raises:
+        core.meshes.MeshLoadError: the chair file is unusable (one line, before anything runs).
+    """
+    front_yaw_deg = 0.0  # the built-in box chair faces +x
+    if config.chair_path is not None:
+        load_mesh(config.chair_path)  # fail fast, with one line, on a bad file
+        front_yaw_deg = front_yaw_from_manifest(config.chair_path)
+
+    from hardware.sim.world import SimConfig
+    from hardware.speech import TextToSpeech
+
+    return SimConfig(
+        chair_path=config.chair_path,
+        placement=config.placement,
+        helper=config.helper,
+        seed=config.seed,
+        gui=config.gui,
+        front_yaw_deg=front_yaw_deg,
+        arena=config.arena,
+        voice=TextToSpeech(mute=config.mute),
+    )
+
+
+def _open_world(sim_config: SimConfig) -> SimWorld:
+    """The simulated world, unless a stop signal came
+    before or while it was built (then it is closed and ``KeyboardInterrupt`` raised)."""
+    from hardware.sim.world import SimWorld
+
+    raise_if_received()
+    world = SimWorld(sim_config)
+    try:
+        raise_if_received()
+    except BaseException:
+        world.close()
+        raise
+    return world
 
 
 def run_on_robots(

@@ -6,8 +6,9 @@ A run directory holds:
   changed (ticks with no change are skipped; ``tick`` numbers say which ones ran).
   Each holds ``tick``, ``t`` (seconds since the start) and ``nodes`` (every node's
   ``name``, ``path``, ``status``, ``feedback``); ``blackboard`` (key -> JSON view) is
-  written only when it changed, and holds until the next line that has one.
-* ``tree.json``: the tree's shape (each node's ``path``, ``name``, ``type``, ``depth``).
+  written only when it was written to, and holds until the next line that has one.
+* ``tree.json``: the tree's shape (each node's ``path``, ``name``, ``type``, ``depth``,
+  and for composites with a memory, ``memory``).
 * ``summary.json``: the outcome (see :class:`RunSummary`).
 """
 
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import uuid
 from pathlib import Path
 from typing import Any
 
@@ -45,6 +47,31 @@ def tree_nodes(
     return nodes
 
 
+def tree_shape(root: py_trees.behaviour.Behaviour) -> list[dict[str, Any]]:
+    """``tree.json``: each node's path, name, class name, depth (and a composite's memory)."""
+    return [
+        {
+            "path": path,
+            "name": node.name,
+            "type": type(node).__name__,
+            "depth": depth,
+            **({"memory": node.memory} if isinstance(getattr(node, "memory", None), bool) else {}),
+        }
+        for path, node, depth in tree_nodes(root)
+    ]
+
+
+_WRITES = frozenset(
+    kind.value
+    for kind in (
+        py_trees.blackboard.ActivityType.WRITE,
+        py_trees.blackboard.ActivityType.INITIALISED,
+        py_trees.blackboard.ActivityType.UNSET,
+    )
+)
+"""The blackboard activities that change what the record shows."""
+
+
 class RunRecordError(errors.RunRecordError, ValueError):
     """A directory is not a readable run record."""
 
@@ -64,23 +91,69 @@ class RunRecorder:
     def __init__(self, out_dir: Path, root: py_trees.behaviour.Behaviour) -> None:
         self.out_dir = Path(out_dir)
         self._nodes = tree_nodes(root)
-        shape = [
-            {"path": path, "name": node.name, "type": type(node).__name__, "depth": depth}
-            for path, node, depth in self._nodes
-        ]
+        self._by_id = {node.id: node for _, node, _ in self._nodes}
         try:
             self.out_dir.mkdir(parents=True, exist_ok=True)
-            write_text_atomic(self.out_dir / TREE_FILE, json.dumps(shape, indent=1))
+            write_text_atomic(self.out_dir / TREE_FILE, json.dumps(tree_shape(root), indent=1))
             self._ticks = open(self.out_dir / TICKS_FILE, "w")  # noqa: SIM115 - see close()
         except (OSError, OutputError) as error:
             raise RecordWriteError(
                 f"cannot start the run record in {self.out_dir}: {_why(error)}"
             ) from error
-        self._last_nodes: str | None = None
-        self._last_blackboard: str | None = None
+        self._snapshot = py_trees.visitors.SnapshotVisitor()
+        self._feedback: dict[uuid.UUID, str] = {}
+        self._last_nodes: list[dict[str, str]] | None = None
+        self._blackboard_recorded = False
+
+    def watch(self, tree: py_trees.trees.BehaviourTree) -> None:
+        """Lets the record see ``tree``'s ticks: its snapshot visitor visits each tick and
+        the blackboard's activity stream says when a key was written.
+
+        Call it after the blackboard was last cleared (that disables the stream).
+        """
+        tree.visitors.append(self._snapshot)
+        py_trees.blackboard.Blackboard.enable_activity_stream()
 
     def record_tick(self, tick: int, seconds: float) -> None:
-        nodes = [
+        """Writes a line for the tick just run when a node's status (the snapshot visitor
+        says which), a visited node's feedback, or the blackboard changed."""
+        feedback = {
+            id_: self._by_id[id_].feedback_message
+            for id_ in self._snapshot.visited
+            if id_ in self._by_id
+        }
+        feedback_changed = any(self._feedback.get(id_) != text for id_, text in feedback.items())
+        self._feedback.update(feedback)
+        # A node that left the visited path may have been reset by its parent unvisited
+        # (a memory selector clears the children before its current one).
+        snapshot = self._snapshot
+        left_changed = any(
+            self._by_id[id_].status != status
+            for id_, status in snapshot.previously_visited.items()
+            if id_ not in snapshot.visited and id_ in self._by_id
+        )
+        board_written = self._blackboard_written()
+        if snapshot.changed or left_changed or feedback_changed or board_written:
+            self._write(tick, seconds, board_written)
+
+    def record_final(self, tick: int, seconds: float) -> None:
+        """Writes the tree as the run left it (stopped, shut down) if it differs from the
+        last line."""
+        board_written = self._blackboard_written()
+        if board_written or self._node_states() != self._last_nodes:
+            self._write(tick, seconds, board_written)
+
+    def _blackboard_written(self) -> bool:
+        """Whether a key was written (or unset) since the last call; the first call, yes."""
+        stream = py_trees.blackboard.Blackboard.activity_stream
+        if stream is None:
+            return not self._blackboard_recorded
+        written = any(item.activity_type in _WRITES for item in stream.data)
+        stream.clear()
+        return written or not self._blackboard_recorded
+
+    def _node_states(self) -> list[dict[str, str]]:
+        return [
             {
                 "path": path,
                 "name": node.name,
@@ -89,16 +162,15 @@ class RunRecorder:
             }
             for path, node, _ in self._nodes
         ]
-        storage = py_trees.blackboard.Blackboard.storage
-        blackboard = {key: to_jsonable(storage[key]) for key in sorted(storage)}
-        nodes_text = json.dumps(nodes)
-        blackboard_text = json.dumps(blackboard, sort_keys=True)
-        if nodes_text == self._last_nodes and blackboard_text == self._last_blackboard:
-            return
+
+    def _write(self, tick: int, seconds: float, with_blackboard: bool) -> None:
+        nodes = self._node_states()
         line: dict[str, Any] = {"tick": tick, "t": round(seconds, 3), "nodes": nodes}
-        if blackboard_text != self._last_blackboard:
-            line["blackboard"] = blackboard
-        self._last_nodes, self._last_blackboard = nodes_text, blackboard_text
+        if with_blackboard:
+            storage = py_trees.blackboard.Blackboard.storage
+            line["blackboard"] = {key: to_jsonable(storage[key]) for key in sorted(storage)}
+            self._blackboard_recorded = True
+        self._last_nodes = nodes
         try:
             self._ticks.write(json.dumps(line) + "\n")
             self._ticks.flush()

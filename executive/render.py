@@ -11,6 +11,7 @@ from pathlib import Path
 
 import py_trees
 
+from behaviours import keys
 from core import errors
 from executive.outputs import atomic_path
 
@@ -22,9 +23,19 @@ class RenderError(errors.RenderError, RuntimeError):
     """The tree could not be rendered in the format asked for."""
 
 
-def render_text(root: py_trees.behaviour.Behaviour, fmt: str, with_blackboard: bool) -> str:
-    """The tree as ASCII or Unicode art, optionally with every blackboard key and its users."""
-    art = (py_trees.display.ascii_tree if fmt == "ascii" else py_trees.display.unicode_tree)(root)
+def render_text(
+    root: py_trees.behaviour.Behaviour, fmt: str, with_blackboard: bool, show_status: bool = False
+) -> str:
+    """The tree as ASCII or Unicode art, py_trees' own (``bearchair tree`` and ``inspect``).
+
+    Args:
+        root: the tree.
+        fmt: ``ascii`` or ``unicode``.
+        with_blackboard: append every blackboard key and its users.
+        show_status: show each node's status mark and feedback message.
+    """
+    draw = py_trees.display.ascii_tree if fmt == "ascii" else py_trees.display.unicode_tree
+    art = draw(root, show_status=show_status)
     if not with_blackboard:
         return art
     lines = [art.rstrip(), "", "Blackboard keys (R read, W write):"]
@@ -43,6 +54,41 @@ def blackboard_users(root: py_trees.behaviour.Behaviour) -> dict[str, list[tuple
             for key in sorted(client.write):
                 users.setdefault(key, []).append((node.name, "W"))
     return users
+
+
+def blackboard_table(root: py_trees.behaviour.Behaviour) -> str:
+    """The table of ``behaviours.keys``' docstring, from the blackboard registrations.
+
+    One row per key, in :data:`behaviours.keys.VALUES`' order then any key only the
+    registrations know: what it holds, the behaviour classes (and the executive) that
+    register it for writing, and those that register it for reading, in tree order.
+    """
+    writers: dict[str, list[str]] = {key: ["executive"] for key in keys.SET_BY_EXECUTIVE}
+    readers: dict[str, list[str]] = {}
+    for node in root.iterate():
+        for client in node.blackboards:
+            for users, registered in ((writers, client.write), (readers, client.read)):
+                for key in registered:
+                    names = users.setdefault(key, [])
+                    if type(node).__name__ not in names:
+                        names.append(type(node).__name__)
+    used = [key for key in {**writers, **readers} if key not in keys.VALUES]
+    rows = [("key", "value", "written by", "read by")] + [
+        (
+            key,
+            keys.VALUES.get(key, "?"),
+            ", ".join(writers.get(key, [])),
+            ", ".join(readers.get(key, [])),
+        )
+        for key in [*keys.VALUES, *sorted(used)]
+    ]
+    widths = [max(len(row[column]) for row in rows) for column in range(4)]
+    rule = " ".join("=" * width for width in widths)
+
+    def line(row: tuple[str, ...]) -> str:
+        return " ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True)).rstrip()
+
+    return "\n".join([rule, line(rows[0]), rule, *(line(row) for row in rows[1:]), rule])
 
 
 def render_graph(

@@ -55,6 +55,7 @@ class MissionOutcome:
     wall_s: float
     interrupted: bool = False
     failed_leaf: py_trees.behaviour.Behaviour | None = None
+    failures: list[str] = field(default_factory=list)
     blackboard: dict[str, Any] = field(default_factory=dict)
     stop_signal: str | None = None
     record_error: str | None = None
@@ -62,6 +63,9 @@ class MissionOutcome:
 
 class MissionRunner:
     """Ticks a mission tree to completion.
+
+    The tree ticked is ``root`` under a :class:`py_trees.decorators.Timeout`: on time it
+    stops the mission (the running leaf's ``terminate()`` cancels its worker) and fails.
 
     Args:
         root: the tree (``trees.mission.create_tree()``).
@@ -92,18 +96,27 @@ class MissionRunner:
         post_tick: Sequence[Callable[[MissionRunner], None]] = (),
     ) -> None:
         self.root = root
-        self.tree = py_trees.trees.BehaviourTree(root)
+        self.timeout = py_trees.decorators.Timeout(
+            name="Mission timeout", child=root, duration=timeout_s
+        )
+        self.tree = py_trees.trees.BehaviourTree(self.timeout)
+        self.failures = FailureLog()
+        self.stage_clock = StageClock(root, self.elapsed)
+        self.tree.visitors += [self.stage_clock, self.failures]
         self.skills = skills
         self.robot = robot
         self.recorder = recorder
+        if recorder is not None:
+            self.tree.add_post_tick_handler(self._record_tick)
         self.tick_period_s = tick_period_s
         self.timeout_s = timeout_s
         self.on_tick = on_tick
         self.post_tick = tuple(post_tick)
-        self.stages = [StageTiming(child.name) for child in root.children]
+        self.stages = self.stage_clock.stages
         self._seed = seed
         self._arena = arena
         self._start = 0.0
+        self._record_error: RecordWriteError | None = None
 
     def elapsed(self) -> float:
         return time.monotonic() - self._start
@@ -116,99 +129,148 @@ class MissionRunner:
         ``record_error``), and the caller writes what it can.
         """
         py_trees.blackboard.Blackboard.clear()
+        if self.recorder:
+            self.recorder.watch(self.tree)
         writer = py_trees.blackboard.Client(name="executive")
-        for key, value in ((keys.SEED, self._seed), (keys.ARENA, self._arena)):
+        for key, value in zip(keys.SET_BY_EXECUTIVE, (self._seed, self._arena), strict=True):
             writer.register_key(key=key, access=py_trees.common.Access.WRITE)
             writer.set(key, value)
         self._start = time.monotonic()
-        interrupted, stop_signal, record_error = False, None, None
+        stopped, stop_signal, record_error = False, None, None
         try:
             with emergency_stop_on_second_signal(lambda: stop_robots(self.robot)):
                 self.tree.setup(timeout=30.0, skills=self.skills, robot=self.robot)
                 self._start = time.monotonic()
                 self._tick_until_done()
         except KeyboardInterrupt as error:
-            interrupted = True
+            stopped = True
             stop_signal = signal_name(getattr(error, "signum", signal.SIGINT))
             how = "the operator (Ctrl-C)" if stop_signal == "SIGINT" else stop_signal
             self._stop(f"interrupted by {how}")
             logger.warning("writing the run record; a second %s exits at once", stop_signal)
         except RecordWriteError as error:
-            record_error = str(error)
+            stopped, record_error = True, str(error)
             self._stop(f"stopped: {error}")
         finally:
-            try:
-                self.tree.shutdown()
-            finally:
-                stop_robots(self.robot)
-            if self.recorder and record_error is None:
-                try:
-                    self.recorder.record_tick(self.tree.count, self.elapsed())
-                except RecordWriteError as error:
-                    record_error = str(error)
-            for hook in self.post_tick:
-                hook(self)
+            record_error = self._finish(record_error)
         return MissionOutcome(
-            status=self.root.status,
+            status=Status.FAILURE if stopped else self.timeout.status,
             stages=self.stages,
             ticks=self.tree.count,
             wall_s=self.elapsed(),
-            interrupted=interrupted,
-            failed_leaf=_failed_leaf(self.root),
+            interrupted=stop_signal is not None,
+            failed_leaf=self.root.tip() if self.root.status == Status.FAILURE else None,
+            failures=list(self.failures.messages),
             blackboard=dict(py_trees.blackboard.Blackboard.storage),
             stop_signal=stop_signal,
             record_error=record_error,
         )
 
+    def _finish(self, record_error: str | None) -> str | None:
+        """Shuts the tree down, stops the robots, writes the final record and calls the
+        hooks a last time; returns the record's error, if any."""
+        try:
+            self.tree.shutdown()
+        finally:
+            stop_robots(self.robot)
+        if self.recorder and record_error is None:
+            try:
+                self.recorder.record_final(self.tree.count, self.elapsed())
+            except RecordWriteError as error:
+                record_error = str(error)
+        for hook in self.post_tick:
+            hook(self)
+        return record_error
+
     def _tick_until_done(self) -> None:
         while True:
             raise_if_received()
-            tick_start = self.elapsed()
             self.tree.tick()
-            self._time_stages(tick_start)
+            if self._record_error is not None:
+                raise self._record_error
             self._after_tick()
-            if self.root.status in (Status.SUCCESS, Status.FAILURE):
-                return
-            if self.elapsed() > self.timeout_s:
-                self._stop(f"mission timed out after {self.timeout_s:.0f} s")
+            if self.timeout.status == Status.FAILURE and self.root.status != Status.FAILURE:
+                self._fail_running_stages(f"mission timed out after {self.timeout_s:.0f} s")
+            if self.timeout.status in (Status.SUCCESS, Status.FAILURE):
                 return
             time.sleep(self.tick_period_s)
 
     def _after_tick(self) -> None:
-        """The per-tick hooks: the run record, ``post_tick``, then the caller's ``on_tick``."""
-        if self.recorder:
-            self.recorder.record_tick(self.tree.count, self.elapsed())
+        """The per-tick hooks after the run record: ``post_tick``, then ``on_tick``."""
         for hook in self.post_tick:
             hook(self)
         if self.on_tick:
             self.on_tick(self)
 
-    def _time_stages(self, tick_start_s: float) -> None:
-        now = self.elapsed()
-        for stage, child in zip(self.stages, self.root.children, strict=True):
-            if child.status != Status.INVALID and stage.started_s is None:
-                stage.started_s = tick_start_s
-            if child.status in (Status.SUCCESS, Status.FAILURE) and stage.ended_s is None:
-                stage.ended_s = now
-            if child.status != Status.INVALID:
-                stage.status = child.status.value
-                stage.feedback = _leaf_feedback(child)
+    def _record_tick(self, tree: py_trees.trees.BehaviourTree) -> None:
+        """The post-tick handler writing the run record; a failed write is raised by
+        the tick loop once py_trees has counted the tick."""
+        assert self.recorder is not None
+        try:
+            # py_trees counts the tick after its post-tick handlers.
+            self.recorder.record_tick(tree.count + 1, self.elapsed())
+        except RecordWriteError as error:
+            self._record_error = error
 
     def _stop(self, reason: str) -> None:
         """Stops the tree (leaves cancel their work) and marks the running stage failed."""
+        self.tree.root.stop(Status.INVALID)
+        self._fail_running_stages(reason)
+
+    def _fail_running_stages(self, reason: str) -> None:
+        """Marks the stages that were running when the mission was cut short as failed."""
         logger.warning(reason)
-        running = [
-            s
-            for s, c in zip(self.stages, self.root.children, strict=True)
-            if c.status == Status.RUNNING
-        ]
-        self.root.stop(Status.INVALID)
-        self.root.status = Status.FAILURE
-        for stage in running:
-            stage.status = Status.FAILURE.value
-            stage.ended_s = self.elapsed()
-            stage.feedback = reason
-        self.root.feedback_message = reason
+        for stage in self.stages:
+            if stage.status == Status.RUNNING.value and stage.ended_s is None:
+                stage.status = Status.FAILURE.value
+                stage.ended_s = self.elapsed()
+                stage.feedback = reason
+
+
+class StageClock(py_trees.visitors.VisitorBase):
+    """Times the root's children (the stages) as each tick visits them: a stage's status
+    is taken before anything above it (the mission's timeout) can stop it.
+
+    Args:
+        root: the mission tree; its children are the stages.
+        clock: seconds since the run began.
+    """
+
+    def __init__(self, root: py_trees.behaviour.Behaviour, clock: Callable[[], float]) -> None:
+        super().__init__(full=False)
+        self.stages = [StageTiming(child.name) for child in root.children]
+        self._stage_of = {
+            child.id: stage for child, stage in zip(root.children, self.stages, strict=True)
+        }
+        self._clock = clock
+        self._tick_start_s = 0.0
+
+    def initialise(self) -> None:
+        self._tick_start_s = self._clock()
+
+    def run(self, behaviour: py_trees.behaviour.Behaviour) -> None:
+        stage = self._stage_of.get(behaviour.id)
+        if stage is None or behaviour.status == Status.INVALID:
+            return
+        if stage.started_s is None:
+            stage.started_s = self._tick_start_s
+        if behaviour.status in (Status.SUCCESS, Status.FAILURE) and stage.ended_s is None:
+            stage.ended_s = self._clock()
+        stage.status = behaviour.status.value
+        stage.feedback = _leaf_feedback(behaviour)
+
+
+class FailureLog(py_trees.visitors.VisitorBase):
+    """Visits each tick's path and keeps ``<leaf>: <feedback>`` for every leaf failure,
+    in the order they happened (``summary.json``'s ``failures``)."""
+
+    def __init__(self) -> None:
+        super().__init__(full=False)
+        self.messages: list[str] = []
+
+    def run(self, behaviour: py_trees.behaviour.Behaviour) -> None:
+        if not behaviour.children and behaviour.status == Status.FAILURE:
+            self.messages.append(f"{behaviour.name}: {behaviour.feedback_message}")
 
 
 def stop_robots(robot: Robot) -> None:
@@ -221,15 +283,6 @@ def stop_robots(robot: Robot) -> None:
         robot.emergency_stop()
     except Exception as error:  # stopping must not hide why we stopped
         logger.error("stopping the robots raised: %s", error)
-
-
-def _failed_leaf(root: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Behaviour | None:
-    """The leaf whose failure ended the mission: the last failed leaf in tick order."""
-    failed = None
-    for node in root.iterate():
-        if not node.children and node.status == Status.FAILURE:
-            failed = node
-    return failed
 
 
 def _leaf_feedback(node: py_trees.behaviour.Behaviour) -> str:
@@ -280,5 +333,5 @@ def summarise(outcome: MissionOutcome, run_info: dict[str, Any]) -> dict[str, An
         "accessible": bool(getattr(board.get(keys.ACCESSIBILITY), "accessible", False)),
         "walk": to_jsonable(board.get(keys.WALK)),
         "judgement": to_jsonable(judgement),
-        "failures": list(board.get(keys.FAILURES, [])),
+        "failures": list(outcome.failures),
     }

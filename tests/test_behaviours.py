@@ -115,8 +115,6 @@ def test_leaf_fails_on_a_negative_result_and_says_why(leaf_class, skill, failing
     leaf = make(leaf_class, ScriptedSkills({skill: failing}))
     assert tick_until_done(leaf)[-1] == Status.FAILURE
     assert failing.reason in leaf.feedback_message
-    failures = py_trees.blackboard.Blackboard.get(keys.FAILURES)
-    assert failures[-1].startswith(leaf.name)
 
 
 @pytest.mark.parametrize(("leaf_class", "skill", "_"), LEAVES)

@@ -10,10 +10,10 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from behaviours import keys
 from core.arena import DEFAULT_ARENA
 from executive.inspect_run import RecordedRun, RunRecordError
 from executive.record import RunRecorder
+from executive.render import render_text
 from executive.runner import MissionRunner, summarise
 from hardware.fakes import FakeJudge, fake_robot
 from skills.fakes import ScriptedSkills, default_results
@@ -107,8 +107,16 @@ def test_assistance_loop_gives_up_after_the_third_rotation():
     assert summary["failed_stage"] == "MakeChairAccessible"
     assert summary["rotations"] == 3
     assert len(skills.calls["compose_instruction"]) == 3
-    assert "after 3 rotation(s)" in summary["reason"]
-    assert "s_goal outside the arena" in summary["reason"]
+    assert summary["reason"] == (
+        "GiveUp: chair not accessible after 3 rotation(s) (at most 3); last failure: "
+        "CheckAccessibilityAgain: not accessible: s_goal outside the arena"
+    )
+    # Every leaf failure, in order: the first check, each check after a turn, GiveUp.
+    assert summary["failures"] == [
+        "CheckAccessibility: not accessible: s_goal outside the arena",
+        *["CheckAccessibilityAgain: not accessible: s_goal outside the arena"] * 3,
+        summary["reason"],
+    ]
     assert not skills.calls["walk_path"]
     statuses = {s["name"]: s["status"] for s in summary["stages"]}
     assert statuses["WalkToChair"] == "INVALID"
@@ -158,8 +166,18 @@ def test_timeout_stops_the_tree_and_cancels_the_running_skill():
     summary = summarise(outcome, {})
     assert summary["outcome"] == "failure"
     assert summary["failed_stage"] == "ImagineSitting"
-    assert "timed out" in summary["reason"]
+    assert summary["reason"] == "mission timed out after 0 s"
     assert outcome.status == Status.FAILURE
+    assert outcome.failed_leaf is None and summary["failures"] == []
+    statuses = {s["name"]: (s["status"], s["message"]) for s in summary["stages"]}
+    assert statuses["ScanChair"][0] == "SUCCESS"
+    assert statuses["ImagineSitting"] == ("FAILURE", "mission timed out after 0 s")
+    # The Timeout stopped the tree: the running leaf's terminate() cancelled its worker.
+    assert all(node.status == Status.INVALID for node in root.iterate())
+    deadline = time.monotonic() + 2.0
+    while "imagine_sitting" not in skills.cancelled and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert "imagine_sitting" in skills.cancelled
 
 
 def test_run_record_and_inspect_replay(tmp_path):
@@ -197,19 +215,16 @@ def test_run_record_and_inspect_replay(tmp_path):
         recorded.at(recorded.last_tick + 10)
 
 
+@pytest.mark.parametrize("checks", [[ACCESSIBLE], [BLOCKED] * 4], ids=["seated", "gave-up"])
+def test_inspect_draws_the_recorded_tree_as_py_trees_draws_the_live_one(tmp_path, checks):
+    _, runner = run(ScriptedSkills({"check_accessibility": checks}), out_dir=tmp_path)
+    live = render_text(runner.root, "unicode", with_blackboard=False, show_status=True)
+    assert RecordedRun(tmp_path).tree_text(None) == live.rstrip()
+
+
 def test_inspect_rejects_a_directory_that_is_not_a_run(tmp_path):
     with pytest.raises(RunRecordError, match="not a run record"):
         RecordedRun(tmp_path)
-
-
-def test_blackboard_keys_are_documented():
-    documented = keys.__doc__
-    for node in create_tree().iterate():
-        for client in node.blackboards:
-            for key in client.read | client.write:
-                assert key in documented, (
-                    f"{key} used by {node.name} is not documented in behaviours.keys"
-                )
 
 
 def test_ctrl_c_stops_the_tree_cancels_the_skill_and_stops_the_robot(tmp_path):
