@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -49,6 +48,7 @@ from core.arena import Arena, Box2D
 from core.geometry import SittingPose, wrap_angle
 from core.se2 import SE2Pose
 from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
+from skills.planning.preplan import SeatingCheck, SeatingValidator, wholebody_validator
 from skills.planning.seat import STEP_M, SeatRay, seat_ray
 from skills.planning.wholebody.chair_profile import (
     BAND_HALF_WIDTH_M,
@@ -85,28 +85,6 @@ MAX_CENTRING_M = BEAR_LANE_HALF_WIDTH_M - 0.01
 armrests: the bear's lane, less a centimetre, still covers the imagined p. A sitter lands
 where its drop put it, often a few centimetres off the middle between armrests, and the
 NAO's hands need the middle."""
-
-
-class SeatingCheck(NamedTuple):
-    """A seating validator's verdict.
-
-    Attributes:
-        reason: why seating from s_goal is infeasible ("" when feasible).
-        bear_placement: the failure is about where the bear goes (reach).
-        too_close: the NAO stands too close to the chair (its feet, or the bear it
-            carries, in it).
-        raise_at: feasible only with the bear raised, which the NAO does here (back
-            along the ray from s_goal) before it steps in; None: walk in as it carries.
-    """
-
-    reason: str = ""
-    bear_placement: bool = False
-    too_close: bool = False
-    raise_at: SE2Pose | None = None
-
-
-SeatingValidator = Callable[[trimesh.Trimesh, SittingPose, SE2Pose], SeatingCheck]
-"""Checks seating the bear at g from s_goal (the whole-body pre-plan, or the reach model)."""
 
 
 class StanceChoice(NamedTuple):
@@ -555,15 +533,13 @@ def check_seat_reachable(
         sitting_pose: the imagined g, world frame.
         seating_validator: the pre-plan (default: the whole-body one).
     """
-    from skills.planning.se2 import default_seating_validator
-
     began = time.perf_counter()
     ray = seat_ray(chair_mesh, sitting_pose)
     if len(ray.slides_m) == 0:
         p_z = float(sitting_pose.position[2])
         return SeatReachability(False, "no seat under the sitting position", p_z)
     checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_solid_boxes(chair_mesh))
-    validator = seating_validator or default_seating_validator()
+    validator = seating_validator or wholebody_validator
     choice = choose_stance(chair_mesh, sitting_pose, checker, validator, scene=False)
     p0 = np.asarray(sitting_pose.position, dtype=float)
     height = choice.seat_height_m
