@@ -75,7 +75,7 @@ TURNS_RAD = tuple(math.radians(d) for d in (5.0, -5.0, 10.0, -10.0))
 is itself uncertain by a few degrees (the drops' start jitter is 2 deg, and the vote's
 weighted mean moves with them), a front bar or a rail may cross the band a few
 centimetres nearer on one side, and a wall may leave room for a slanted approach. 10 deg
-stays well within the planner's facing tolerance (``seating.FACING_TOLERANCE_RAD``, 20
+stays well within the planner's facing tolerance (``wholebody.scene.FACING_TOLERANCE_RAD``, 20
 deg) and the seating judge's 45 deg."""
 PREPLANS_PER_TURN = 2
 """Pre-plans each turned ray may ask for: the reach model's first pairs are right when

@@ -84,7 +84,7 @@ N_KNOTS = 30
 COARSE_KNOTS = 15
 """Knots of the trajectory tried first (about 2.3 times faster to solve than
 :data:`N_KNOTS`); the planner checks it between its knots too and falls back to
-:data:`N_KNOTS` when it does not hold (``seating.solve_trajectory``)."""
+:data:`N_KNOTS` when it does not hold (``trajectory.solve_trajectory``)."""
 
 # (link, offset in link frame (m), radius (m), label): sampled points of the NAO's body.
 LEG_TORSO_HEAD_POINTS = (
