@@ -36,7 +36,7 @@ from core.geometry import SittingPose, wrap_angle
 from core.se2 import SE2Pose
 from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from skills.planning.preplan import SeatingValidator, wholebody_validator
-from skills.planning.stance import choose_stance
+from skills.planning.stance import StanceChoice, choose_stance
 from skills.results import AccessibilityResult
 
 __all__ = [
@@ -221,21 +221,12 @@ def check_accessibility(
     Raises:
         AccessibilityError: an empty chair mesh or a non-finite pose.
     """
-    if chair_mesh is None or len(chair_mesh.faces) == 0:
-        raise AccessibilityError("the chair mesh has no triangles")
-    if not (np.all(np.isfinite(sitting_pose.position)) and math.isfinite(sitting_pose.yaw)):
-        raise AccessibilityError("the sitting pose is not finite")
-    if not all(math.isfinite(v) for v in humanoid_pose):
-        raise AccessibilityError("the humanoid's pose is not finite")
-
+    _check_inputs(chair_mesh, sitting_pose, humanoid_pose)
     checker = NaoCollisionChecker(arena, chair_solid_boxes(chair_mesh))
     validator = seating_validator or wholebody_validator
     choice = choose_stance(chair_mesh, sitting_pose, checker, validator, scene=True)
     if choice.se2_goal is None:
-        reason = choice.reason
-        if choice.check.reason and not reason.startswith("seating pre-plan"):
-            reason = f"seating pre-plan infeasible: {reason}"
-        return AccessibilityResult(False, None, choice.sitting_pose, (), reason)
+        return AccessibilityResult(False, None, choice.sitting_pose, (), _refusal(choice))
     se2_goal, sitting_pose = choice.se2_goal, choice.sitting_pose
 
     # The walk ends where the walking NAO's ellipsoid is clear; from there it steps
@@ -262,6 +253,26 @@ def check_accessibility(
         raise_at=raise_at,
         step_in_from=approach if raise_at is None else None,
     )
+
+
+def _check_inputs(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, humanoid_pose: SE2Pose
+) -> None:
+    """Raises :class:`AccessibilityError` on an empty chair mesh or a non-finite pose."""
+    if chair_mesh is None or len(chair_mesh.faces) == 0:
+        raise AccessibilityError("the chair mesh has no triangles")
+    if not (np.all(np.isfinite(sitting_pose.position)) and math.isfinite(sitting_pose.yaw)):
+        raise AccessibilityError("the sitting pose is not finite")
+    if not all(math.isfinite(v) for v in humanoid_pose):
+        raise AccessibilityError("the humanoid's pose is not finite")
+
+
+def _refusal(choice: StanceChoice) -> str:
+    """Why no stance works, naming the pre-plan when it refused."""
+    reason = choice.reason
+    if choice.check.reason and not reason.startswith("seating pre-plan"):
+        reason = f"seating pre-plan infeasible: {reason}"
+    return reason
 
 
 def _farther(se2_goal: SE2Pose, a: SE2Pose, b: SE2Pose) -> SE2Pose:
