@@ -40,7 +40,9 @@ from core.arena import DEFAULT_ARENA, Arena, accessible_sitting_yaws
 from core.geometry import SittingPose, yaw_transform
 from core.meshes import box_chair_mesh, load_mesh
 from skills.assistance import compose_instruction
-from skills.planning.se2 import check_accessibility, reach_validator, seat_support_heights
+from skills.planning.preplan import reach_validator
+from skills.planning.se2 import check_accessibility
+from skills.planning.seat import seat_support_heights
 from skills.results import AccessibilityResult
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"

@@ -41,7 +41,7 @@ from core.geometry import SittingPose, make_transform, rot_z, wrap_angle
 from core.meshes import box_chair_mesh, load_mesh
 from core.se2 import SE2Pose
 from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
-from skills.planning.se2 import default_seating_validator
+from skills.planning.preplan import wholebody_validator
 from skills.planning.seat import seat_support_heights
 from skills.planning.stance import choose_stance, open_floor_arena
 from skills.planning.wholebody import InfeasibleSeating, plan_seating, preplan_seating
@@ -137,9 +137,7 @@ def feasible_stance(
     chooses with the chair alone (:func:`skills.planning.stance.choose_stance`: reach
     model, then the pre-plan)."""
     checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_solid_boxes(chair_mesh))
-    choice = choose_stance(
-        chair_mesh, sitting_pose, checker, default_seating_validator(), scene=False
-    )
+    choice = choose_stance(chair_mesh, sitting_pose, checker, wholebody_validator, scene=False)
     if choice.se2_goal is None:
         return None
     return choice.se2_goal, choice.sitting_pose, choice.check.raise_at

@@ -12,16 +12,10 @@ from core.arena import DEFAULT_ARENA, Arena, Box2D
 from core.geometry import SittingPose, yaw_transform
 from core.meshes import box_chair_mesh
 from core.se2 import SE2Pose
-from skills.planning import collision
+from skills.planning import collision, preplan
 from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
-from skills.planning.se2 import (
-    AccessibilityError,
-    SeatingCheck,
-    check_accessibility,
-    goal_on_ray,
-    reach_validator,
-    stepped_back,
-)
+from skills.planning.preplan import SeatingCheck, reach_validator
+from skills.planning.se2 import AccessibilityError, check_accessibility, stepped_back
 from skills.planning.seat import (
     BEAR_EDGE_MARGIN_M,
     SEAT_DROP_TOLERANCE_M,
@@ -30,7 +24,8 @@ from skills.planning.seat import (
     seat_support_heights,
     slide_on_seat,
 )
-from skills.planning.stance import check_seat_reachable, choose_stance
+from skills.planning.stance import check_seat_reachable, choose_stance, goal_on_ray
+from skills.planning.wholebody import InfeasibleSeating
 from skills.planning.wholebody.reach_model import reach_model
 
 PELVIS_ABOVE_SEAT_M = 0.05
@@ -248,14 +243,6 @@ def test_humanoid_pose_is_unchanged_type() -> None:
 def test_out_of_reach_preplan_slides_p_closer_and_retries(monkeypatch: pytest.MonkeyPatch) -> None:
     """A whole-body pre-plan stand-in that reaches only 0.29 m: the search tries the
     next sitting point closer to the NAO until it fits."""
-    import sys
-    import types
-
-    class InfeasibleSeating(ValueError):
-        def __init__(self, constraint: str, detail: str) -> None:
-            super().__init__(f"{constraint}: {detail}")
-            self.constraint = constraint
-
     calls: list[float] = []
     reach_m = [0.29]
 
@@ -268,10 +255,8 @@ def test_out_of_reach_preplan_slides_p_closer_and_retries(monkeypatch: pytest.Mo
             raise InfeasibleSeating("bear placement", f"out of reach: {forward:.2f} m forward")
         return None
 
-    module = types.ModuleType("skills.planning.wholebody")
-    module.preplan_approach = preplan_approach
-    module.InfeasibleSeating = InfeasibleSeating
-    monkeypatch.setitem(sys.modules, "skills.planning.wholebody", module)
+    monkeypatch.setattr(preplan, "preplan_approach", preplan_approach)
+    monkeypatch.setattr(preplan, "PREPLANS", preplan.PreplanMemo())  # no real answers kept
 
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.0, 0.0, seat_depth_m=0.4)
     result = check_accessibility(chair_mesh, sitting_pose, START, DEFAULT_ARENA, seed=0)

@@ -10,19 +10,18 @@ import numpy as np
 from core.geometry import SittingPose, make_transform, rot_z
 from core.meshes import box_chair_mesh
 from core.se2 import SE2Pose
-from skills.planning.se2 import PREPLANS, PreplanMemo, SeatingCheck, default_seating_validator
+from skills.planning.preplan import PREPLANS, PreplanMemo, SeatingCheck, wholebody_validator
 from skills.planning.stance import goal_on_ray
 
 SITTING_POSE = SittingPose(np.array([0.0, 0.0, 0.29]), 0.0)
 
 
 def test_a_question_asked_twice_is_planned_once_and_answered_alike() -> None:
-    validator = default_seating_validator()
     chair_mesh = box_chair_mesh()
     se2_goal = goal_on_ray(SITTING_POSE, 0.33)
     hits = PREPLANS.hits
-    first = validator(chair_mesh, SITTING_POSE, se2_goal)
-    second = validator(chair_mesh.copy(), SITTING_POSE, se2_goal)
+    first = wholebody_validator(chair_mesh, SITTING_POSE, se2_goal)
+    second = wholebody_validator(chair_mesh.copy(), SITTING_POSE, se2_goal)
     assert PREPLANS.hits == hits + 1
     assert second == first
 

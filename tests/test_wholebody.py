@@ -17,6 +17,7 @@ from core.nao_carrying import (
     BEAR_COM_AHEAD_M,
     BEAR_COM_HEIGHT_M,
     BEAR_SEAT_BELOW_HANDS_M,
+    BEAR_SEAT_CLEARANCE_M,
 )
 from core.se2 import SE2Pose
 from skills.planning.wholebody import (
@@ -39,6 +40,7 @@ from skills.planning.wholebody.chair_profile import (
     RAIL_CLEARANCE_M,
     largest_horizontal_surface_height,
 )
+from skills.planning.wholebody.goal import goal_posture_candidates
 from skills.planning.wholebody.nao_model import (
     DRIVEN_JOINTS,
     joint_values,
@@ -61,14 +63,9 @@ from skills.planning.wholebody.optimisation import (
     released_bear,
     seating_problems,
 )
-from skills.planning.wholebody.seating import (
-    BEAR_SEAT_CLEARANCE_M,
-    PLANNING_VELOCITY_RADPS,
-    exact_posture_violation,
-    goal_posture_candidates,
-    seating_scene,
-    solve_trajectory,
-)
+from skills.planning.wholebody.posture_check import exact_posture_violation
+from skills.planning.wholebody.scene import seating_scene
+from skills.planning.wholebody.trajectory import PLANNING_VELOCITY_RADPS, solve_trajectory
 
 SEAT_HEIGHT_M = 0.24
 # The box chair faces +x; g sits 2 cm above the seat, 2 cm in front of the seat's middle.

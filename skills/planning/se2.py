@@ -21,13 +21,8 @@ l along the ray:
 
 from __future__ import annotations
 
-import hashlib
-import importlib
-import logging
 import math
-import threading
 import time
-from collections import OrderedDict
 from typing import NamedTuple
 
 import numpy as np
@@ -40,29 +35,14 @@ from core.arena import Arena
 from core.geometry import SittingPose, wrap_angle
 from core.se2 import SE2Pose
 from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
-from skills.planning.seat import seat_support_heights
-from skills.planning.stance import (
-    SeatingCheck,
-    SeatingValidator,
-    choose_stance,
-    goal_on_ray,
-)
-from skills.planning.wholebody.chair_profile import ChairProfileError, fit_chair_profile
-from skills.planning.wholebody.reach_model import reach_model
+from skills.planning.preplan import SeatingValidator, wholebody_validator
+from skills.planning.stance import StanceChoice, choose_stance
 from skills.results import AccessibilityResult
-
-logger = logging.getLogger(__name__)
 
 __all__ = [
     "AccessibilityError",
-    "SeatingCheck",
-    "SeatingValidator",
     "check_accessibility",
-    "default_seating_validator",
-    "goal_on_ray",
     "plan_se2_path",
-    "reach_validator",
-    "seat_support_heights",
     "stepped_back",
 ]
 
@@ -75,126 +55,17 @@ PLANNING_TIME_S = 10.0
 CHECK_RESOLUTION_M = 0.01
 """Spacing of validity checks along motions, metres (OMPL's resolution is relative)."""
 WAYPOINT_SPACING_M = 0.1
+OMPL_LOG_LEVEL = ou.LogLevel.LOG_NONE
+"""OMPL's (process-wide) log level, set once when this module is imported: this build
+defaults to DEBUG chatter on stderr, and reports every reseed after its first RNG as an
+error (:func:`_seed_ompl` reseeds on every plan). A failed search comes back as
+:class:`PlannedPath`'s reason."""
+
+ou.setLogLevel(OMPL_LOG_LEVEL)
 
 
 class AccessibilityError(ValueError):
     """Bad input to the accessibility check (not an inaccessible chair)."""
-
-
-def reach_validator(
-    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
-) -> SeatingCheck:
-    """A fast validity check without the pre-plan: the reach model
-    (:mod:`skills.planning.wholebody.reach_model`) places the bear at g from s_goal, the
-    chair's profile seen from there (seat front, seat top) as the whole-body planner
-    sees it, and the front of the feet clear of the chair."""
-    T_nao_world = np.linalg.inv(se2_goal.as_transform())
-    p = np.asarray(sitting_pose.position, dtype=float)
-    p_nao = T_nao_world[:3, :3] @ p + T_nao_world[:3, 3]
-    try:
-        profile = fit_chair_profile(chair_mesh, T_nao_world, p_nao)
-    except ChairProfileError as error:
-        return SeatingCheck(str(error), bear_placement=True)
-    forward = float(p_nao[0])
-    d_max = reach_model().max_forward(profile.seat_top_z, profile.seat_front_x)
-    if math.isnan(d_max):
-        return SeatingCheck(
-            f"no posture places the bear on a {profile.seat_top_z:.2f} m seat whose front is "
-            f"{profile.seat_front_x:.2f} m ahead",
-            too_close=profile.seat_front_x < reach_model().seat_fronts_m[0],
-            bear_placement=True,
-        )
-    if forward > d_max:
-        return SeatingCheck(
-            f"out of reach: {forward:.2f} m forward, the NAO reaches {d_max:.2f} m on a "
-            f"{profile.seat_top_z:.2f} m seat",
-            bear_placement=True,
-        )
-    return SeatingCheck()
-
-
-PREPLAN_MEMO_SIZE = 64
-"""Pre-plan answers kept, the least recently used dropped first (a stance search asks a
-few to a few dozen questions)."""
-
-
-class PreplanMemo:
-    """The whole-body pre-plan's answers by chair, sitting pose and stance.
-
-    The pre-plan is a pure function of the three (no warm starts), and the mission asks
-    it the same questions twice: the chair-alone reachability check and then the
-    accessibility check search the same stances on the same scan, each pre-plan taking
-    0.3-0.9 s. The chair is keyed by the bytes of its vertices and faces (a SHA-1, under
-    a millisecond on a 20 k-face scan), so a chair turned by the helper is a new chair.
-    """
-
-    def __init__(self, max_size: int = PREPLAN_MEMO_SIZE) -> None:
-        self._answers: OrderedDict[tuple, SeatingCheck] = OrderedDict()
-        self._max_size = max_size
-        self._lock = threading.Lock()
-        self.hits = 0
-
-    @staticmethod
-    def key(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose) -> tuple:
-        digest = hashlib.sha1(np.ascontiguousarray(chair_mesh.vertices).tobytes())
-        digest.update(np.ascontiguousarray(chair_mesh.faces).tobytes())
-        pose = (*np.asarray(sitting_pose.position, dtype=float).tolist(), float(sitting_pose.yaw))
-        return digest.hexdigest(), pose, tuple(float(v) for v in se2_goal)
-
-    def get(self, key: tuple) -> SeatingCheck | None:
-        with self._lock:
-            answer = self._answers.get(key)
-            if answer is not None:
-                self._answers.move_to_end(key)
-                self.hits += 1
-            return answer
-
-    def put(self, key: tuple, answer: SeatingCheck) -> None:
-        with self._lock:
-            self._answers[key] = answer
-            self._answers.move_to_end(key)
-            while len(self._answers) > self._max_size:
-                self._answers.popitem(last=False)
-
-
-PREPLANS = PreplanMemo()
-"""The memo :func:`default_seating_validator`'s pre-plan answers from."""
-
-
-def default_seating_validator() -> SeatingValidator:
-    """The whole-body pre-plan when ``skills.planning.wholebody`` provides it, else reach."""
-    try:
-        module = importlib.import_module("skills.planning.wholebody")
-    except ModuleNotFoundError as error:
-        if error.name and "skills.planning.wholebody".startswith(error.name):
-            return reach_validator
-        raise
-    preplan = getattr(module, "preplan_approach", None)
-    if preplan is None:
-        return reach_validator
-    infeasible = getattr(module, "InfeasibleSeating", ValueError)
-    stance = getattr(module, "STANCE", None)
-
-    def wholebody_validator(
-        chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
-    ) -> SeatingCheck:
-        key = PREPLANS.key(chair_mesh, sitting_pose, se2_goal)
-        answer = PREPLANS.get(key)
-        if answer is not None:
-            return answer
-        try:
-            answer = SeatingCheck(raise_at=preplan(chair_mesh, sitting_pose, se2_goal))
-        except infeasible as error:
-            constraint = getattr(error, "constraint", "")
-            answer = SeatingCheck(
-                f"seating pre-plan infeasible: {error}",
-                bear_placement=constraint == "bear placement",
-                too_close=constraint == stance,
-            )
-        PREPLANS.put(key, answer)
-        return answer
-
-    return wholebody_validator
 
 
 def stepped_back(se2_goal: SE2Pose, distance_m: float) -> SE2Pose:
@@ -217,14 +88,10 @@ class PlannedPath(NamedTuple):
 
 
 def _seed_ompl(seed: int) -> None:
-    # OMPL complains (harmlessly) when reseeded after its first RNG was made; the reseed
-    # still makes every later planner's sampler sequence a function of ``seed``.
-    level = ou.getLogLevel()
-    ou.setLogLevel(ou.LogLevel.LOG_NONE)
-    try:
-        ou.RNG.setSeed(int(seed) % (2**31 - 1) + 1)
-    finally:
-        ou.setLogLevel(level)
+    # OMPL complains (harmlessly, see OMPL_LOG_LEVEL) when reseeded after its first RNG was
+    # made; the reseed still makes every later planner's sampler sequence a function of
+    # ``seed``.
+    ou.RNG.setSeed(int(seed) % (2**31 - 1) + 1)
 
 
 def goal_blocked_reason(checker: NaoCollisionChecker, goal: SE2Pose) -> str:
@@ -264,14 +131,9 @@ def plan_se2_path(
     if blocker:
         return PlannedPath((), 0.0, f"the humanoid's own pose touches the {blocker}")
 
-    log_level = ou.getLogLevel()
-    ou.setLogLevel(ou.LogLevel.LOG_ERROR)  # this build defaults to DEBUG chatter on stderr
-    try:
-        return _run_rrt_connect(
-            checker, start, goal, seed=seed, check_budget=check_budget, time_budget_s=time_budget_s
-        )
-    finally:
-        ou.setLogLevel(log_level)
+    return _run_rrt_connect(
+        checker, start, goal, seed=seed, check_budget=check_budget, time_budget_s=time_budget_s
+    )
 
 
 def _run_rrt_connect(
@@ -350,7 +212,7 @@ def check_accessibility(
         arena: walls and fixed obstacles.
         seed: OMPL's random seed.
         seating_validator: checks seating from s_goal; default: the whole-body pre-plan
-            when available, else the reach model.
+            (:func:`skills.planning.preplan.wholebody_validator`).
         check_budget: RRTConnect gives up after this many state validity checks.
 
     Returns:
@@ -359,21 +221,12 @@ def check_accessibility(
     Raises:
         AccessibilityError: an empty chair mesh or a non-finite pose.
     """
-    if chair_mesh is None or len(chair_mesh.faces) == 0:
-        raise AccessibilityError("the chair mesh has no triangles")
-    if not (np.all(np.isfinite(sitting_pose.position)) and math.isfinite(sitting_pose.yaw)):
-        raise AccessibilityError("the sitting pose is not finite")
-    if not all(math.isfinite(v) for v in humanoid_pose):
-        raise AccessibilityError("the humanoid's pose is not finite")
-
+    _check_inputs(chair_mesh, sitting_pose, humanoid_pose)
     checker = NaoCollisionChecker(arena, chair_solid_boxes(chair_mesh))
-    validator = seating_validator or default_seating_validator()
+    validator = seating_validator or wholebody_validator
     choice = choose_stance(chair_mesh, sitting_pose, checker, validator, scene=True)
     if choice.se2_goal is None:
-        reason = choice.reason
-        if choice.check.reason and not reason.startswith("seating pre-plan"):
-            reason = f"seating pre-plan infeasible: {reason}"
-        return AccessibilityResult(False, None, choice.sitting_pose, (), reason)
+        return AccessibilityResult(False, None, choice.sitting_pose, (), _refusal(choice))
     se2_goal, sitting_pose = choice.se2_goal, choice.sitting_pose
 
     # The walk ends where the walking NAO's ellipsoid is clear; from there it steps
@@ -400,6 +253,26 @@ def check_accessibility(
         raise_at=raise_at,
         step_in_from=approach if raise_at is None else None,
     )
+
+
+def _check_inputs(
+    chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, humanoid_pose: SE2Pose
+) -> None:
+    """Raises :class:`AccessibilityError` on an empty chair mesh or a non-finite pose."""
+    if chair_mesh is None or len(chair_mesh.faces) == 0:
+        raise AccessibilityError("the chair mesh has no triangles")
+    if not (np.all(np.isfinite(sitting_pose.position)) and math.isfinite(sitting_pose.yaw)):
+        raise AccessibilityError("the sitting pose is not finite")
+    if not all(math.isfinite(v) for v in humanoid_pose):
+        raise AccessibilityError("the humanoid's pose is not finite")
+
+
+def _refusal(choice: StanceChoice) -> str:
+    """Why no stance works, naming the pre-plan when it refused."""
+    reason = choice.reason
+    if choice.check.reason and not reason.startswith("seating pre-plan"):
+        reason = f"seating pre-plan infeasible: {reason}"
+    return reason
 
 
 def _farther(se2_goal: SE2Pose, a: SE2Pose, b: SE2Pose) -> SE2Pose:

@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -49,6 +48,7 @@ from core.arena import Arena, Box2D
 from core.geometry import SittingPose, wrap_angle
 from core.se2 import SE2Pose
 from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
+from skills.planning.preplan import SeatingCheck, SeatingValidator, wholebody_validator
 from skills.planning.seat import STEP_M, SeatRay, seat_ray
 from skills.planning.wholebody.chair_profile import (
     BAND_HALF_WIDTH_M,
@@ -75,7 +75,7 @@ TURNS_RAD = tuple(math.radians(d) for d in (5.0, -5.0, 10.0, -10.0))
 is itself uncertain by a few degrees (the drops' start jitter is 2 deg, and the vote's
 weighted mean moves with them), a front bar or a rail may cross the band a few
 centimetres nearer on one side, and a wall may leave room for a slanted approach. 10 deg
-stays well within the planner's facing tolerance (``seating.FACING_TOLERANCE_RAD``, 20
+stays well within the planner's facing tolerance (``wholebody.scene.FACING_TOLERANCE_RAD``, 20
 deg) and the seating judge's 45 deg."""
 PREPLANS_PER_TURN = 2
 """Pre-plans each turned ray may ask for: the reach model's first pairs are right when
@@ -85,28 +85,6 @@ MAX_CENTRING_M = BEAR_LANE_HALF_WIDTH_M - 0.01
 armrests: the bear's lane, less a centimetre, still covers the imagined p. A sitter lands
 where its drop put it, often a few centimetres off the middle between armrests, and the
 NAO's hands need the middle."""
-
-
-class SeatingCheck(NamedTuple):
-    """A seating validator's verdict.
-
-    Attributes:
-        reason: why seating from s_goal is infeasible ("" when feasible).
-        bear_placement: the failure is about where the bear goes (reach).
-        too_close: the NAO stands too close to the chair (its feet, or the bear it
-            carries, in it).
-        raise_at: feasible only with the bear raised, which the NAO does here (back
-            along the ray from s_goal) before it steps in; None: walk in as it carries.
-    """
-
-    reason: str = ""
-    bear_placement: bool = False
-    too_close: bool = False
-    raise_at: SE2Pose | None = None
-
-
-SeatingValidator = Callable[[trimesh.Trimesh, SittingPose, SE2Pose], SeatingCheck]
-"""Checks seating the bear at g from s_goal (the whole-body pre-plan, or the reach model)."""
 
 
 class StanceChoice(NamedTuple):
@@ -369,24 +347,11 @@ def choose_stance_on_ray(
         return StanceChoice(None, sitting_pose, "no seat under the sitting position")
     seat_top = planner_seat_top(chair_mesh, sitting_pose, ray)
     points = surface_points(chair_mesh) if points is None else points
-    centred = centred_between_rails(chair_mesh, sitting_pose, seat_top, points)
-    centred_m = 0.0
-    if centred is not sitting_pose:
-        centred_ray = seat_ray(chair_mesh, centred)
-        if len(centred_ray.slides_m):
-            centred_m = float(
-                np.linalg.norm(np.asarray(centred.position) - np.asarray(sitting_pose.position))
-            )
-            sitting_pose, ray = centred, centred_ray
-            seat_top = planner_seat_top(chair_mesh, sitting_pose, ray)
+    sitting_pose, ray, seat_top, centred_m = _centred_ray(
+        chair_mesh, sitting_pose, ray, seat_top, points
+    )
     chair = chair_along_ray(chair_mesh, sitting_pose, seat_top, points)
     seat_under_p0 = float(ray.seat_heights_m[0])
-    # Something standing on the seat in the band (armrests, a backrest) in front of the
-    # bear's back: the planar planner may still find its way (its seat top is the highest
-    # horizontal surface near p), so it only names the refusal when the pre-plan finds none.
-    blocked_above = not np.any(
-        ray.slides_m >= chair.above_seat_m + BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M
-    )
     front = chair.front_m
     none = StanceChoice(None, sitting_pose, "", seat_height_m=seat_under_p0, centred_m=centred_m)
     # The planner lets the bear go over its own seat top (a dished seat's rim, rails):
@@ -402,21 +367,96 @@ def choose_stance_on_ray(
             reason=f"no spot on the sitting ray clear of the chair and {blocker}",
             depends_on_scene=True,
         )
-    walk_stances = np.arange(walk_in, walk_in + STANCE_SEARCH_M + 1e-9, STEP_M)
-    nearest = max(front + float(model.seat_fronts_m[0]), 0.0)
-    step_stances = np.arange(walk_in - STEP_M, nearest - 1e-9, -STEP_M)
-    pairs = _model_pairs(planner_ray, front, walk_stances, model)
-    pairs += _model_pairs(planner_ray, front, step_stances, model)
+    pairs, stances = _stance_pairs(planner_ray, front, walk_in, model)
     if not pairs:
         return none._replace(
-            reason=_out_of_reach_reason(
-                planner_ray, front, np.concatenate([walk_stances, step_stances]), model
-            ),
+            reason=_out_of_reach_reason(planner_ray, front, stances, model),
             depends_on_scene=scene and walk_in > chair_clear + 1e-9,
         )
+    search = _RaySearch(
+        chair_mesh, sitting_pose, checker, validator, scene, true_height, walk_in, none
+    )
+    last = _confirm_pairs(search, pairs, max_preplans)
+    if last.se2_goal is None and _closed_above(chair, ray) and not last.depends_on_scene:
+        # The planar planner may still find its way past what stands on the seat (its
+        # seat top is the highest horizontal surface near p), so that only names the
+        # refusal when the pre-plan finds none.
+        return last._replace(reason=f"{_blocked_above_reason(chair, ray)} ({last.reason})")
+    return last
+
+
+def _stance_pairs(
+    planner_ray: SeatRay, front_m: float, walk_in_m: float, model: ReachModel
+) -> tuple[list[tuple[float, float, float]], np.ndarray]:
+    """The reach model's (slide, seat height, stance) pairs (:func:`_model_pairs`) over the
+    stances walked to (from ``walk_in_m`` back by ``STANCE_SEARCH_M``), then those stepped
+    in to (nearer, down to the front of the feet at the chair's front), and all those
+    stances (metres from p₀)."""
+    walk_stances = np.arange(walk_in_m, walk_in_m + STANCE_SEARCH_M + 1e-9, STEP_M)
+    nearest = max(front_m + float(model.seat_fronts_m[0]), 0.0)
+    step_stances = np.arange(walk_in_m - STEP_M, nearest - 1e-9, -STEP_M)
+    pairs = _model_pairs(planner_ray, front_m, walk_stances, model)
+    pairs += _model_pairs(planner_ray, front_m, step_stances, model)
+    return pairs, np.concatenate([walk_stances, step_stances])
+
+
+def _centred_ray(
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    ray: SeatRay,
+    seat_top_m: float,
+    points: np.ndarray,
+) -> tuple[SittingPose, SeatRay, float, float]:
+    """(sitting pose, its seat ray, the planner's seat top in metres, how far p moved in
+    metres) with p centred between armrests (:func:`centred_between_rails`) when there is
+    a seat under the centred p; else the given ones and 0."""
+    centred = centred_between_rails(chair_mesh, sitting_pose, seat_top_m, points)
+    if centred is sitting_pose:
+        return sitting_pose, ray, seat_top_m, 0.0
+    centred_ray = seat_ray(chair_mesh, centred)
+    if not len(centred_ray.slides_m):
+        return sitting_pose, ray, seat_top_m, 0.0
+    centred_m = float(
+        np.linalg.norm(np.asarray(centred.position) - np.asarray(sitting_pose.position))
+    )
+    return centred, centred_ray, planner_seat_top(chair_mesh, centred, centred_ray), centred_m
+
+
+class _RaySearch(NamedTuple):
+    """One ray's search, as the pre-plan confirms the reach model's pairs on it.
+
+    Attributes:
+        chair_mesh: the chair, world frame, z up.
+        sitting_pose: g = (p₀, γ) the ray starts from (centred between armrests).
+        checker: the NAO-versus-scene collision checker.
+        validator: the seating pre-plan.
+        scene: also keep the stance clear of walls and obstacles inside the arena.
+        true_height: slide (metres) -> the seat's height (metres) under p there.
+        walk_in: the first stance (metres from p₀) the walking NAO's ellipsoid clears.
+        none: the ray's choice before any pair is found.
+    """
+
+    chair_mesh: trimesh.Trimesh
+    sitting_pose: SittingPose
+    checker: NaoCollisionChecker
+    validator: SeatingValidator
+    scene: bool
+    true_height: dict[float, float]
+    walk_in: float
+    none: StanceChoice
+
+
+def _confirm_pairs(
+    search: _RaySearch, pairs: list[tuple[float, float, float]], max_preplans: int
+) -> StanceChoice:
+    """The first of the (slide, seat height, stance) ``pairs`` the pre-plan confirms, or
+    the last failure; asking it at most ``max_preplans`` times (``preplans`` says how
+    many)."""
+    sitting_pose, checker, none = search.sitting_pose, search.checker, search.none
+    seat_under_p0 = none.seat_height_m
     p0 = np.asarray(sitting_pose.position, dtype=float)
     u = sitting_pose.direction()
-    approach_from = goal_on_ray(sitting_pose, walk_in)
+    approach_from = goal_on_ray(sitting_pose, search.walk_in)
     last = none
     preplans = 0
     too_close_within = -math.inf  # stances at or nearer than this put the NAO in the chair
@@ -428,10 +468,12 @@ def choose_stance_on_ray(
             continue
         moved = p0.copy()
         moved[:2] += slide * u
-        moved[2] += true_height[slide] - seat_under_p0
+        moved[2] += search.true_height[slide] - seat_under_p0
         pose = SittingPose(moved, sitting_pose.yaw)
         goal = goal_on_ray(sitting_pose, stance)
-        if scene and (checker.collides_with_walls(goal) or checker.collides_with_obstacles(goal)):
+        if search.scene and (
+            checker.collides_with_walls(goal) or checker.collides_with_obstacles(goal)
+        ):
             blocked = "the wall" if checker.collides_with_walls(goal) else "the obstacle"
             if not last.reason:
                 last = none._replace(
@@ -439,10 +481,10 @@ def choose_stance_on_ray(
                     depends_on_scene=True,
                 )
             continue
-        check = validator(chair_mesh, pose, goal)
+        check = search.validator(search.chair_mesh, pose, goal)
         preplans += 1
         if not check.reason:
-            approach = approach_from if stance < walk_in - 1e-9 else None
+            approach = approach_from if stance < search.walk_in - 1e-9 else None
             return none._replace(
                 se2_goal=goal,
                 sitting_pose=pose,
@@ -461,10 +503,6 @@ def choose_stance_on_ray(
         else:
             out_of_reach[slide] = -math.inf
         last = none._replace(sitting_pose=pose, reason=check.reason, check=check, slide_m=slide)
-    if blocked_above and not last.depends_on_scene:
-        return last._replace(
-            reason=f"{_blocked_above_reason(chair, ray)} ({last.reason})", preplans=preplans
-        )
     return last._replace(preplans=preplans)
 
 
@@ -480,6 +518,12 @@ def _model_pairs(
             if not math.isnan(d_max) and stance - slide <= d_max:
                 pairs.append((float(slide), float(height), float(stance)))
     return pairs
+
+
+def _closed_above(chair: ChairAlongRay, ray: SeatRay) -> bool:
+    """Whether something standing on the seat in the band (armrests, a backrest) leaves
+    no sitting point on the ray room for the bear's back in front of it."""
+    return not np.any(ray.slides_m >= chair.above_seat_m + BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M)
 
 
 def _blocked_above_reason(chair: ChairAlongRay, ray: SeatRay) -> str:
@@ -555,15 +599,13 @@ def check_seat_reachable(
         sitting_pose: the imagined g, world frame.
         seating_validator: the pre-plan (default: the whole-body one).
     """
-    from skills.planning.se2 import default_seating_validator
-
     began = time.perf_counter()
     ray = seat_ray(chair_mesh, sitting_pose)
     if len(ray.slides_m) == 0:
         p_z = float(sitting_pose.position[2])
         return SeatReachability(False, "no seat under the sitting position", p_z)
     checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_solid_boxes(chair_mesh))
-    validator = seating_validator or default_seating_validator()
+    validator = seating_validator or wholebody_validator
     choice = choose_stance(chair_mesh, sitting_pose, checker, validator, scene=False)
     p0 = np.asarray(sitting_pose.position, dtype=float)
     height = choice.seat_height_m

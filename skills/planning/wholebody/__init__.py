@@ -15,21 +15,20 @@ Infeasible plans raise :class:`InfeasibleSeating` (a ``ValueError``) naming the 
 constraint.
 """
 
-from skills.planning.wholebody.seating import (
-    RAISED_POSTURE,
-    REST_POSTURE,
-    STANCE,
-    STANDING_POSTURE,
-    InfeasibleSeating,
+from skills.planning.wholebody.execution import (
     SeatingCancelled,
     execute_seating,
-    plan_raise,
+    raise_bear,
+    release_and_stand,
+)
+from skills.planning.wholebody.infeasible import STANCE, InfeasibleSeating
+from skills.planning.wholebody.postures import RAISED_POSTURE, REST_POSTURE, STANDING_POSTURE
+from skills.planning.wholebody.raising import plan_raise
+from skills.planning.wholebody.seating import (
     plan_seating,
     plan_seating_where_standing,
     preplan_approach,
     preplan_seating,
-    raise_bear,
-    release_and_stand,
 )
 
 __all__ = [

@@ -134,6 +134,25 @@ def fit_chair_profile(
     if len(points) == 0:
         raise ChairProfileError("no part of the chair lies in front of the NAO")
 
+    seat_top_z = _seat_top_z(points, normals, g_x, g_z)
+    below = points[:, 2] <= seat_top_z + 0.01
+    seat_front_x = float(np.min(points[below, 0]))
+    above = stands_above_seat(points[:, 1], points[:, 2], seat_top_z)
+    if np.any(above):
+        back_front_x = float(np.min(points[above, 0]))
+        back_top_z = float(np.max(points[above, 2]))
+    else:
+        back_front_x, back_top_z = seat_front_x + 10.0, seat_top_z
+    return ChairProfile(seat_front_x, seat_top_z, back_front_x, back_top_z)
+
+
+def _seat_top_z(points: np.ndarray, normals: np.ndarray, g_x: float, g_z: float) -> float:
+    """The seat top (metres) under g = (``g_x``, ``g_z``) from the band's (N, 3) surface
+    points and their normals (NAO frame, y from g).
+
+    Raises:
+        ChairProfileError: no chair surface lies under g.
+    """
     # The seat top: the highest horizontal surface under g not far above it (a pelvis
     # sits a few centimetres above the seat; higher horizontal surfaces are armrests or
     # the backrest's top), in the bear's lane; beside it, a rail the hands must pass over
@@ -157,15 +176,7 @@ def fit_chair_profile(
     if rails.any():
         rail_top = float(np.max(points[rails, 2]))
         seat_top_z = max(seat_top_z, rail_top - HANDS_ABOVE_SEAT_M + RAIL_CLEARANCE_M)
-    below = points[:, 2] <= seat_top_z + 0.01
-    seat_front_x = float(np.min(points[below, 0]))
-    above = stands_above_seat(points[:, 1], points[:, 2], seat_top_z)
-    if np.any(above):
-        back_front_x = float(np.min(points[above, 0]))
-        back_top_z = float(np.max(points[above, 2]))
-    else:
-        back_front_x, back_top_z = seat_front_x + 10.0, seat_top_z
-    return ChairProfile(seat_front_x, seat_top_z, back_front_x, back_top_z)
+    return seat_top_z
 
 
 def largest_horizontal_surface_height(chair_mesh: trimesh.Trimesh, *, bin_m: float = 0.01) -> float:

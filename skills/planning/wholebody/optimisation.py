@@ -84,7 +84,7 @@ N_KNOTS = 30
 COARSE_KNOTS = 15
 """Knots of the trajectory tried first (about 2.3 times faster to solve than
 :data:`N_KNOTS`); the planner checks it between its knots too and falls back to
-:data:`N_KNOTS` when it does not hold (``seating.solve_trajectory``)."""
+:data:`N_KNOTS` when it does not hold (``trajectory.solve_trajectory``)."""
 
 # (link, offset in link frame (m), radius (m), label): sampled points of the NAO's body.
 LEG_TORSO_HEAD_POINTS = (
@@ -222,96 +222,26 @@ class SeatingProblems:
 
     # ---- the posture model -------------------------------------------------------
     def _posture(self, q: ca.SX, chair: ca.SX, bear_held: ca.SX, released: ca.SX):
+        """The posture vector's expressions, rows and bounds (before the solve-time ones),
+        and the :class:`PostureGeometry` outputs, of a symbolic posture ``q``."""
         nao = self.nao
         frames = nao.frames(q)
-        nao_com, nao_mass = nao.centre_of_mass(frames)
-        # The hands frame (the palms' middle, their mean orientation: a pure pitch ψ by
-        # symmetry) and the bear rigidly attached to it as in the carrying posture.
-        palm = nao.point(frames, "l_wrist", PALM_IN_WRIST_M)
-        rot = frames["l_wrist"][:3, :3]
-        hands_x = ca.vertcat(rot[0, 0], rot[2, 0])
-        hands_z = ca.vertcat(-hands_x[1], hands_x[0])
-        grasp_pitch, grasp_offset = carrying_grasp()
-        bear_base = palm + grasp_offset[0] * hands_x + grasp_offset[1] * hands_z
-        c, s = math.cos(grasp_pitch), math.sin(grasp_pitch)
-        forward = c * hands_x + s * hands_z
-        up = -s * hands_x + c * hands_z
-        bear_com = bear_base + BEAR_COM_HEIGHT_M * up
-        bear_mass = BEAR_MASS_KG * bear_held
-        com = (nao_mass * nao_com + bear_mass * bear_com) / (nao_mass + bear_mass)
-        torso_rot = frames["torso"][:3, :3]
-        torso_pitch = ca.atan2(-torso_rot[2, 0], torso_rot[0, 0])
-
-        seat_front, seat_top, back_front, back_top = (chair[i] for i in range(4))
-
-        def chair_clearance(p: ca.SX) -> ca.SX:
-            seat = _smooth_max(seat_front - p[0], p[1] - seat_top)
-            back = _smooth_max(back_front - p[0], p[1] - back_top)
-            return ca.fmin(seat, back)
-
-        rows: list[ConstraintRow] = []
-        exprs: list[ca.SX] = []
-        lower: list[float] = []
-        upper: list[float] = []
-
-        def add(group: str, label: str, expr: ca.SX, lo: float, hi: float = math.inf) -> None:
-            rows.append(ConstraintRow(group, label))
-            exprs.append(expr)
-            lower.append(lo)
-            upper.append(hi)
-
+        bear_base, forward, up, com, torso_pitch = _held_bear(nao, frames, bear_held)
+        rows = _ConstraintRows()
         # Placement and uprightness get their bounds at solve time (goal vs motion).
-        add("bear placement", "forward", bear_base[0], -math.inf, math.inf)
-        add("bear placement", "height", bear_base[1], -math.inf, math.inf)
-        add("bear upright", "bear tilt", forward[1] * bear_held, -math.inf, math.inf)
-        add(
+        rows.add("bear placement", "forward", bear_base[0], -math.inf, math.inf)
+        rows.add("bear placement", "height", bear_base[1], -math.inf, math.inf)
+        rows.add("bear upright", "bear tilt", forward[1] * bear_held, -math.inf, math.inf)
+        rows.add(
             "support polygon",
             "centre of mass",
             com[0],
             nao.support_x[0] + SUPPORT_MARGIN_M,
             nao.support_x[1] - SUPPORT_MARGIN_M,
         )
-        body_points: dict[str, ca.SX] = {}
-        for link, offset, radius, label in LEG_TORSO_HEAD_POINTS + ARM_POINTS:
-            point = nao.point(frames, link, offset)
-            body_points[label] = point
-            add("chair collision", f"NAO {label}", chair_clearance(point) - radius, BODY_MARGIN_M)
-            add("floor", f"NAO {label}", point[1] - radius, 0.0)
-        # A released bear (bear_held = 0) no longer moves with the hands: its chair and
-        # floor rows are lifted by a metre.
-        lift = 1.0 - bear_held
-        bear_points: dict[str, ca.SX] = {}
-        for bx, bz, label in BEAR_OUTLINE:
-            point = bear_base + bx * forward + bz * up
-            bear_points[label] = point
-            add("chair collision", label, chair_clearance(point) + lift, BEAR_CHAIR_MARGIN_M)
-            add("floor", label, point[1] + lift, 0.0)
-        # The body keeps clear of the bear held, and of the bear let go where it rests:
-        # standing up, the head must not sweep through it.
-        body_bear_base = bear_held * bear_base + (1.0 - bear_held) * released[0:2]
-        body_bear_forward = bear_held * forward + (1.0 - bear_held) * released[2:4]
-        body_bear_up = ca.vertcat(-body_bear_forward[1], body_bear_forward[0])
-        for _link, _offset, radius, label in LEG_TORSO_HEAD_POINTS:
-            rel = body_points[label] - body_bear_base
-            lx = ca.dot(rel, body_bear_forward)
-            lz = ca.dot(rel, body_bear_up)
-            outline = _smooth_max_n(
-                [-BEAR_DEPTH_M / 2 - lx, lx - BEAR_DEPTH_M / 2, -lz, lz - BEAR_HEIGHT_M]
-            )
-            # The let-go bear's snout (lx < 0 is its face) too: standing up with only the
-            # outline clear, the head swept 3 cm into it and pushed the bear over. It may
-            # be touched, and entered as deep as where it was let go (released[4]); the
-            # held bear's is left to the outline's margin.
-            snout = _smooth_max_n(
-                [
-                    -BEAR_DEPTH_M / 2 - BEAR_SNOUT_M - lx,
-                    lx + BEAR_DEPTH_M / 2,
-                    BEAR_SNOUT_Z_M[0] - lz,
-                    lz - BEAR_SNOUT_Z_M[1],
-                ]
-            )
-            outside = ca.fmin(outline, snout + BODY_MARGIN_M + released[4] + bear_held)
-            add("bear-body collision", f"NAO {label}", outside - radius, BODY_MARGIN_M)
+        body_points = _add_body_rows(rows, nao, frames, chair)
+        bear_points = _add_bear_rows(rows, bear_base, forward, up, chair, bear_held)
+        _add_body_bear_rows(rows, body_points, bear_base, forward, bear_held, released)
         geometry = [
             com[0],
             bear_base,
@@ -322,7 +252,13 @@ class SeatingProblems:
         ]
         self.body_labels = list(body_points)
         self.bear_labels = list(bear_points)
-        return ca.vertcat(*exprs), rows, np.array(lower), np.array(upper), geometry
+        return (
+            ca.vertcat(*rows.exprs),
+            rows.rows,
+            np.array(rows.lower),
+            np.array(rows.upper),
+            geometry,
+        )
 
     def geometry(self, q: np.ndarray, bear_held: bool = True) -> PostureGeometry:
         """Numeric quantities of a posture (for checks and reports)."""
@@ -388,6 +324,136 @@ class SeatingProblems:
             "g": g,
         }
         return ca.nlpsol(f"seating_trajectory_{n}", "ipopt", nlp, _ipopt_options(300))
+
+
+def _held_bear(
+    nao: PlanarNao, frames: dict[str, ca.SX], bear_held: ca.SX
+) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX, ca.SX]:
+    """(bear base (x, z), its forward and up axes, the centre of mass (x, z) of the NAO and
+    the bear it holds, the torso's pitch) of a symbolic posture's ``frames``."""
+    nao_com, nao_mass = nao.centre_of_mass(frames)
+    # The hands frame (the palms' middle, their mean orientation: a pure pitch ψ by
+    # symmetry) and the bear rigidly attached to it as in the carrying posture.
+    palm = nao.point(frames, "l_wrist", PALM_IN_WRIST_M)
+    rot = frames["l_wrist"][:3, :3]
+    hands_x = ca.vertcat(rot[0, 0], rot[2, 0])
+    hands_z = ca.vertcat(-hands_x[1], hands_x[0])
+    grasp_pitch, grasp_offset = carrying_grasp()
+    bear_base = palm + grasp_offset[0] * hands_x + grasp_offset[1] * hands_z
+    c, s = math.cos(grasp_pitch), math.sin(grasp_pitch)
+    forward = c * hands_x + s * hands_z
+    up = -s * hands_x + c * hands_z
+    bear_com = bear_base + BEAR_COM_HEIGHT_M * up
+    bear_mass = BEAR_MASS_KG * bear_held
+    com = (nao_mass * nao_com + bear_mass * bear_com) / (nao_mass + bear_mass)
+    torso_rot = frames["torso"][:3, :3]
+    torso_pitch = ca.atan2(-torso_rot[2, 0], torso_rot[0, 0])
+    return bear_base, forward, up, com, torso_pitch
+
+
+class _ConstraintRows:
+    """The posture constraints as they are added: rows, expressions and bounds."""
+
+    def __init__(self) -> None:
+        self.rows: list[ConstraintRow] = []
+        self.exprs: list[ca.SX] = []
+        self.lower: list[float] = []
+        self.upper: list[float] = []
+
+    def add(self, group: str, label: str, expr: ca.SX, lo: float, hi: float = math.inf) -> None:
+        """Adds ``lo <= expr <= hi``."""
+        self.rows.append(ConstraintRow(group, label))
+        self.exprs.append(expr)
+        self.lower.append(lo)
+        self.upper.append(hi)
+
+
+def _chair_clearance(chair: ca.SX, p: ca.SX) -> ca.SX:
+    """The smoothed clearance (metres) of a point (x, z) to the chair's two blocks."""
+    seat_front, seat_top, back_front, back_top = (chair[i] for i in range(4))
+    seat = _smooth_max(seat_front - p[0], p[1] - seat_top)
+    back = _smooth_max(back_front - p[0], p[1] - back_top)
+    return ca.fmin(seat, back)
+
+
+def _add_body_rows(
+    rows: _ConstraintRows, nao: PlanarNao, frames: dict[str, ca.SX], chair: ca.SX
+) -> dict[str, ca.SX]:
+    """Adds the chair and floor rows of the NAO's sampled body points; returns the points
+    by label."""
+    body_points: dict[str, ca.SX] = {}
+    for link, offset, radius, label in LEG_TORSO_HEAD_POINTS + ARM_POINTS:
+        point = nao.point(frames, link, offset)
+        body_points[label] = point
+        rows.add(
+            "chair collision",
+            f"NAO {label}",
+            _chair_clearance(chair, point) - radius,
+            BODY_MARGIN_M,
+        )
+        rows.add("floor", f"NAO {label}", point[1] - radius, 0.0)
+    return body_points
+
+
+def _add_bear_rows(
+    rows: _ConstraintRows,
+    bear_base: ca.SX,
+    forward: ca.SX,
+    up: ca.SX,
+    chair: ca.SX,
+    bear_held: ca.SX,
+) -> dict[str, ca.SX]:
+    """Adds the chair and floor rows of the held bear's outline; returns its points by
+    label."""
+    # A released bear (bear_held = 0) no longer moves with the hands: its chair and
+    # floor rows are lifted by a metre.
+    lift = 1.0 - bear_held
+    bear_points: dict[str, ca.SX] = {}
+    for bx, bz, label in BEAR_OUTLINE:
+        point = bear_base + bx * forward + bz * up
+        bear_points[label] = point
+        rows.add(
+            "chair collision", label, _chair_clearance(chair, point) + lift, BEAR_CHAIR_MARGIN_M
+        )
+        rows.add("floor", label, point[1] + lift, 0.0)
+    return bear_points
+
+
+def _add_body_bear_rows(
+    rows: _ConstraintRows,
+    body_points: dict[str, ca.SX],
+    bear_base: ca.SX,
+    forward: ca.SX,
+    bear_held: ca.SX,
+    released: ca.SX,
+) -> None:
+    """Adds the rows that keep the NAO's legs, torso and head clear of the bear."""
+    # The body keeps clear of the bear held, and of the bear let go where it rests:
+    # standing up, the head must not sweep through it.
+    body_bear_base = bear_held * bear_base + (1.0 - bear_held) * released[0:2]
+    body_bear_forward = bear_held * forward + (1.0 - bear_held) * released[2:4]
+    body_bear_up = ca.vertcat(-body_bear_forward[1], body_bear_forward[0])
+    for _link, _offset, radius, label in LEG_TORSO_HEAD_POINTS:
+        rel = body_points[label] - body_bear_base
+        lx = ca.dot(rel, body_bear_forward)
+        lz = ca.dot(rel, body_bear_up)
+        outline = _smooth_max_n(
+            [-BEAR_DEPTH_M / 2 - lx, lx - BEAR_DEPTH_M / 2, -lz, lz - BEAR_HEIGHT_M]
+        )
+        # The let-go bear's snout (lx < 0 is its face) too: standing up with only the
+        # outline clear, the head swept 3 cm into it and pushed the bear over. It may
+        # be touched, and entered as deep as where it was let go (released[4]); the
+        # held bear's is left to the outline's margin.
+        snout = _smooth_max_n(
+            [
+                -BEAR_DEPTH_M / 2 - BEAR_SNOUT_M - lx,
+                lx + BEAR_DEPTH_M / 2,
+                BEAR_SNOUT_Z_M[0] - lz,
+                lz - BEAR_SNOUT_Z_M[1],
+            ]
+        )
+        outside = ca.fmin(outline, snout + BODY_MARGIN_M + released[4] + bear_held)
+        rows.add("bear-body collision", f"NAO {label}", outside - radius, BODY_MARGIN_M)
 
 
 def released_bear(geometry: PostureGeometry) -> np.ndarray:

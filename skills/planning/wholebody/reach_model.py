@@ -39,6 +39,7 @@ import casadi as ca
 import numpy as np
 
 from core.nao_carrying import BEAR_SEAT_CLEARANCE_M
+from skills.planning.wholebody.chair_profile import ChairProfile
 from skills.planning.wholebody.optimisation import (
     BEAR_CHAIR_MARGIN_M,
     BEAR_TILT_GOAL_RAD,
@@ -47,6 +48,8 @@ from skills.planning.wholebody.optimisation import (
     _ipopt_options,
     seating_problems,
 )
+from skills.planning.wholebody.posture_check import CHECK_TOLERANCE, exact_posture_violation
+from skills.planning.wholebody.postures import RAISED_POSTURE
 
 TABLE_PATH = Path(__file__).with_name("reach_table.json")
 SEAT_HEIGHTS_M = np.round(np.arange(0.10, 0.501, 0.01), 3)
@@ -56,7 +59,6 @@ SEAT_FRONTS_M = np.round(np.arange(0.10, 0.401, 0.02), 3)
 0.10 m ahead of the NAO frame's origin: no stance puts a seat's front nearer."""
 HEIGHT_TOLERANCE_M = 0.001
 """The bear's base height is held this close to ``h + BEAR_SEAT_CLEARANCE_M``."""
-CHECK_TOLERANCE = 1e-4
 NO_BACKREST = 10.0
 """A back block this far ahead (metres) stands for "no backrest"."""
 
@@ -79,7 +81,7 @@ class ReachModel(NamedTuple):
         seat_fronts_m: (F,) seat front planes in the NAO frame, metres.
         max_forward_m: (H, F) the farthest forward bear placement, metres (NaN: none).
         carry_height_m: the highest the NAO carries the bear's base into a stance (its
-            raised posture, :data:`.seating.RAISED_POSTURE`), metres: the bear comes over
+            raised posture, :data:`.postures.RAISED_POSTURE`), metres: the bear comes over
             the seat's front at this height, so no seat above it less
             ``BEAR_CHAIR_MARGIN_M`` can be reached from any stance.
     """
@@ -179,9 +181,6 @@ class _MaxForwardProblem:
 
     def solve(self, seat_height_m: float, seat_front_m: float) -> float:
         """d_max of one cell (metres), NaN when no guess reaches a feasible posture."""
-        from skills.planning.wholebody.chair_profile import ChairProfile
-        from skills.planning.wholebody.seating import exact_posture_violation
-
         problems = self.problems
         profile = ChairProfile(seat_front_m, seat_height_m, NO_BACKREST, seat_height_m)
         lower, upper = problems.posture_bounds(g_xz=None, tilt_rad=BEAR_TILT_GOAL_RAD)
@@ -225,8 +224,6 @@ def compute_reach_model(
 
 def raised_carry_height_m() -> float:
     """Height (metres) of the bear's base in the raised carrying posture."""
-    from skills.planning.wholebody.seating import RAISED_POSTURE
-
     return float(seating_problems().geometry(RAISED_POSTURE).bear_base[1])
 
 
