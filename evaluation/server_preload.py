@@ -20,17 +20,15 @@ PRELOADED_MODULES = (
     "executive.mission",
     "evaluation.worker",
     "trees.mission",
+    "skills.default_skills",  # every skill
 )
-"""Imported besides the modules of ``skills.toolbox.SKILL_SOURCES``."""
 
 
 def _preload() -> float:
     """Imports every module a mission binds and builds the planner's problems; returns
     the seconds it took."""
     started = time.perf_counter()
-    from skills.toolbox import SKILL_SOURCES
-
-    for module_name in (*PRELOADED_MODULES, *(s.split(":")[0] for s in SKILL_SOURCES.values())):
+    for module_name in PRELOADED_MODULES:
         importlib.import_module(module_name)
     from skills.planning.wholebody.optimisation import seating_problems
 

@@ -22,7 +22,7 @@ from executive.outputs import atomic_path
 from executive.record import RecordWriteError, RunRecorder
 from executive.recording import open_recording
 from executive.runner import MissionRunner, summarise
-from skills.toolbox import DefaultSkills, MissionSkills
+from skills.toolbox import MissionSkills
 from trees.mission import create_tree
 
 if TYPE_CHECKING:
@@ -258,6 +258,9 @@ def _run_tree(
     recording = None
     try:
         if skills is None:
+            # Imported only when a mission runs: it imports every skill (about 2 s).
+            from skills.default_skills import DefaultSkills
+
             skills = DefaultSkills(imagination_workers=config.imagination_workers)
             skills.warm_up()
         recording = open_recording(root, config.out_dir, record=config.record, live=config.live)

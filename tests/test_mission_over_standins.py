@@ -12,7 +12,7 @@ from core.arena import DEFAULT_ARENA
 from executive.runner import MissionRunner, summarise
 from hardware.real.panda import wall_limits
 from hardware.sim.world import SimConfig, SimWorld
-from skills.toolbox import DefaultSkills
+from skills.default_skills import DefaultSkills
 from trees.mission import create_tree
 
 pytest.importorskip("qi")

@@ -724,7 +724,7 @@ def test_each_trials_imagination_gets_the_cores_the_other_trials_leave(
 
 
 def test_the_imagination_workers_reach_the_trials_payload_and_the_skills(tmp_path):
-    from skills.toolbox import DefaultSkills
+    from skills.default_skills import DefaultSkills
 
     spec = expand_protocol([ChairEntry(tmp_path / "a.obj", "chair", 90.0)], "paper", 0)[0]
     assert spec.to_payload(tmp_path, 60.0, imagination_workers=1)["imagination_workers"] == 1

@@ -1,0 +1,49 @@
+"""The real skills, bound for the mission tree: :class:`DefaultSkills`.
+
+Importing this module imports every skill (open3d, casadi, pybullet, OMPL: about 2 s),
+which is why the tree's leaves see only the :class:`skills.toolbox.MissionSkills`
+protocol and the executive imports this module when a mission runs.
+"""
+
+from __future__ import annotations
+
+import functools
+import threading
+
+from skills import assistance, control, imagination, perception
+from skills.planning import se2, stance, wholebody
+from skills.planning.wholebody.optimisation import start_building_problems
+
+
+class DefaultSkills:
+    """The skill functions the mission calls, one attribute each (see ``MissionSkills``).
+
+    Args:
+        imagination_workers: processes ``imagine_sitting`` drops in (1: this one).
+    """
+
+    scan_chair = staticmethod(perception.scan_chair)
+    locate_humanoid = staticmethod(perception.locate_humanoid)
+    wait_until_chair_still = staticmethod(perception.wait_until_chair_still)
+    measure_chair_rotation = staticmethod(perception.measure_chair_rotation)
+    check_seat_reachable = staticmethod(stance.check_seat_reachable)
+    check_accessibility = staticmethod(se2.check_accessibility)
+    choose_rotation = staticmethod(assistance.choose_rotation)
+    compose_instruction = staticmethod(assistance.compose_instruction)
+    walk_path = staticmethod(control.walk_path)
+    raise_bear = staticmethod(wholebody.raise_bear)
+    plan_seating = staticmethod(wholebody.plan_seating_where_standing)
+    execute_seating = staticmethod(wholebody.execute_seating)
+    release_and_stand = staticmethod(wholebody.release_and_stand)
+
+    def __init__(self, imagination_workers: int = imagination.DEFAULT_WORKERS) -> None:
+        self.imagination_workers = imagination_workers
+        self.imagine_sitting = functools.partial(
+            imagination.imagine_sitting, workers=imagination_workers
+        )
+
+    def warm_up(self) -> threading.Thread:
+        """Starts building, in the background, what a skill would otherwise build on its
+        first call: the whole-body planner's problems (2 s), needed after the scan and the
+        imagination."""
+        return start_building_problems()
