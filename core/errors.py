@@ -1,16 +1,31 @@
-"""The project's exceptions: one base, one type per failure domain.
+"""The project's exceptions: one hierarchy, one base.
 
-Every error a user can act on (a bad argument, an unreadable mesh, an unusable output
-folder, a corrupt run record or campaign database) derives from :class:`BearchairError`;
-``executive.cli.main`` prints it as one line and exits with status 2. Anything else that
-escapes a command is a bug: status 3, one line on the terminal, the traceback in the
-run folder's log.
+Every exception the project raises derives from :class:`BearchairError` through one
+domain class here::
 
-The domain classes live in the core, below every other package, so each
-package's own exception (``core.meshes.MeshLoadError``,
-``executive.inspect_run.RunRecordError``, ...) can derive from its domain without
-importing upward. Those existing classes keep their names and their old bases
-(``ValueError`` where they had it), so existing ``except`` clauses still catch them.
+    BearchairError
+    ├── InputError          a command-line argument or value is not acceptable
+    ├── MeshError           a mesh file is unusable (MeshLoadError)
+    ├── OutputError         an output place cannot be written (RecordWriteError)
+    ├── RunRecordError      a run record cannot be read
+    ├── ChairSetError       a chairs folder or manifest is unusable (BadChairsError)
+    ├── RecordStoreError    a campaign database is unusable
+    ├── BackendError        a robot or compute backend is missing, unreachable or refused
+    │   ├── BackendUnavailable  (CellConfigError, RecordingUnavailable)
+    │   └── EmergencyStopped, ArmFault (hardware.real)
+    ├── RenderError         a picture cannot be drawn
+    ├── SkillError          a skill cannot answer for this input (PerceptionError,
+    │                       AccessibilityError, InfeasibleSeating, WalkError, ...)
+    └── Cancelled           a long skill stopped because it was asked to (ScanCancelled,
+                            SeatingCancelled)
+
+At the command line (``executive.cli.main``) a BearchairError is printed as one line
+and the command exits with status 2; anything else that escapes a command is a bug:
+status 3, one line on the terminal, the traceback in the run folder's log. In the
+mission tree, a leaf turns any exception of its skill into FAILURE with its message.
+
+The classes keep the builtin bases they had before the hierarchy (``ValueError``,
+``RuntimeError``), so ``except ValueError`` clauses written for them still catch them.
 """
 
 from __future__ import annotations
@@ -32,11 +47,11 @@ class OutputError(BearchairError):
     """An output place (run folder, picture, report, cache) cannot be written."""
 
 
-class RunRecordError(BearchairError):
+class RunRecordError(BearchairError, ValueError):
     """A run record (summary.json, ticks.jsonl, tree.json) cannot be read."""
 
 
-class ChairSetError(BearchairError):
+class ChairSetError(BearchairError, ValueError):
     """A chairs folder or its manifest.json is missing, malformed or holds bad meshes."""
 
 
@@ -48,8 +63,21 @@ class BackendError(BearchairError):
     """A robot or compute backend is not installed, not reachable, or refused."""
 
 
-class RenderError(BearchairError):
+class BackendUnavailable(BackendError, RuntimeError):
+    """A backend's library is not installed, its device not found, or it cannot connect."""
+
+
+class RenderError(BearchairError, RuntimeError):
     """A picture of the tree or the scene cannot be drawn."""
+
+
+class SkillError(BearchairError):
+    """A skill cannot give an answer for this input (no chair in the frames, no path, no
+    feasible seating): the leaf that called it fails with the message."""
+
+
+class Cancelled(BearchairError):
+    """A long skill or motion stopped early because its caller asked it to."""
 
 
 def one_line(error: BaseException, limit: int = 400) -> str:

@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from typing import Any, Protocol
 
-from core.errors import BackendError
+from core.errors import BackendUnavailable
 from evaluation.forked_workers import PreloadedLauncher
 from evaluation.protocol import TrialSpec
 from evaluation.worker_process import (
@@ -32,10 +32,6 @@ from executive.interrupts import emergency_stop_on_second_signal
 Job = tuple[TrialSpec, dict[str, Any]]
 """A trial and its worker payload."""
 OnResult = Callable[[TrialSpec, WorkerOutcome], None]
-
-
-class BackendUnavailableError(BackendError, RuntimeError):
-    """The backend's library is not installed or cannot connect."""
 
 
 class Backend(Protocol):
@@ -105,7 +101,7 @@ def import_ray() -> Any:
     try:
         import ray
     except ImportError as error:
-        raise BackendUnavailableError(
+        raise BackendUnavailable(
             "--backend ray needs Ray, an optional extra: pip install 'bearchair[trials]'"
         ) from error
     return ray
@@ -146,7 +142,7 @@ class RayBackend:
         try:
             ray.init(address=self.address or None, ignore_reinit_error=True)
         except Exception as error:
-            raise BackendUnavailableError(
+            raise BackendUnavailable(
                 f"could not start or reach Ray{f' at {self.address}' if self.address else ''}: "
                 f"{str(error).splitlines()[0] if str(error) else type(error).__name__}"
             ) from error

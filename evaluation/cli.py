@@ -179,7 +179,8 @@ def _check_arguments(args: argparse.Namespace) -> None:
 
 def _chairs(args: argparse.Namespace) -> tuple[list[ChairEntry], list[SkippedChair]]:
     """The campaign's chairs and the skipped meshes; one stderr line per bad chair."""
-    from evaluation.protocol import BadChairsError, ChairSetError, discover_chairs
+    from core.errors import ChairSetError
+    from evaluation.protocol import BadChairsError, discover_chairs
 
     try:
         chairs, skipped = discover_chairs(
@@ -202,14 +203,15 @@ def _chairs(args: argparse.Namespace) -> tuple[list[ChairEntry], list[SkippedCha
 
 def _backend(args: argparse.Namespace) -> Backend:
     """The backend of ``--backend``, with ``--worker-cmd`` if given."""
-    from evaluation.backends import BackendUnavailableError, LocalBackend, RayBackend
+    from core.errors import BackendUnavailable
+    from evaluation.backends import LocalBackend, RayBackend
 
     command = shlex.split(args.worker_cmd) if args.worker_cmd else None
     try:
         if args.backend == "ray":
             return RayBackend(args.workers, args.timeout, args.address, command=command)
         return LocalBackend(args.workers, args.timeout, command)
-    except BackendUnavailableError as error:
+    except BackendUnavailable as error:
         raise InputError(f"bearchair trials: {error}") from error
 
 
@@ -222,7 +224,7 @@ def _run_campaign(
     record: bool,
 ) -> CampaignResult:
     """``run_campaign`` with a progress bar; a backend that fails to start is one line."""
-    from evaluation.backends import BackendUnavailableError
+    from core.errors import BackendUnavailable
     from evaluation.campaign import run_campaign
     from evaluation.progress import Progress
 
@@ -238,7 +240,7 @@ def _run_campaign(
             record=record,
             imagination_workers=imagination_workers(args),
         )
-    except BackendUnavailableError as error:
+    except BackendUnavailable as error:
         raise InputError(f"bearchair trials: {error}") from error
 
 

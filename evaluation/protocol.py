@@ -15,7 +15,7 @@ import math
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from core import errors
+from core.errors import ChairSetError
 from core.meshes import SUPPORTED_SUFFIXES
 from skills.imagination import DEFAULT_WORKERS
 
@@ -39,10 +39,6 @@ PROTOCOLS: dict[str, tuple[str, ...]] = {
     "paper": ("accessible",) * 3 + ("inaccessible_obeys",) * 2 + ("inaccessible_disobeys",),
 }
 """Protocol name -> the experiment of each trial index, per chair."""
-
-
-class ChairSetError(errors.ChairSetError, ValueError):
-    """The chairs folder is missing, unreadable or holds no usable mesh."""
 
 
 class ChairEntry(NamedTuple):

@@ -26,7 +26,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TextIO
 
-from core.errors import BearchairError, InputError, one_line
+from core.errors import BackendUnavailable, BearchairError, InputError, one_line
 from executive import (
     cmd_calibrate_hand_eye,
     cmd_check_hardware,
@@ -53,7 +53,7 @@ LOG_FILE = "bearchair.log"
 """The run folder's log: warnings of the run, and the traceback of an internal error."""
 
 
-class CommandUnavailableError(BearchairError):
+class CommandUnavailableError(BackendUnavailable):
     """A command registered in the installed metadata cannot be loaded (a stale install)."""
 
 
@@ -349,26 +349,14 @@ def _error_line(error: BaseException) -> str:
     return text if text.startswith("bearchair") else f"bearchair: {text}"
 
 
-def _user_errors() -> tuple[type[BaseException], ...]:
-    """Exceptions that mean bad input or an unusable place: exit 2, one line."""
-    found: list[type[BaseException]] = [
-        BearchairError,
-        OSError,
-        json.JSONDecodeError,
-        UnicodeError,
-        sqlite3.Error,
-    ]
-    # Other packages' one-line errors that do not derive from BearchairError (yet). Only
-    # from modules already loaded: one that was not cannot have raised (and importing
-    # open3d just to classify an error costs seconds).
-    for module_name, class_name in (
-        ("hardware.real", "BackendUnavailable"),
-        ("skills.perception", "PerceptionError"),
-    ):
-        module = sys.modules.get(module_name)
-        if module is not None and isinstance(getattr(module, class_name, None), type):
-            found.append(getattr(module, class_name))
-    return tuple(found)
+USER_ERRORS: tuple[type[BaseException], ...] = (
+    BearchairError,
+    OSError,
+    json.JSONDecodeError,
+    UnicodeError,
+    sqlite3.Error,
+)
+"""Exceptions that mean bad input or an unusable place: exit 2, one line."""
 
 
 def _crash_log(args: argparse.Namespace | None) -> Path:
@@ -473,7 +461,7 @@ def _main(argv: list[str] | None) -> int:
     except SystemExit as error:  # argparse's --help, or a library that exits
         return error.code if isinstance(error.code, int) else EXIT_BAD_INPUT
     except Exception as error:
-        if isinstance(error, _user_errors()):
+        if isinstance(error, USER_ERRORS):
             print(_error_line(error), file=sys.stderr)
             return EXIT_BAD_INPUT
         _report_internal_error(error, args)

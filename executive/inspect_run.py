@@ -9,7 +9,8 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
-from executive.record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, RunRecordError, read_ticks
+from core.errors import RunRecordError
+from executive.record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, read_ticks
 from executive.render import render_text
 
 __all__ = ["RecordedRun", "RunRecordError"]

@@ -22,8 +22,7 @@ from typing import Any
 
 import py_trees
 
-from core import errors
-from core.errors import OutputError
+from core.errors import OutputError, RunRecordError
 from executive.jsonable import to_jsonable
 from executive.outputs import describe_os_error, write_text_atomic
 
@@ -70,10 +69,6 @@ _WRITES = frozenset(
     )
 )
 """The blackboard activities that change what the record shows."""
-
-
-class RunRecordError(errors.RunRecordError, ValueError):
-    """A directory is not a readable run record."""
 
 
 class RecordWriteError(OutputError):

@@ -12,15 +12,11 @@ from pathlib import Path
 import py_trees
 
 from behaviours import keys
-from core import errors
+from core.errors import RenderError
 from executive.outputs import atomic_path
 
 TEXT_FORMATS = ("ascii", "unicode")
 GRAPH_FORMATS = ("dot", "svg", "png")
-
-
-class RenderError(errors.RenderError, RuntimeError):
-    """The tree could not be rendered in the format asked for."""
 
 
 def render_text(

@@ -17,7 +17,7 @@ import numpy as np
 import trimesh
 
 from core.arena import Arena
-from core.errors import BearchairError
+from core.errors import SkillError
 from core.geometry import SittingPose
 from core.se2 import SE2Pose
 from hardware.interfaces import Clock, Humanoid, ScanningArm
@@ -37,7 +37,7 @@ Locate = Callable[[], SE2Pose | None]
 """Returns the humanoid's tracked pose now, or None when it is not seen."""
 
 
-class SkillNotReady(BearchairError, RuntimeError):
+class SkillNotReady(SkillError, RuntimeError):
     """A skill the mission needs is not implemented (yet) in this installation."""
 
 

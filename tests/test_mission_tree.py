@@ -11,7 +11,8 @@ import pytest
 from py_trees.common import Status
 
 from core.arena import DEFAULT_ARENA
-from executive.inspect_run import RecordedRun, RunRecordError
+from core.errors import RunRecordError
+from executive.inspect_run import RecordedRun
 from executive.record import RunRecorder
 from executive.render import render_text
 from executive.runner import MissionRunner, summarise

@@ -27,6 +27,7 @@ import threading
 from collections.abc import Callable
 from typing import NamedTuple
 
+from core.errors import SkillError
 from core.geometry import wrap_angle
 from core.se2 import SE2Pose
 from hardware.interfaces import Clock, Humanoid
@@ -36,7 +37,7 @@ from skills.results import WalkResult
 logger = logging.getLogger(__name__)
 
 
-class WalkError(ValueError):
+class WalkError(SkillError, ValueError):
     """Bad input to the walk (an empty path or a non-positive time step)."""
 
 

@@ -22,6 +22,7 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
+from core.errors import SkillError
 from core.geometry import make_transform, rot_z, yaw_of
 from core.meshes import (
     cache_dir,
@@ -94,7 +95,7 @@ recently used last (a dict keeps its insertion order)."""
 _memory_lock = threading.Lock()
 
 
-class ChairPreparationError(ValueError):
+class ChairPreparationError(SkillError, ValueError):
     """The mesh cannot be simulated (degenerate, no volume)."""
 
 

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from core.errors import BearchairError
+from core.errors import SkillError
 
 
-class PerceptionError(RuntimeError):
+class PerceptionError(SkillError, RuntimeError):
     """The camera data cannot give an answer: bad frames, no chair, too few points."""
 
 
@@ -13,7 +13,7 @@ class RegistrationError(PerceptionError):
     """Registration of the chair's new view to its reference failed its quality checks."""
 
 
-class HandEyeError(PerceptionError, BearchairError):
+class HandEyeError(PerceptionError):
     """The hand-eye calibration cannot give a trustworthy answer (too few poses, rotations
     too alike, inconsistent inputs): one line, exit status 2 on the command line."""
 

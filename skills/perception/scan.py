@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import threading
 
+from core.errors import Cancelled
 from hardware.interfaces import ScanningArm
 from skills.perception.clearance import MIN_SCAN_VIEWS, capture_views
 from skills.perception.errors import PerceptionError
@@ -12,7 +13,7 @@ from skills.perception.views import SCAN_CONFIGURATIONS
 from skills.results import ChairScan
 
 
-class ScanCancelled(PerceptionError):
+class ScanCancelled(Cancelled, PerceptionError):
     """The scan was interrupted through its cancel event."""
 
 

@@ -32,6 +32,7 @@ from ompl import geometric as og
 from ompl import util as ou
 
 from core.arena import Arena
+from core.errors import SkillError
 from core.geometry import SittingPose, wrap_angle
 from core.se2 import SE2Pose
 from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
@@ -64,7 +65,7 @@ error (:func:`_seed_ompl` reseeds on every plan). A failed search comes back as
 ou.setLogLevel(OMPL_LOG_LEVEL)
 
 
-class AccessibilityError(ValueError):
+class AccessibilityError(SkillError, ValueError):
     """Bad input to the accessibility check (not an inaccessible chair)."""
 
 

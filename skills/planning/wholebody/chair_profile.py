@@ -30,6 +30,7 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
+from core.errors import SkillError
 from core.geometry import transform_points
 from core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, BEAR_SEAT_CLEARANCE_M
 
@@ -65,7 +66,7 @@ HORIZONTAL_NORMAL_Z = 0.95
 """A surface sample with |n_z| at least this belongs to a horizontal surface."""
 
 
-class ChairProfileError(ValueError):
+class ChairProfileError(SkillError, ValueError):
     """The chair has no usable seat under the sitting pose in the NAO's sagittal plane."""
 
 

@@ -9,6 +9,7 @@ import threading
 import numpy as np
 import trimesh
 
+from core.errors import Cancelled
 from core.geometry import SittingPose
 from core.se2 import SE2Pose
 from hardware.interfaces import Humanoid
@@ -17,7 +18,7 @@ from skills.planning.wholebody.raising import plan_raise
 from skills.results import SeatingPlan
 
 
-class SeatingCancelled(RuntimeError):
+class SeatingCancelled(Cancelled, RuntimeError):
     """The seating motion was cancelled before or while it played."""
 
 

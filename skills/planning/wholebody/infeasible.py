@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from core.errors import SkillError
+
 STANCE = "stance"
 """The constraint group of an s_goal too close to the chair (feet, or the carried bear,
 in it): standing farther back may help."""
 
 
-class InfeasibleSeating(ValueError):
+class InfeasibleSeating(SkillError, ValueError):
     """No seating motion satisfies the constraints; the message names the violated one.
 
     Attributes:
