@@ -12,6 +12,7 @@ from scipy.spatial import cKDTree
 from core.arena import HUMANOID_TAG
 from core.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
 from core.meshes import box_chair_mesh
+from hardware.fakes import FakeClock
 from hardware.interfaces import RGBDFrame
 from skills.perception import (
     PerceptionError,
@@ -180,17 +181,6 @@ def test_no_chair_in_the_area_is_a_clear_failure():
         scene.close()
     with pytest.raises(PerceptionError, match=r"nothing|no object"):
         reconstruct_chair(frames, ReconstructionConfig())
-
-
-class FakeClock:
-    def __init__(self) -> None:
-        self.t = 0.0
-
-    def now(self) -> float:
-        return self.t
-
-    def sleep(self, seconds: float) -> None:
-        self.t += seconds
 
 
 class TurningChairArm:

@@ -357,8 +357,6 @@ def _make_motion(qi: Any, owner: NaoqiStandin) -> Any:
 
 def _make_posture(qi: Any, owner: NaoqiStandin) -> Any:
     class ALRobotPosture:
-        posture = "Crouch"
-
         @qi.bind(qi.Bool, [qi.String, qi.Float])
         def goToPosture(self, name: str, speed: float) -> Any:
             owner.record("ALRobotPosture", "goToPosture", name, speed)
@@ -367,15 +365,9 @@ def _make_posture(qi: Any, owner: NaoqiStandin) -> Any:
 
             def run(cancelled: threading.Event) -> None:
                 owner.body.posture(name, cancelled)
-                self.posture = name
 
             future, _ = _task(qi, run, value=True)
             return future
-
-        @qi.bind(qi.String, [])
-        def getPosture(self) -> str:
-            owner.record("ALRobotPosture", "getPosture")
-            return self.posture
 
     return ALRobotPosture()
 

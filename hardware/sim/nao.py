@@ -30,7 +30,7 @@ from hardware.sim.bullet import (
     reset_base_link,
 )
 from hardware.sim.clock import SimClock
-from hardware.sim.nao_model import SOLE_TO_TORSO_M, TAG_LINK
+from hardware.sim.nao_urdf import SOLE_TO_TORSO_M, TAG_LINK
 
 log = logging.getLogger(__name__)
 

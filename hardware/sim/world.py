@@ -38,7 +38,7 @@ from hardware.sim.contacts import ChairTouchMonitor
 from hardware.sim.helper import SimHelper, SimSpeaker
 from hardware.sim.judge import SimJudge
 from hardware.sim.nao import SimNao
-from hardware.sim.nao_model import nao_urdf
+from hardware.sim.nao_urdf import nao_urdf
 from hardware.sim.panda import SimPanda
 from hardware.sim.tag import tag_assets
 
