@@ -14,6 +14,7 @@ from core.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
 from core.meshes import box_chair_mesh
 from hardware.fakes import FakeClock
 from hardware.interfaces import RGBDFrame
+from hardware.sim.camera import carmine_intrinsics
 from skills.perception import (
     PerceptionError,
     ReconstructionConfig,
@@ -23,7 +24,7 @@ from skills.perception import (
     register_chair,
     wait_until_chair_still,
 )
-from skills.perception.synthetic import SyntheticArm, SyntheticScene, carmine_intrinsics
+from skills.perception.synthetic import SyntheticArm, SyntheticScene
 from skills.perception.views import HOME_CONFIGURATION, SCAN_CONFIGURATIONS, look_at
 from tests.test_perception_views import frames_of
 
