@@ -168,30 +168,8 @@ def parse_cell_config(
     raw: Any, arena: Arena = DEFAULT_ARENA, source: Path | None = None
 ) -> CellConfig:
     """Checks a decoded cell description (see :func:`load_cell_config`)."""
-    if not isinstance(raw, dict):
-        raise CellConfigError(
-            f"the cell file must be an object of fields, got {type(raw).__name__}"
-        )
-    for key in raw:
-        if key in LEGACY_KEYS:
-            raise CellConfigError(f"{key}: {LEGACY_KEYS[key]}")
-        if key not in _KNOWN:
-            near = difflib.get_close_matches(str(key), _KNOWN, n=1, cutoff=0.6)
-            hint = f" (did you mean {near[0]}?)" if near else ""
-            raise CellConfigError(f"unknown field {key!r}{hint}; known: {', '.join(_KNOWN)}")
-    missing = [key for key in _REQUIRED if key not in raw]
-    if missing:
-        raise CellConfigError(f"missing field {missing[0]}")
-
-    nao_url = _text(raw, "nao_url")
-    if not nao_url.startswith(("tcp://", "tcps://")):
-        raise CellConfigError(f"nao_url: {nao_url!r} must start with tcp:// or tcps://")
-    nao_user = _optional_text(raw, "nao_user")
-    nao_password = _optional_text(raw, "nao_password")
-    if (nao_user is None) != (nao_password is None):
-        raise CellConfigError("nao_user and nao_password go together")
-    if nao_user is not None and not nao_url.startswith("tcps://"):
-        raise CellConfigError("nao_user: credentials are only sent over tcps:// (port 9503)")
+    _check_fields(raw)
+    nao_url, nao_user, nao_password = _nao_connection(raw)
     camera = _text(raw, "camera", "carmine")
     if camera not in CAMERAS:
         raise CellConfigError(f"camera: {camera!r} is not one of {', '.join(CAMERAS)}")
@@ -204,19 +182,7 @@ def parse_cell_config(
     T_world_base = _rigid(raw, "T_world_base", max_translation_m=3.0)
     _check_base(T_world_base, arena)
     T_flange_camera = _rigid(raw, "T_flange_camera", max_translation_m=MAX_HAND_EYE_M)
-
-    x_m = _number(raw, "nao_start_x_m")
-    y_m = _number(raw, "nao_start_y_m")
-    yaw_rad = _number(raw, "nao_start_yaw_rad")
-    if not -math.pi - 1e-6 <= yaw_rad <= math.pi + 1e-6:
-        raise CellConfigError(
-            f"nao_start_yaw_rad: {yaw_rad:g} is outside [-pi, pi] (radians, not degrees)"
-        )
-    if not arena.contains(x_m, y_m):
-        raise CellConfigError(
-            f"nao_start_x_m, nao_start_y_m: ({x_m:g}, {y_m:g}) m is outside the arena "
-            f"x [{arena.x_min}, {arena.x_max}], y [{arena.y_min}, {arena.y_max}] m"
-        )
+    x_m, y_m, yaw_rad = _nao_start(raw, arena)
     return CellConfig(
         nao_url=nao_url,
         panda_host=_text(raw, "panda_host"),
@@ -232,6 +198,56 @@ def parse_cell_config(
         panda_speed_factor=speed,
         source=source,
     )
+
+
+def _check_fields(raw: Any) -> None:
+    """Raises CellConfigError unless ``raw`` is an object of known fields holding every
+    required one (a legacy field gets its own message, a misspelt one a suggestion)."""
+    if not isinstance(raw, dict):
+        raise CellConfigError(
+            f"the cell file must be an object of fields, got {type(raw).__name__}"
+        )
+    for key in raw:
+        if key in LEGACY_KEYS:
+            raise CellConfigError(f"{key}: {LEGACY_KEYS[key]}")
+        if key not in _KNOWN:
+            near = difflib.get_close_matches(str(key), _KNOWN, n=1, cutoff=0.6)
+            hint = f" (did you mean {near[0]}?)" if near else ""
+            raise CellConfigError(f"unknown field {key!r}{hint}; known: {', '.join(_KNOWN)}")
+    missing = [key for key in _REQUIRED if key not in raw]
+    if missing:
+        raise CellConfigError(f"missing field {missing[0]}")
+
+
+def _nao_connection(raw: dict[str, Any]) -> tuple[str, str | None, str | None]:
+    """(nao_url, nao_user, nao_password), checked: credentials go together, over tcps only."""
+    nao_url = _text(raw, "nao_url")
+    if not nao_url.startswith(("tcp://", "tcps://")):
+        raise CellConfigError(f"nao_url: {nao_url!r} must start with tcp:// or tcps://")
+    nao_user = _optional_text(raw, "nao_user")
+    nao_password = _optional_text(raw, "nao_password")
+    if (nao_user is None) != (nao_password is None):
+        raise CellConfigError("nao_user and nao_password go together")
+    if nao_user is not None and not nao_url.startswith("tcps://"):
+        raise CellConfigError("nao_user: credentials are only sent over tcps:// (port 9503)")
+    return nao_url, nao_user, nao_password
+
+
+def _nao_start(raw: dict[str, Any], arena: Arena) -> tuple[float, float, float]:
+    """The NAO's start (x m, y m, yaw rad), checked to be inside the arena, yaw in [-pi, pi]."""
+    x_m = _number(raw, "nao_start_x_m")
+    y_m = _number(raw, "nao_start_y_m")
+    yaw_rad = _number(raw, "nao_start_yaw_rad")
+    if not -math.pi - 1e-6 <= yaw_rad <= math.pi + 1e-6:
+        raise CellConfigError(
+            f"nao_start_yaw_rad: {yaw_rad:g} is outside [-pi, pi] (radians, not degrees)"
+        )
+    if not arena.contains(x_m, y_m):
+        raise CellConfigError(
+            f"nao_start_x_m, nao_start_y_m: ({x_m:g}, {y_m:g}) m is outside the arena "
+            f"x [{arena.x_min}, {arena.x_max}], y [{arena.y_min}, {arena.y_max}] m"
+        )
+    return x_m, y_m, yaw_rad
 
 
 def check_rigid(T: np.ndarray, name: str, max_translation_m: float) -> None:

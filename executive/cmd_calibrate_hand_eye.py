@@ -33,11 +33,15 @@ import json
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from executive.cli_types import positive_int, positive_seconds
+
+if TYPE_CHECKING:
+    from executive.cell_config import CellConfig
+    from hardware.real.panda import PandaArm
 
 SETTLE_S = 0.5
 """Wait after each motion before capturing: the arm's last vibration and the camera's
@@ -188,11 +192,9 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     """Connects, asks, moves through the views and captures; always ends at HOME."""
     from executive.cell_config import load_cell_config
     from executive.cmd_check_hardware import MOVE_SPEED_FACTOR, _within
-    from executive.interrupts import emergency_stop_on_second_signal
     from executive.operator import ask_operator
-    from hardware.real import BackendUnavailable, robots
+    from hardware.real import robots
     from skills.perception.hand_eye import BOARD_CENTRE_BASE_XY_M, CALIBRATION_CONFIGURATIONS
-    from skills.perception.views import HOME_CONFIGURATION
 
     count = len(CALIBRATION_CONFIGURATIONS) if args.views is None else args.views
     if not 3 <= count <= len(CALIBRATION_CONFIGURATIONS):
@@ -217,6 +219,23 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     if not args.yes and not ask_operator("The Panda will move now. Go on? [y/N] "):
         raise _error("the operator did not confirm: nothing moved")
     arm._speed_factor = MOVE_SPEED_FACTOR  # as check-hardware --move: slow, near a person
+    return _visit_views(arm, cell, board, CALIBRATION_CONFIGURATIONS[:count], args.timeout)
+
+
+def _visit_views(
+    arm: PandaArm,
+    cell: CellConfig,
+    board: Any,
+    configurations: Sequence[Sequence[float]],
+    timeout_s: float,
+) -> list[View]:
+    """HOME, then each configuration (capture, detect the board) and back to HOME; any
+    failure emergency-stops the arm."""
+    from executive.cmd_check_hardware import _within
+    from executive.interrupts import emergency_stop_on_second_signal
+    from hardware.real import BackendUnavailable
+    from skills.perception.views import HOME_CONFIGURATION
+
     T_base_world = np.linalg.inv(cell.T_world_base)
     T_camera_flange = np.linalg.inv(cell.T_flange_camera)
     views: list[View] = []
@@ -224,12 +243,12 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     with emergency_stop_on_second_signal(arm.emergency_stop):
         try:
             arm.move_to(HOME_CONFIGURATION, timeout_s=MOVE_TIMEOUT_S)
-            for index, joints in enumerate(CALIBRATION_CONFIGURATIONS[:count]):
+            for index, joints in enumerate(configurations):
                 where = f"view calib{index}"
                 arm.move_to(joints, timeout_s=MOVE_TIMEOUT_S)
                 time.sleep(SETTLE_S)
-                _within(args.timeout, arm.capture)  # a frame buffered during the motion
-                frame = _within(args.timeout, arm.capture)
+                _within(timeout_s, arm.capture)  # a frame buffered during the motion
+                frame = _within(timeout_s, arm.capture)
                 T_base_flange = T_base_world @ frame.T_world_camera @ T_camera_flange
                 view = _detect(f"calib{index}", arm.joint_positions(), T_base_flange, frame, board)
                 _print_view(view)

@@ -17,9 +17,15 @@ import argparse
 import json
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from executive import interrupts
 from executive.cli_types import positive_int, seed_value
+
+if TYPE_CHECKING:
+    import trimesh
+
+    from skills.results import ImaginationResult
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -52,36 +58,54 @@ def run(args: argparse.Namespace) -> int:
         mesh, seed=args.seed, workers=args.workers, cancel=interrupts.stop_requested
     )
     interrupts.raise_if_received()
-    seconds = result.seconds.get("total", 0.0)
     if args.image is not None:
-        from skills.imagination.render import render_sitting
-
-        title = (
-            f"{args.mesh.name}: yaw {math.degrees(result.sitting_pose.yaw):.1f} deg, "
-            f"{result.n_correct} correct of {result.n_drops}"
-            if result.found and result.sitting_pose is not None
-            else f"{args.mesh.name}: no sitting pose ({result.reason})"
-        )
-        render_sitting(mesh, result.sitting_pose, args.image, title)
+        _draw(mesh, result, args.mesh.name, args.image)
     if args.json:
-        payload: dict = {
-            "found": result.found,
-            "position": [round(float(v), 4) for v in result.sitting_pose.position]
-            if result.sitting_pose is not None
-            else None,
-            "yaw_deg": round(math.degrees(result.sitting_pose.yaw), 2)
-            if result.sitting_pose is not None
-            else None,
-            "n_correct": result.n_correct,
-            "n_drops": result.n_drops,
-            "seconds": round(seconds, 3),
-            "vote": result.vote.to_json() if result.vote is not None else None,
-            "backrest": result.backrest.to_json() if result.backrest is not None else None,
-        }
-        if not result.found:
-            payload["reason"] = result.reason
-        print(json.dumps(payload))
+        print(json.dumps(_json_payload(result)))
         return 0
+    _print_report(result)
+    if args.image is not None:
+        print(f"image:            {args.image}")
+    return 0
+
+
+def _draw(mesh: trimesh.Trimesh, result: ImaginationResult, name: str, image: Path) -> None:
+    """The mesh and the sitting pose found (if any) drawn into the PNG ``image``."""
+    from skills.imagination.render import render_sitting
+
+    title = (
+        f"{name}: yaw {math.degrees(result.sitting_pose.yaw):.1f} deg, "
+        f"{result.n_correct} correct of {result.n_drops}"
+        if result.found and result.sitting_pose is not None
+        else f"{name}: no sitting pose ({result.reason})"
+    )
+    render_sitting(mesh, result.sitting_pose, image, title)
+
+
+def _json_payload(result: ImaginationResult) -> dict:
+    """The ``--json`` object (keys in the module's docstring)."""
+    seconds = result.seconds.get("total", 0.0)
+    payload: dict = {
+        "found": result.found,
+        "position": [round(float(v), 4) for v in result.sitting_pose.position]
+        if result.sitting_pose is not None
+        else None,
+        "yaw_deg": round(math.degrees(result.sitting_pose.yaw), 2)
+        if result.sitting_pose is not None
+        else None,
+        "n_correct": result.n_correct,
+        "n_drops": result.n_drops,
+        "seconds": round(seconds, 3),
+        "vote": result.vote.to_json() if result.vote is not None else None,
+        "backrest": result.backrest.to_json() if result.backrest is not None else None,
+    }
+    if not result.found:
+        payload["reason"] = result.reason
+    return payload
+
+
+def _print_report(result: ImaginationResult) -> None:
+    """The human-readable result: pose, correct drops, vote, backrest check and times."""
     if result.found and result.sitting_pose is not None:
         x, y, z = (float(v) for v in result.sitting_pose.position)
         print(f"sitting position: x={x:.3f} y={y:.3f} z={z:.3f} m (mesh frame)")
@@ -103,10 +127,8 @@ def run(args: argparse.Namespace) -> int:
             f"backrest:         faces {math.degrees(check.yaw_rad):.1f} deg, the vote's "
             f"direction {math.degrees(check.disagreement_rad):+.1f} deg from it: {verdict}"
         )
+    seconds = result.seconds.get("total", 0.0)
     print(
         f"time:             {seconds:.2f} s (prepare {result.seconds.get('prepare', 0.0):.2f} s, "
         f"simulate {result.seconds.get('simulate', 0.0):.2f} s)"
     )
-    if args.image is not None:
-        print(f"image:            {args.image}")
-    return 0

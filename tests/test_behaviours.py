@@ -22,7 +22,6 @@ from core.arena import DEFAULT_ARENA
 from core.se2 import SE2Pose
 from hardware.fakes import FakeJudge, fake_robot
 from hardware.interfaces import SeatingJudgement
-from skills.fakes import ScriptedSkills, default_results
 from skills.results import (
     AccessibilityResult,
     ImaginationResult,
@@ -30,6 +29,7 @@ from skills.results import (
     SeatReachability,
     WalkResult,
 )
+from skills.scripted import ScriptedSkills, default_results
 from skills.toolbox import SkillNotReady
 
 DEFAULTS = default_results()

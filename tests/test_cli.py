@@ -13,7 +13,7 @@ from executive.cli import main
 from executive.record import RunRecorder
 from executive.runner import MissionRunner, summarise
 from hardware.fakes import FakeJudge, fake_robot
-from skills.fakes import ScriptedSkills
+from skills.scripted import ScriptedSkills
 from trees.mission import STAGES, create_tree
 
 

@@ -10,8 +10,8 @@ import pytest
 
 from core.geometry import wrap_angle
 from core.se2 import SE2Pose
+from hardware.fakes import FakeClock, FakeHumanoid, FakeTagTracker
 from skills.control import PID, WalkError, walk_path
-from skills.control.fakes import FakeClock, FakeHumanoid, FakeTagTracker
 
 START = SE2Pose(1.9, 0.0, math.pi)
 PATH = (

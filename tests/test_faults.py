@@ -29,7 +29,7 @@ from executive import cli, mission
 from executive.inspect_run import RecordedRun
 from executive.record import RunRecorder
 from hardware.fakes import FakeJudge, fake_robot
-from skills.fakes import ScriptedSkills
+from skills.scripted import ScriptedSkills
 from tests.test_trials import (
     FAKE_WORKER,
     REPO,

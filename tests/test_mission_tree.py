@@ -17,9 +17,9 @@ from executive.record import RunRecorder
 from executive.render import render_text
 from executive.runner import MissionRunner, summarise
 from hardware.fakes import FakeJudge, fake_robot
-from skills.fakes import ScriptedSkills, default_results
 from skills.perception.errors import RegistrationError
 from skills.results import AccessibilityResult, SeatReachability
+from skills.scripted import ScriptedSkills, default_results
 from skills.toolbox import SkillNotReady
 from trees.mission import STAGES, create_tree
 

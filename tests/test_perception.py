@@ -12,7 +12,9 @@ from scipy.spatial import cKDTree
 from core.arena import HUMANOID_TAG
 from core.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
 from core.meshes import box_chair_mesh
+from hardware.fakes import FakeClock
 from hardware.interfaces import RGBDFrame
+from hardware.sim.camera import carmine_intrinsics
 from skills.perception import (
     PerceptionError,
     ReconstructionConfig,
@@ -22,7 +24,7 @@ from skills.perception import (
     register_chair,
     wait_until_chair_still,
 )
-from skills.perception.synthetic import SyntheticArm, SyntheticScene, carmine_intrinsics
+from skills.perception.synthetic import SyntheticArm, SyntheticScene
 from skills.perception.views import HOME_CONFIGURATION, SCAN_CONFIGURATIONS, look_at
 from tests.test_perception_views import frames_of
 
@@ -180,17 +182,6 @@ def test_no_chair_in_the_area_is_a_clear_failure():
         scene.close()
     with pytest.raises(PerceptionError, match=r"nothing|no object"):
         reconstruct_chair(frames, ReconstructionConfig())
-
-
-class FakeClock:
-    def __init__(self) -> None:
-        self.t = 0.0
-
-    def now(self) -> float:
-        return self.t
-
-    def sleep(self, seconds: float) -> None:
-        self.t += seconds
 
 
 class TurningChairArm:

@@ -26,8 +26,8 @@ from executive.record import RunRecorder, load_ticks
 from executive.runner import MissionRunner, summarise
 from hardware.fakes import FakeJudge, fake_robot
 from hardware.interfaces import SeatingJudgement
-from skills.fakes import ScriptedSkills, default_results
 from skills.results import AccessibilityResult
+from skills.scripted import ScriptedSkills, default_results
 from trees.mission import create_tree
 
 pytest.importorskip("rerun", reason="rerun-sdk (the [viewer] extra) is not installed")

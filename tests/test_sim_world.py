@@ -416,7 +416,7 @@ def test_simulated_run_records_the_ground_truth(tmp_path):
 
     from executive.config import RunConfig
     from executive.mission import run_in_simulation
-    from skills.fakes import ScriptedSkills
+    from skills.scripted import ScriptedSkills
 
     summary = run_in_simulation(
         RunConfig(seed=0, out_dir=tmp_path, mute=True, timeout_s=120.0), skills=ScriptedSkills()

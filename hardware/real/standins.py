@@ -206,9 +206,21 @@ def _task(
 
 
 def _make_motion(qi: Any, owner: NaoqiStandin) -> Any:
+    """The ALMotion service: its task bookkeeping, walking and joint motions."""
+
+    class ALMotion(
+        _motion_joint_methods(qi, owner), _motion_walk_methods(qi, owner), _motion_tasks(qi, owner)
+    ):
+        pass
+
+    return ALMotion()
+
+
+def _motion_tasks(qi: Any, owner: NaoqiStandin) -> type:
+    """ALMotion's state and its running joint tasks (killed together)."""
     body = owner.body
 
-    class ALMotion:
+    class ALMotionTasks:
         def __init__(self) -> None:
             self.awake = False
             self.arm_swing = True
@@ -243,6 +255,14 @@ def _make_motion(qi: Any, owner: NaoqiStandin) -> Any:
                 self._tasks.append(cancelled)
             return future
 
+    return ALMotionTasks
+
+
+def _motion_walk_methods(qi: Any, owner: NaoqiStandin) -> type:
+    """ALMotion's waking, resting, odometry and walking."""
+    body = owner.body
+
+    class ALMotionWalking:
         @qi.bind(qi.Void, [])
         def wakeUp(self) -> None:
             owner.record("ALMotion", "wakeUp")
@@ -280,11 +300,6 @@ def _make_motion(qi: Any, owner: NaoqiStandin) -> Any:
             owner.record("ALMotion", "stopMove")
             body.stop_walk()
 
-        @qi.bind(qi.Void, [qi.List(qi.String)])
-        def killTasksUsingResources(self, names: list[str]) -> None:
-            owner.record("ALMotion", "killTasksUsingResources", list(names))
-            self._kill()
-
         @qi.bind(qi.Void, [qi.Bool, qi.Bool])
         def setMoveArmsEnabled(self, left: bool, right: bool) -> None:
             owner.record("ALMotion", "setMoveArmsEnabled", left, right)
@@ -295,6 +310,19 @@ def _make_motion(qi: Any, owner: NaoqiStandin) -> Any:
             owner.record("ALMotion", "getMoveArmsEnabled", chain)
             return self.arm_swing
 
+    return ALMotionWalking
+
+
+def _motion_joint_methods(qi: Any, owner: NaoqiStandin) -> type:
+    """ALMotion's stiffness, joint interpolations and hands, each a cancellable task."""
+    body = owner.body
+
+    class ALMotionJoints:
+        @qi.bind(qi.Void, [qi.List(qi.String)])
+        def killTasksUsingResources(self, names: list[str]) -> None:
+            owner.record("ALMotion", "killTasksUsingResources", list(names))
+            self._kill()
+
         @qi.bind(qi.Void, [qi.Dynamic, qi.Dynamic])
         def setStiffnesses(self, names: Any, stiffnesses: Any) -> None:
             owner.record("ALMotion", "setStiffnesses", names, stiffnesses)
@@ -304,18 +332,7 @@ def _make_motion(qi: Any, owner: NaoqiStandin) -> Any:
             self, names: Any, angle_lists: Any, time_lists: Any, absolute: bool
         ) -> Any:
             owner.record("ALMotion", "angleInterpolation", names, angle_lists, time_lists, absolute)
-            names = [names] if isinstance(names, str) else list(names)
-            angles = [a if isinstance(a, list) else [a] for a in angle_lists]
-            times = [t if isinstance(t, list) else [t] for t in time_lists]
-            if len(angles) != len(names) or len(times) != len(names):
-                raise RuntimeError("angleInterpolation: one angle list and one time list per joint")
-            for joint_angles, joint_times in zip(angles, times, strict=True):
-                if (
-                    len(joint_angles) != len(joint_times)
-                    or any(b <= a for a, b in itertools.pairwise(joint_times))
-                    or joint_times[0] <= 0.0
-                ):
-                    raise RuntimeError("angleInterpolation: times must be positive and increasing")
+            names, angles, times = _interpolation_lists(names, angle_lists, time_lists)
             if not absolute:
                 raise RuntimeError("the stand-in plays absolute angles only")
             return self._start(lambda cancelled: body.play(names, angles, times, cancelled))
@@ -352,13 +369,36 @@ def _make_motion(qi: Any, owner: NaoqiStandin) -> Any:
                 raise RuntimeError(f"closeHand: unknown hand {hand!r}")
             return self._start(lambda cancelled: body.hand(hand, False, cancelled))
 
-    return ALMotion()
+    return ALMotionJoints
+
+
+def _interpolation_lists(
+    names: Any, angle_lists: Any, time_lists: Any
+) -> tuple[list[str], list[list[float]], list[list[float]]]:
+    """``angleInterpolation``'s arguments as NAOqi accepts them (a name or names; an angle
+    or a list per joint; likewise times), as lists, checked as NAOqi checks them.
+
+    Raises:
+        RuntimeError: not one angle list and one time list per joint, or times that are
+            not positive and increasing.
+    """
+    names = [names] if isinstance(names, str) else list(names)
+    angles = [a if isinstance(a, list) else [a] for a in angle_lists]
+    times = [t if isinstance(t, list) else [t] for t in time_lists]
+    if len(angles) != len(names) or len(times) != len(names):
+        raise RuntimeError("angleInterpolation: one angle list and one time list per joint")
+    for joint_angles, joint_times in zip(angles, times, strict=True):
+        if (
+            len(joint_angles) != len(joint_times)
+            or any(b <= a for a, b in itertools.pairwise(joint_times))
+            or joint_times[0] <= 0.0
+        ):
+            raise RuntimeError("angleInterpolation: times must be positive and increasing")
+    return names, angles, times
 
 
 def _make_posture(qi: Any, owner: NaoqiStandin) -> Any:
     class ALRobotPosture:
-        posture = "Crouch"
-
         @qi.bind(qi.Bool, [qi.String, qi.Float])
         def goToPosture(self, name: str, speed: float) -> Any:
             owner.record("ALRobotPosture", "goToPosture", name, speed)
@@ -367,15 +407,9 @@ def _make_posture(qi: Any, owner: NaoqiStandin) -> Any:
 
             def run(cancelled: threading.Event) -> None:
                 owner.body.posture(name, cancelled)
-                self.posture = name
 
             future, _ = _task(qi, run, value=True)
             return future
-
-        @qi.bind(qi.String, [])
-        def getPosture(self) -> str:
-            owner.record("ALRobotPosture", "getPosture")
-            return self.posture
 
     return ALRobotPosture()
 
@@ -746,6 +780,54 @@ def _wall(width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
 # --- pyrealsense2 -----------------------------------------------------------------------
 
 
+_RealSenseStream = enum.Enum("stream", {"depth": 1, "color": 2})
+_RealSenseFormat = enum.Enum("format", {"z16": 1, "rgb8": 5})
+
+
+class _RealSenseFrame:
+    def __init__(self, data: np.ndarray) -> None:
+        self._data = data
+
+    def get_data(self) -> np.ndarray:
+        return self._data
+
+    def __bool__(self) -> bool:
+        return True
+
+
+class _RealSenseFrameset:
+    def __init__(self, depth: np.ndarray, colour: np.ndarray) -> None:
+        self._depth, self._colour = depth, colour
+
+    def get_depth_frame(self) -> _RealSenseFrame:
+        return _RealSenseFrame(self._depth)
+
+    def get_color_frame(self) -> _RealSenseFrame:
+        return _RealSenseFrame(self._colour)
+
+
+class _RealSenseIntrinsics:
+    width, height, fx, fy, ppx, ppy = 640, 480, 615.0, 615.0, 320.0, 240.0
+
+
+class _RealSenseProfile:
+    """What ``pipeline.start`` returns: the device (its depth scale) and stream profiles."""
+
+    def __init__(self, fake: FakeRealSense) -> None:
+        self._fake = fake
+
+    def get_device(self) -> Any:
+        fake = self._fake
+        sensor = type("depth_sensor", (), {"get_depth_scale": lambda s: fake.depth_scale_m})
+        return type("device", (), {"first_depth_sensor": lambda s: sensor()})()
+
+    def get_stream(self, stream_type: Any) -> Any:
+        video = type(
+            "video_stream_profile", (), {"get_intrinsics": lambda s: _RealSenseIntrinsics()}
+        )
+        return type("stream_profile", (), {"as_video_stream_profile": lambda s: video()})()
+
+
 class FakeRealSense:
     """The ``pyrealsense2`` calls :class:`hardware.real.camera.RealSenseCamera` makes.
 
@@ -766,14 +848,6 @@ class FakeRealSense:
         self.aligned_to: Any = None
         fake = self
 
-        class stream(enum.Enum):
-            depth = 1
-            color = 2
-
-        class format(enum.Enum):
-            z16 = 1
-            rgb8 = 5
-
         class config:
             def enable_device(self, serial: str) -> None:
                 fake.serial = serial
@@ -781,51 +855,17 @@ class FakeRealSense:
             def enable_stream(self, stream_type, width, height, fmt, framerate) -> None:
                 fake.enabled.append((stream_type, width, height, fmt, framerate))
 
-        class _Frame:
-            def __init__(self, data: np.ndarray) -> None:
-                self._data = data
-
-            def get_data(self) -> np.ndarray:
-                return self._data
-
-            def __bool__(self) -> bool:
-                return True
-
-        class _Frameset:
-            def __init__(self, depth: np.ndarray, colour: np.ndarray) -> None:
-                self._depth, self._colour = depth, colour
-
-            def get_depth_frame(self) -> _Frame:
-                return _Frame(self._depth)
-
-            def get_color_frame(self) -> _Frame:
-                return _Frame(self._colour)
-
-        class _Intrinsics:
-            width, height, fx, fy, ppx, ppy = 640, 480, 615.0, 615.0, 320.0, 240.0
-
-        class _Profile:
-            def get_device(self) -> Any:
-                sensor = type("depth_sensor", (), {"get_depth_scale": lambda s: fake.depth_scale_m})
-                return type("device", (), {"first_depth_sensor": lambda s: sensor()})()
-
-            def get_stream(self, stream_type: Any) -> Any:
-                video = type(
-                    "video_stream_profile", (), {"get_intrinsics": lambda s: _Intrinsics()}
-                )
-                return type("stream_profile", (), {"as_video_stream_profile": lambda s: video()})()
-
         class pipeline:
-            def start(self, cfg: Any) -> _Profile:
+            def start(self, cfg: Any) -> _RealSenseProfile:
                 if fake._devices == 0:
                     raise RuntimeError("No device connected")
-                return _Profile()
+                return _RealSenseProfile(fake)
 
-            def wait_for_frames(self, timeout_ms: int = 5000) -> _Frameset:
+            def wait_for_frames(self, timeout_ms: int = 5000) -> _RealSenseFrameset:
                 w, h = fake.enabled[0][1], fake.enabled[0][2]
                 rgb, depth_mm = fake.render(w, h)
                 units = np.round(depth_mm.astype(np.float64) / 1000.0 / fake.depth_scale_m)
-                return _Frameset(units.astype(np.uint16), rgb)
+                return _RealSenseFrameset(units.astype(np.uint16), rgb)
 
             def stop(self) -> None:
                 pass
@@ -838,5 +878,5 @@ class FakeRealSense:
                 return frames
 
         self._devices = devices
-        self.stream, self.format, self.config = stream, format, config
+        self.stream, self.format, self.config = _RealSenseStream, _RealSenseFormat, config
         self.pipeline, self.align = pipeline, align

@@ -80,58 +80,10 @@ class SimBear:
     def __init__(self, bullet: LockedBullet, clock: SimClock, T_world_bear: np.ndarray) -> None:
         self._bullet = bullet
         com = bear_centre_of_mass()
-        shapes = {"box": pybullet.GEOM_BOX, "sphere": pybullet.GEOM_SPHERE}
         with bullet.lock:
-            collision_ids: list[int] = []
-            visual_ids: list[int] = []
-            for part in BEAR_PARTS:
-                position = list(np.asarray(part.centre) - com)
-                orientation = pybullet.getQuaternionFromEuler(part.rpy)
-                if part.kind == "capsule":
-                    geometry = {"radius": part.size[0], "height": part.size[1]}
-                    kind = pybullet.GEOM_CAPSULE
-                    visual_geometry = {"radius": part.size[0], "length": part.size[1]}
-                elif part.kind == "box":
-                    geometry = {"halfExtents": [v / 2.0 for v in part.size]}
-                    kind = shapes["box"]
-                    visual_geometry = geometry
-                else:
-                    geometry = {"radius": part.size[0]}
-                    kind = shapes["sphere"]
-                    visual_geometry = geometry
-                collision_ids.append(
-                    bullet.createCollisionShape(
-                        kind,
-                        collisionFramePosition=position,
-                        collisionFrameOrientation=orientation,
-                        **geometry,
-                    )
-                )
-                visual_ids.append(
-                    bullet.createVisualShape(
-                        kind,
-                        rgbaColor=list(part.colour),
-                        visualFramePosition=position,
-                        visualFrameOrientation=orientation,
-                        **visual_geometry,
-                    )
-                )
-            # A compound of primitives: one multibody with one link per extra part.
-            self.body = bullet.createMultiBody(
-                baseMass=BEAR_MASS_KG * 0.5,
-                baseCollisionShapeIndex=collision_ids[0],
-                baseVisualShapeIndex=visual_ids[0],
-                basePosition=[0, 0, 0],
-                linkMasses=[BEAR_MASS_KG * 0.5 / (len(BEAR_PARTS) - 1)] * (len(BEAR_PARTS) - 1),
-                linkCollisionShapeIndices=collision_ids[1:],
-                linkVisualShapeIndices=visual_ids[1:],
-                linkPositions=[[0, 0, 0]] * (len(BEAR_PARTS) - 1),
-                linkOrientations=[[0, 0, 0, 1]] * (len(BEAR_PARTS) - 1),
-                linkInertialFramePositions=[[0, 0, 0]] * (len(BEAR_PARTS) - 1),
-                linkInertialFrameOrientations=[[0, 0, 0, 1]] * (len(BEAR_PARTS) - 1),
-                linkParentIndices=[0] * (len(BEAR_PARTS) - 1),
-                linkJointTypes=[pybullet.JOINT_FIXED] * (len(BEAR_PARTS) - 1),
-                linkJointAxis=[[0, 0, 1]] * (len(BEAR_PARTS) - 1),
+            shapes = [_part_shapes(bullet, part, com) for part in BEAR_PARTS]
+            self.body = _compound_body(
+                bullet, [collision for collision, _ in shapes], [visual for _, visual in shapes]
             )
             for link in range(-1, len(BEAR_PARTS) - 1):
                 bullet.changeDynamics(self.body, link, lateralFriction=0.9, rollingFriction=0.001)
@@ -252,3 +204,55 @@ class SimBear:
             jointChildFrameOrientation=orientation,
             maxForce=HOLD_FORCE_N,
         )
+
+
+def _part_shapes(bullet: LockedBullet, part: BearPart, com: np.ndarray) -> tuple[int, int]:
+    """(collision shape id, visual shape id) of one part, placed relative to the bear's
+    centre of mass ``com`` (the multibody's base frame)."""
+    position = list(np.asarray(part.centre) - com)
+    orientation = pybullet.getQuaternionFromEuler(part.rpy)
+    if part.kind == "capsule":
+        geometry = {"radius": part.size[0], "height": part.size[1]}
+        kind = pybullet.GEOM_CAPSULE
+        visual_geometry = {"radius": part.size[0], "length": part.size[1]}
+    elif part.kind == "box":
+        geometry = {"halfExtents": [v / 2.0 for v in part.size]}
+        kind = pybullet.GEOM_BOX
+        visual_geometry = geometry
+    else:
+        geometry = {"radius": part.size[0]}
+        kind = pybullet.GEOM_SPHERE
+        visual_geometry = geometry
+    collision = bullet.createCollisionShape(
+        kind, collisionFramePosition=position, collisionFrameOrientation=orientation, **geometry
+    )
+    visual = bullet.createVisualShape(
+        kind,
+        rgbaColor=list(part.colour),
+        visualFramePosition=position,
+        visualFrameOrientation=orientation,
+        **visual_geometry,
+    )
+    return collision, visual
+
+
+def _compound_body(bullet: LockedBullet, collision_ids: list[int], visual_ids: list[int]) -> int:
+    """A compound of primitives: one multibody with one fixed link per extra part, half
+    the bear's mass in the base and half shared by the links."""
+    links = len(BEAR_PARTS) - 1
+    return bullet.createMultiBody(
+        baseMass=BEAR_MASS_KG * 0.5,
+        baseCollisionShapeIndex=collision_ids[0],
+        baseVisualShapeIndex=visual_ids[0],
+        basePosition=[0, 0, 0],
+        linkMasses=[BEAR_MASS_KG * 0.5 / links] * links,
+        linkCollisionShapeIndices=collision_ids[1:],
+        linkVisualShapeIndices=visual_ids[1:],
+        linkPositions=[[0, 0, 0]] * links,
+        linkOrientations=[[0, 0, 0, 1]] * links,
+        linkInertialFramePositions=[[0, 0, 0]] * links,
+        linkInertialFrameOrientations=[[0, 0, 0, 1]] * links,
+        linkParentIndices=[0] * links,
+        linkJointTypes=[pybullet.JOINT_FIXED] * links,
+        linkJointAxis=[[0, 0, 1]] * links,
+    )

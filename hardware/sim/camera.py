@@ -1,8 +1,12 @@
 """The wrist depth camera: a PrimeSense Carmine 1.09 rendered by pybullet's TinyRenderer.
 
+The one description of the simulated Carmine (field of view, intrinsics, mount, range,
+noise model), used by the simulated Panda (:mod:`hardware.sim.panda`) and by the
+synthetic scenes the perception tests render (:mod:`skills.perception.synthetic`).
 Rendering works in DIRECT mode (no GUI, no OpenGL context). The OpenGL z-buffer is
 turned into metric depth along the optical axis, then a Carmine-like noise model is
-applied (see :class:`CarmineNoise`).
+applied (see :class:`CarmineNoise`), or only the sensor's range limits
+(:func:`carmine_images`).
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 import pybullet
+from pybullet_utils.bullet_client import BulletClient
 
 from core.geometry import make_transform
 from hardware.interfaces import CameraIntrinsics
@@ -89,7 +94,7 @@ def opengl_matrices(
 
 
 def render_view(
-    bullet: LockedBullet, T_world_camera: np.ndarray, intrinsics: CameraIntrinsics
+    bullet: LockedBullet | BulletClient, T_world_camera: np.ndarray, intrinsics: CameraIntrinsics
 ) -> RenderedView:
     """Renders RGB, metric depth along the optical axis and segmentation with TinyRenderer.
 
@@ -206,3 +211,19 @@ def clip_range(depth_m: np.ndarray) -> np.ndarray:
     depth = depth_m.copy()
     depth[(depth < MIN_RANGE_M) | (depth > MAX_RANGE_M)] = 0.0
     return depth
+
+
+def carmine_images(
+    view: RenderedView,
+    intrinsics: CameraIntrinsics,
+    noise: CarmineNoise | None,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray]:
+    """What the Carmine reads out of a rendering: (rgb uint8, depth_m float32, 0 = missing).
+
+    With ``noise``, its :meth:`CarmineNoise.apply` (drawing from ``rng``); without, the
+    noiseless images with only the range limits applied (:func:`clip_range`).
+    """
+    if noise is None:
+        return view.rgb.copy(), clip_range(view.depth_m)
+    return noise.apply(view.rgb, view.depth_m, intrinsics, rng)

@@ -30,7 +30,7 @@ from hardware.sim.bullet import (
     reset_base_link,
 )
 from hardware.sim.clock import SimClock
-from hardware.sim.nao_model import SOLE_TO_TORSO_M, TAG_LINK
+from hardware.sim.nao_urdf import SOLE_TO_TORSO_M, TAG_LINK
 
 log = logging.getLogger(__name__)
 
@@ -99,31 +99,7 @@ class SimNao:
         self._bullet = bullet
         self._clock = clock
         self._rng = rng
-        self.body = bullet.loadURDF(
-            urdf_path,
-            basePosition=[start.x, start.y, SOLE_TO_TORSO_M],
-            baseOrientation=pybullet.getQuaternionFromEuler([0.0, 0.0, start.theta]),
-            useFixedBase=True,
-            flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
-        )
-        all_joints = joint_index_by_name(bullet, self.body)
-        self.joint_indices = {
-            name: index
-            for name, index in all_joints.items()
-            if bullet.getJointInfo(self.body, index)[2] == pybullet.JOINT_REVOLUTE
-        }
-        self.joint_limits = {
-            name: tuple(bullet.getJointInfo(self.body, index)[8:10])
-            for name, index in self.joint_indices.items()
-        }
-        self._joint_list = list(self.joint_indices.values())
-        self.link_indices = link_index_by_name(bullet, self.body)
-        self._l_sole = self.link_indices["l_sole"]
-        self.tag_link = self.link_indices[TAG_LINK]
-        if texture_id is not None:
-            bullet.changeVisualShape(
-                self.body, self.tag_link, textureUniqueId=texture_id, rgbaColor=[1, 1, 1, 1]
-            )
+        self._load_body(urdf_path, start, texture_id)
 
         self._positions = dict.fromkeys(self.joint_indices, 0.0)
         self._positions.update(HOLDING_POSTURE_RAD)
@@ -149,6 +125,36 @@ class SimNao:
             self._apply_joints()
             self._place_body()
         clock.add_process(self._step)
+
+    def _load_body(self, urdf_path: str, start: SE2Pose, texture_id: int | None) -> None:
+        """Loads the URDF standing at ``start`` and indexes its revolute joints (with their
+        limits) and links; the tag link gets ``texture_id``'s picture if one is given."""
+        bullet = self._bullet
+        self.body = bullet.loadURDF(
+            urdf_path,
+            basePosition=[start.x, start.y, SOLE_TO_TORSO_M],
+            baseOrientation=pybullet.getQuaternionFromEuler([0.0, 0.0, start.theta]),
+            useFixedBase=True,
+            flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
+        )
+        all_joints = joint_index_by_name(bullet, self.body)
+        self.joint_indices = {
+            name: index
+            for name, index in all_joints.items()
+            if bullet.getJointInfo(self.body, index)[2] == pybullet.JOINT_REVOLUTE
+        }
+        self.joint_limits = {
+            name: tuple(bullet.getJointInfo(self.body, index)[8:10])
+            for name, index in self.joint_indices.items()
+        }
+        self._joint_list = list(self.joint_indices.values())
+        self.link_indices = link_index_by_name(bullet, self.body)
+        self._l_sole = self.link_indices["l_sole"]
+        self.tag_link = self.link_indices[TAG_LINK]
+        if texture_id is not None:
+            bullet.changeVisualShape(
+                self.body, self.tag_link, textureUniqueId=texture_id, rgbaColor=[1, 1, 1, 1]
+            )
 
     # --- Humanoid protocol -------------------------------------------------------------
     def pose(self) -> SE2Pose:

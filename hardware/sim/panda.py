@@ -21,7 +21,7 @@ from hardware.sim.camera import (
     T_HAND_CAMERA,
     CarmineNoise,
     RenderedView,
-    clip_range,
+    carmine_images,
     render_view,
 )
 from hardware.sim.clock import SimClock
@@ -230,10 +230,7 @@ class SimPanda:
             timers.pixels += intrinsics.width * intrinsics.height
         self.last_view = view
         started = time.perf_counter()
-        if self._noise is None:
-            rgb, depth = view.rgb.copy(), clip_range(view.depth_m)
-        else:
-            rgb, depth = self._noise.apply(view.rgb, view.depth_m, intrinsics, self._rng)
+        rgb, depth = carmine_images(view, intrinsics, self._noise, self._rng)
         timers.noise_s += time.perf_counter() - started
         return RGBDFrame(rgb, depth, intrinsics, T_world_camera, stamp_s)
 

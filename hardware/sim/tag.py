@@ -11,9 +11,6 @@ import numpy as np
 from core.arena import TagSpec
 from hardware.sim.bullet import sim_cache_dir
 
-MARKER_MODULES = 6
-"""Modules across a 4x4 marker including its one-module black border."""
-
 QUIET_MODULES = 1
 """White quiet border around the black square, in modules."""
 

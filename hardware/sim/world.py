@@ -38,7 +38,7 @@ from hardware.sim.contacts import ChairTouchMonitor
 from hardware.sim.helper import SimHelper, SimSpeaker
 from hardware.sim.judge import SimJudge
 from hardware.sim.nao import SimNao
-from hardware.sim.nao_model import nao_urdf
+from hardware.sim.nao_urdf import nao_urdf
 from hardware.sim.panda import SimPanda
 from hardware.sim.tag import tag_assets
 
@@ -122,50 +122,16 @@ class SimWorld:
                 if config.gui:
                     bullet.configureDebugVisualizer(pybullet.COV_ENABLE_GUI, 0)
                 self.clock = SimClock(bullet, realtime=config.gui)
-                self.floor = bullet.loadURDF(
-                    str(Path(pybullet_data.getDataPath()) / "plane.urdf"), useFixedBase=True
-                )
-                bullet.changeVisualShape(
-                    self.floor, -1, textureUniqueId=-1, rgbaColor=[0.62, 0.62, 0.6, 1.0]
-                )
-                bullet.changeDynamics(self.floor, -1, lateralFriction=0.9)
+                self.floor = self._build_floor()
                 self.walls = self._build_walls(config.arena)
                 self.panda = SimPanda(
                     bullet, self.clock, config.arena.arm_base_xy, camera_rng, config.camera_noise
                 )
                 T_world_chair = self._placement(config, placement_rng)
                 self.chair = SimChair(bullet, chair_mesh, T_world_chair)
-                texture_path, plate_path = tag_assets(HUMANOID_TAG)
-                texture = bullet.loadTexture(str(texture_path))
-                self.nao = SimNao(
-                    bullet,
-                    self.clock,
-                    str(nao_urdf(plate_path, HUMANOID_TAG.height_m)),
-                    config.arena.humanoid_start,
-                    nao_rng,
-                    texture_id=texture,
-                )
+                self.nao = self._build_nao(config.arena.humanoid_start, nao_rng)
                 self._ignore_floor(self.nao.body, self.panda.body)
-                self.chair_touch = ChairTouchMonitor(
-                    bullet,
-                    self.nao.body,
-                    self.chair.body,
-                    {index: name for name, index in self.nao.link_indices.items()},
-                )
-                self.clock.add_process(self.chair_touch)
-                self.bear = SimBear(bullet, self.clock, self._bear_in_hands())
-                self.bear.hold(self.hands_frame, self.nao.body)
-                self.nao.on_hands = self._on_hands
-                self.helper = SimHelper(self.clock, self.chair, config.helper, helper_rng)
-                self.speaker = SimSpeaker(self.helper, config.voice)
-                self.judge = SimJudge(
-                    bullet,
-                    self.clock,
-                    self.bear,
-                    self.chair.body,
-                    self.floor,
-                    true_sitting_yaw=self.sitting_yaw_true,
-                )
+                self._build_bear_helper_and_judge(config, helper_rng)
             self.clock.sleep(SETTLE_S)
         except BaseException:
             bullet.disconnect_once()
@@ -177,6 +143,57 @@ class SimWorld:
             clock=self.clock,
             helper=self.helper,
             judge=self.judge,
+        )
+
+    def _build_floor(self) -> int:
+        """pybullet's plane, grey and with the lab floor's friction; returns its body id."""
+        floor = self._bullet.loadURDF(
+            str(Path(pybullet_data.getDataPath()) / "plane.urdf"), useFixedBase=True
+        )
+        self._bullet.changeVisualShape(
+            floor, -1, textureUniqueId=-1, rgbaColor=[0.62, 0.62, 0.6, 1.0]
+        )
+        self._bullet.changeDynamics(floor, -1, lateralFriction=0.9)
+        return floor
+
+    def _build_nao(self, start: SE2Pose, rng: np.random.Generator) -> SimNao:
+        """The NAO wearing the humanoid tag on its head, standing at ``start``."""
+        texture_path, plate_path = tag_assets(HUMANOID_TAG)
+        texture = self._bullet.loadTexture(str(texture_path))
+        return SimNao(
+            self._bullet,
+            self.clock,
+            str(nao_urdf(plate_path, HUMANOID_TAG.height_m)),
+            start,
+            rng,
+            texture_id=texture,
+        )
+
+    def _build_bear_helper_and_judge(
+        self, config: SimConfig, helper_rng: np.random.Generator
+    ) -> None:
+        """The chair-touch monitor, the bear in the NAO's hands, the helper who hears the
+        speaker, and the judge (after the NAO and the chair exist)."""
+        bullet = self._bullet
+        self.chair_touch = ChairTouchMonitor(
+            bullet,
+            self.nao.body,
+            self.chair.body,
+            {index: name for name, index in self.nao.link_indices.items()},
+        )
+        self.clock.add_process(self.chair_touch)
+        self.bear = SimBear(bullet, self.clock, self._bear_in_hands())
+        self.bear.hold(self.hands_frame, self.nao.body)
+        self.nao.on_hands = self._on_hands
+        self.helper = SimHelper(self.clock, self.chair, config.helper, helper_rng)
+        self.speaker = SimSpeaker(self.helper, config.voice)
+        self.judge = SimJudge(
+            bullet,
+            self.clock,
+            self.bear,
+            self.chair.body,
+            self.floor,
+            true_sitting_yaw=self.sitting_yaw_true,
         )
 
     # --- ground truth (tests and benchmarks only) ----------------------------------------

@@ -1,6 +1,6 @@
 """Walking control: following the SE(2) path with PID controllers on the tracked pose.
 
-See :mod:`skills.control.walk`; :mod:`skills.control.fakes` holds test doubles.
+See :mod:`skills.control.walk`; :mod:`hardware.fakes` holds the test doubles it walks.
 """
 
 from skills.control.pid import PID

@@ -1,16 +1,17 @@
 """Rendered RGB-D frames for tests and benchmarks (not a simulated world).
 
 A minimal, physics-free pybullet scene (DIRECT client, TinyRenderer) holding meshes,
-a floor, ArUco tags and ChArUco calibration boards, rendered from any camera pose with a Carmine-like depth noise
-model; and :class:`SyntheticArm`, a :class:`hardware.interfaces.ScanningArm` whose camera
-pose comes from the Panda's forward kinematics. The mission uses ``hardware.sim``;
-this module exists so the perception algorithms can be tested on their own.
-:func:`board_view` draws a calibration board by its homography alone (no pybullet).
+a floor, ArUco tags and ChArUco calibration boards, seen by the simulated Carmine of
+:mod:`hardware.sim.camera` (the same intrinsics, rendering and noise model as the
+mission's wrist camera); and :class:`SyntheticArm`, a
+:class:`hardware.interfaces.ScanningArm` whose camera pose comes from the Panda's forward
+kinematics. The mission uses ``hardware.sim``; this module exists so the perception
+algorithms can be tested on their own. :func:`board_view` draws a calibration board by
+its homography alone (no pybullet).
 """
 
 from __future__ import annotations
 
-import math
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
@@ -21,83 +22,50 @@ import numpy as np
 import pybullet
 import pybullet_data
 import trimesh
+from pybullet_utils.bullet_client import BulletClient
 
 from core.arena import TagSpec
 from hardware.interfaces import CameraIntrinsics, RGBDFrame
+from hardware.sim.camera import (
+    CARMINE_INTRINSICS,
+    T_HAND_CAMERA,
+    CarmineNoise,
+    carmine_images,
+    render_view,
+)
 
 if TYPE_CHECKING:
     from skills.perception.hand_eye import BoardSpec
 
-# The OpenGL camera looks along -z with y up; OpenCV looks along +z with y down.
-_GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
-
-T_HAND_CAMERA = np.array(
-    [
-        [0.0, 1.0, 0.0, 0.065],
-        [-1.0, 0.0, 0.0, 0.0],
-        [0.0, 0.0, 1.0, 0.02],
-        [0.0, 0.0, 0.0, 1.0],
-    ]
-)
-"""Hand-eye extrinsic (camera in ``panda_hand``), the same as ``hardware.sim.camera``'s:
-the optical axis along the hand's approach axis, 6.5 cm off it along the hand's +x."""
-
-
-def carmine_intrinsics() -> CameraIntrinsics:
-    """A PrimeSense Carmine 1.09-like 640x480 camera (57.5 x 45 degree field of view)."""
-    width, height = 640, 480
-    focal = (width / 2) / math.tan(math.radians(57.5) / 2)
-    return CameraIntrinsics(width, height, focal, focal, (width - 1) / 2, (height - 1) / 2)
-
-
-def carmine_depth_noise(
-    depth_m: np.ndarray, rng: np.random.Generator, dropout: float = 0.005
-) -> np.ndarray:
-    """Axial noise σ(z) = 1.425e-3 z² (structured-light sensors), 1 mm quantisation and
-    random missing pixels; pixels outside 0.35..3.5 m are missing (0)."""
-    noisy = depth_m + rng.normal(0.0, 1.0, depth_m.shape) * 1.425e-3 * depth_m**2
-    noisy = np.round(noisy * 1000.0) / 1000.0
-    noisy[(depth_m < 0.35) | (depth_m > 3.5) | (rng.random(depth_m.shape) < dropout)] = 0.0
-    return noisy.astype(np.float32)
-
-
-def opengl_projection(intrinsics: CameraIntrinsics, near_m: float, far_m: float) -> list[float]:
-    """Column-major OpenGL projection of a pinhole camera (principal point at the centre)."""
-    w, h = intrinsics.width, intrinsics.height
-    proj = np.zeros((4, 4))
-    proj[0, 0] = 2.0 * intrinsics.fx / w
-    proj[1, 1] = 2.0 * intrinsics.fy / h
-    proj[2, 2] = -(far_m + near_m) / (far_m - near_m)
-    proj[2, 3] = -2.0 * far_m * near_m / (far_m - near_m)
-    proj[3, 2] = -1.0
-    return proj.T.reshape(-1).tolist()
-
 
 class SyntheticScene:
-    """Meshes, a floor and tags in a pybullet DIRECT client, rendered by TinyRenderer."""
+    """Meshes, a floor and tags in a pybullet DIRECT client, rendered by TinyRenderer.
+
+    Args:
+        floor: lay a 6 m x 6 m floor at z = 0.
+        noise: apply the Carmine's noise model (else only its range limits).
+        seed: the noise's seed.
+    """
 
     def __init__(self, *, floor: bool = True, noise: bool = True, seed: int = 0) -> None:
-        self.client = pybullet.connect(pybullet.DIRECT)
+        self.bullet: BulletClient | None = BulletClient(connection_mode=pybullet.DIRECT)
         self._scratch = tempfile.TemporaryDirectory(prefix="bearchair-synthetic-")
         self._rng = np.random.default_rng(seed)
-        self.noise = noise
+        self._noise = CarmineNoise() if noise else None
         self._count = 0
         if floor:
-            shape = pybullet.createVisualShape(
+            shape = self.bullet.createVisualShape(
                 pybullet.GEOM_BOX,
                 halfExtents=[3.0, 3.0, 0.01],
                 rgbaColor=[0.55, 0.5, 0.45, 1.0],
-                physicsClientId=self.client,
             )
-            pybullet.createMultiBody(
-                0, -1, shape, basePosition=[0, 0, -0.01], physicsClientId=self.client
-            )
+            self.bullet.createMultiBody(0, -1, shape, basePosition=[0, 0, -0.01])
 
     def close(self) -> None:
         """Disconnects the client and removes the scratch files."""
-        if self.client >= 0:
-            pybullet.disconnect(self.client)
-            self.client = -1
+        if self.bullet is not None:
+            self.bullet.disconnect()
+            self.bullet = None
         self._scratch.cleanup()
 
     def add_mesh(
@@ -110,13 +78,10 @@ class SyntheticScene:
         self._count += 1
         path = Path(self._scratch.name) / f"mesh{self._count}.obj"
         mesh.export(path)
-        shape = pybullet.createVisualShape(
-            pybullet.GEOM_MESH,
-            fileName=str(path),
-            rgbaColor=list(rgba),
-            physicsClientId=self.client,
+        shape = self.bullet.createVisualShape(
+            pybullet.GEOM_MESH, fileName=str(path), rgbaColor=list(rgba)
         )
-        body = pybullet.createMultiBody(0, -1, shape, physicsClientId=self.client)
+        body = self.bullet.createMultiBody(0, -1, shape)
         self.set_pose(body, np.eye(4) if T_world_mesh is None else T_world_mesh)
         return body
 
@@ -174,62 +139,34 @@ class SyntheticScene:
         cv2.imwrite(str(png), cv2.cvtColor(image, cv2.COLOR_GRAY2RGB))
         obj = Path(self._scratch.name) / f"{name}{self._count}.obj"
         obj.write_text(obj_text)
-        shape = pybullet.createVisualShape(
-            pybullet.GEOM_MESH, fileName=str(obj), physicsClientId=self.client
-        )
-        body = pybullet.createMultiBody(0, -1, shape, physicsClientId=self.client)
-        texture = pybullet.loadTexture(str(png), physicsClientId=self.client)
-        pybullet.changeVisualShape(
-            body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1], physicsClientId=self.client
-        )
+        shape = self.bullet.createVisualShape(pybullet.GEOM_MESH, fileName=str(obj))
+        body = self.bullet.createMultiBody(0, -1, shape)
+        texture = self.bullet.loadTexture(str(png))
+        self.bullet.changeVisualShape(body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1])
         self.set_pose(body, T_world_body)
         return body
 
     def set_pose(self, body: int, T_world_body: np.ndarray) -> None:
         """Places a body (its mesh frame) at a world pose."""
         quat = _quaternion_xyzw(T_world_body[:3, :3])
-        pybullet.resetBasePositionAndOrientation(
-            body, T_world_body[:3, 3].tolist(), quat, physicsClientId=self.client
-        )
+        self.bullet.resetBasePositionAndOrientation(body, T_world_body[:3, 3].tolist(), quat)
 
     def remove(self, body: int) -> None:
         """Removes a body from the scene."""
-        pybullet.removeBody(body, physicsClientId=self.client)
+        self.bullet.removeBody(body)
 
     def render(
         self,
         T_world_camera: np.ndarray,
-        intrinsics: CameraIntrinsics | None = None,
+        intrinsics: CameraIntrinsics = CARMINE_INTRINSICS,
         stamp_s: float = 0.0,
-        near_m: float = 0.05,
-        far_m: float = 5.0,
     ) -> RGBDFrame:
-        """Renders colour and depth (metres along the optical axis) from an OpenCV camera pose."""
-        intrinsics = intrinsics or carmine_intrinsics()
-        T_world_gl = T_world_camera @ _GL_FROM_CV
-        view = np.linalg.inv(T_world_gl).T.reshape(-1).tolist()
-        _, _, rgba, depth_buffer, _ = pybullet.getCameraImage(
-            intrinsics.width,
-            intrinsics.height,
-            viewMatrix=view,
-            projectionMatrix=opengl_projection(intrinsics, near_m, far_m),
-            renderer=pybullet.ER_TINY_RENDERER,
-            physicsClientId=self.client,
-        )
-        rgba = np.asarray(rgba, dtype=np.uint8).reshape(intrinsics.height, intrinsics.width, 4)
-        buffer = np.asarray(depth_buffer, dtype=np.float64).reshape(
-            intrinsics.height, intrinsics.width
-        )
-        depth = far_m * near_m / (far_m - (far_m - near_m) * buffer)
-        depth[buffer >= 1.0] = 0.0
-        if self.noise:
-            depth = carmine_depth_noise(depth, self._rng)
+        """What the Carmine sees from an OpenCV camera pose: colour and depth (metres
+        along the optical axis, 0 = missing)."""
+        view = render_view(self.bullet, T_world_camera, intrinsics)
+        rgb, depth = carmine_images(view, intrinsics, self._noise, self._rng)
         return RGBDFrame(
-            np.ascontiguousarray(rgba[:, :, :3]),
-            depth.astype(np.float32),
-            intrinsics,
-            np.asarray(T_world_camera, dtype=np.float64).copy(),
-            stamp_s,
+            rgb, depth, intrinsics, np.asarray(T_world_camera, dtype=np.float64).copy(), stamp_s
         )
 
 
