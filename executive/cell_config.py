@@ -37,9 +37,9 @@ from typing import Any
 import numpy as np
 
 from core.arena import DEFAULT_ARENA, Arena
+from core.errors import BackendUnavailable
 from core.geometry import yaw_of
 from core.se2 import SE2Pose
-from hardware.real import BackendUnavailable
 
 ROTATION_TOLERANCE = 1e-3
 """Largest element of R^T R - I (and |det R - 1|) accepted: a 4-decimal matrix passes."""

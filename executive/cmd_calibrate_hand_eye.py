@@ -231,9 +231,9 @@ def _visit_views(
 ) -> list[View]:
     """HOME, then each configuration (capture, detect the board) and back to HOME; any
     failure emergency-stops the arm."""
+    from core.errors import BackendUnavailable
     from executive.cmd_check_hardware import _within
     from executive.interrupts import emergency_stop_on_second_signal
-    from hardware.real import BackendUnavailable
     from skills.perception.views import HOME_CONFIGURATION
 
     T_base_world = np.linalg.inv(cell.T_world_base)

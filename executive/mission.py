@@ -207,11 +207,12 @@ def run_on_robots(
 
     Raises:
         executive.cell_config.CellConfigError: the cell file is wrong (one line).
-        hardware.real.BackendUnavailable: an SDK or a robot is missing, or the operator
+        core.errors.BackendUnavailable: an SDK or a robot is missing, or the operator
             said no.
     """
+    from core.errors import BackendUnavailable
     from executive.cell_config import load_cell_config
-    from hardware.real import BackendUnavailable, sdk_versions
+    from hardware.real import sdk_versions
     from hardware.real.robots import activate, connect_robots
 
     cell = load_cell_config(cell_file, config.arena)

@@ -39,6 +39,7 @@ import py_trees
 from py_trees.common import Status
 
 from behaviours import keys
+from core.errors import BackendUnavailable
 from executive.jsonable import to_jsonable
 from executive.record import tree_nodes
 
@@ -71,7 +72,7 @@ FEEDBACK_LABEL_CHARS = 48
 """Feedback shown in a node's label is cut here; the full text is in ``tree/log``."""
 
 
-class RecordingUnavailable(RuntimeError):
+class RecordingUnavailable(BackendUnavailable):
     """A recording was asked for but cannot be made (no rerun-sdk, no display)."""
 
 

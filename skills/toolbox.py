@@ -3,7 +3,7 @@
 Behaviours never import skill modules: they call methods of a :class:`MissionSkills`
 object passed to ``tree.setup(skills=...)``: the real ones
 (``skills.default_skills.DefaultSkills``) or a test's stubs
-(``skills.fakes.ScriptedSkills``). A stub for a skill that is not ready raises
+(``skills.scripted.ScriptedSkills``). A stub for a skill that is not ready raises
 :class:`SkillNotReady`, and the tree fails at the leaf that needs it, naming it.
 """
 

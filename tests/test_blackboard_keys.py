@@ -14,7 +14,7 @@ from core.arena import DEFAULT_ARENA
 from executive.render import blackboard_table
 from executive.runner import MissionRunner
 from hardware.fakes import FakeJudge, fake_robot
-from skills.fakes import ScriptedSkills, default_results
+from skills.scripted import ScriptedSkills, default_results
 from skills.perception.errors import RegistrationError
 from skills.results import AccessibilityResult
 from trees.mission import create_tree

@@ -34,8 +34,8 @@ from typing import Any
 
 import pytest
 
+from core.errors import BackendUnavailable
 from core.se2 import SE2Pose
-from hardware.real import BackendUnavailable
 
 pytest.importorskip("qi")
 

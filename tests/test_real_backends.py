@@ -16,9 +16,10 @@ import time
 import numpy as np
 import pytest
 
+from core.errors import BackendUnavailable
 from core.se2 import SE2Pose
 from hardware.interfaces import Humanoid, ScanningArm, Speaker
-from hardware.real import BackendUnavailable, EmergencyStopped, import_sdk
+from hardware.real import EmergencyStopped, import_sdk
 from hardware.real.camera import CarmineCamera
 from hardware.real.panda import JOINT_LIMITS_LOWER_RAD, ArmFault, PandaArm, into_walls
 from hardware.real.standins import (

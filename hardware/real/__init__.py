@@ -17,12 +17,10 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-
-class BackendUnavailable(RuntimeError):
-    """A robot SDK is not installed or the robot cannot be reached."""
+from core.errors import BackendError, BackendUnavailable
 
 
-class EmergencyStopped(RuntimeError):
+class EmergencyStopped(BackendError, RuntimeError):
     """A motion was refused or ended because the robot was emergency-stopped."""
 
 

@@ -35,9 +35,10 @@ from typing import Any
 
 import numpy as np
 
+from core.errors import BackendUnavailable
 from core.nao_carrying import CARRYING_POSTURE_RAD
 from core.se2 import SE2Pose
-from hardware.real import BackendUnavailable, EmergencyStopped, import_sdk
+from hardware.real import EmergencyStopped, import_sdk
 
 log = logging.getLogger(__name__)
 

@@ -29,8 +29,9 @@ from typing import Any
 
 import numpy as np
 
+from core.errors import BackendError, BackendUnavailable
 from hardware.interfaces import RGBDFrame
-from hardware.real import BackendUnavailable, EmergencyStopped, import_sdk
+from hardware.real import EmergencyStopped, import_sdk
 from hardware.real.camera import CARMINE_INTRINSICS, CarmineCamera
 
 __all__ = ["CARMINE_INTRINSICS", "ArmFault", "CarmineCamera", "PandaArm"]
@@ -50,7 +51,7 @@ STILL_DURING_CAPTURE_M = 0.002
 FAULT_MODES = ("kReflex", "kOther", "kUserStopped", "kAutomaticErrorRecovery")
 
 
-class ArmFault(RuntimeError):
+class ArmFault(BackendError, RuntimeError):
     """The Panda reported an error (libfranka's message); recover it with the operator."""
 
 
