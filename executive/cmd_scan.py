@@ -14,6 +14,7 @@ import json
 import sys
 from pathlib import Path
 
+from core.streams import silenced_fds
 from executive.cli_types import seed_value
 
 
@@ -48,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     try:
         # pybullet's C code prints to stdout when it connects: keep stdout for our output.
-        with _stdout_to_stderr():
+        with silenced_fds(1, target_fd=2):
             world = SimWorld(SimConfig(chair_path=args.chair, seed=args.seed))
         with world:
             world_s = time.perf_counter() - started
@@ -83,21 +84,3 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {step:<8} {value:7.3f} s (wall)")
     print(f"views: {scan.views}")
     return 0
-
-
-class _stdout_to_stderr:
-    """Sends file descriptor 1 to descriptor 2 for the duration of a ``with`` block."""
-
-    def __enter__(self) -> None:
-        import os
-
-        sys.stdout.flush()
-        self._saved = os.dup(1)
-        os.dup2(2, 1)
-
-    def __exit__(self, *exc: object) -> None:
-        import os
-
-        sys.stdout.flush()
-        os.dup2(self._saved, 1)
-        os.close(self._saved)

@@ -14,9 +14,9 @@ from core.arena import DEFAULT_ARENA
 from executive.render import blackboard_table
 from executive.runner import MissionRunner
 from hardware.fakes import FakeJudge, fake_robot
-from skills.scripted import ScriptedSkills, default_results
 from skills.perception.errors import RegistrationError
 from skills.results import AccessibilityResult
+from skills.scripted import ScriptedSkills, default_results
 from trees.mission import create_tree
 
 ACCESSIBLE = default_results()["check_accessibility"]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -528,3 +529,14 @@ def test_cli_json_reports_the_vote(tmp_path, capsys) -> None:
     assert sum(vote["counts"]) >= payload["n_correct"] > 0
     assert 0.0 < vote["share"] <= 1.0 and isinstance(vote["split"], bool)
     assert vote["chosen_deg"] in range(0, 360, 45)
+
+
+def test_the_picture_without_matplotlib_names_the_extra(tmp_path, monkeypatch):
+    from core.errors import RenderError
+    from core.meshes import box_chair_mesh
+    from skills.imagination.render import render_sitting
+
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib raises
+    with pytest.raises(RenderError, match=r"bearchair\[trials\]"):
+        render_sitting(box_chair_mesh(), None, tmp_path / "sitting.png", "box chair")
+    assert not (tmp_path / "sitting.png").exists()

@@ -94,6 +94,16 @@ def test_broken_engine_falls_back(monkeypatch: pytest.MonkeyPatch) -> None:
     assert not voice.audible and voice.spoken == [SENTENCE]
 
 
+def test_without_pyttsx3_the_text_names_the_extra(monkeypatch: pytest.MonkeyPatch, caplog) -> None:
+    monkeypatch.setattr(speech, "audio_device_available", lambda: True)
+    monkeypatch.setitem(sys.modules, "pyttsx3", None)  # import pyttsx3 raises ImportError
+    voice = TextToSpeech(timeout_s=1.0)
+    voice.say(SENTENCE)
+    assert not voice.audible and voice.spoken == [SENTENCE]
+    warnings = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert len(warnings) == 1 and "bearchair[voice]" in warnings[0]
+
+
 def test_records_wav_without_audio(tmp_path) -> None:
     if speech.shutil.which("espeak-ng") is None:
         pytest.skip("espeak-ng not installed")

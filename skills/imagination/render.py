@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from core.errors import RenderError
 from core.geometry import SittingPose, rot_z
 from skills.imagination.agent import JOINTS
 
@@ -66,8 +67,12 @@ def render_sitting(
         path: the PNG to write.
         title: a line above the figure.
     """
-    import matplotlib
-
+    try:
+        import matplotlib
+    except ImportError as error:
+        raise RenderError(
+            "the picture needs matplotlib: pip install 'bearchair[trials]'"
+        ) from error
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection

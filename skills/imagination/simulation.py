@@ -20,7 +20,6 @@ copy j stands at T_world_chair_j = translation(0, j * spacing, 0).
 
 from __future__ import annotations
 
-import ctypes
 import math
 import os
 import signal
@@ -30,6 +29,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from core.geometry import yaw_of
+from core.streams import silenced_fds
 from skills.imagination.agent import (
     BALANCE_FULL_TILT_RAD,
     BALANCE_TORQUE_MAX_NM,
@@ -178,23 +178,8 @@ _client: dict[str, Any] = {}
 def _pybullet() -> Any:
     """Imports pybullet with its build banner (printed by C code) sent to /dev/null."""
     if "module" not in _client:
-        import sys
-
-        sys.stdout.flush()
-        sys.stderr.flush()
-        saved = [os.dup(1), os.dup(2)]
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        try:
-            os.dup2(devnull, 1)
-            os.dup2(devnull, 2)
+        with silenced_fds(1, 2):
             import pybullet
-
-            ctypes.CDLL(None).fflush(None)
-        finally:
-            os.dup2(saved[0], 1)
-            os.dup2(saved[1], 2)
-            for fd in (*saved, devnull):
-                os.close(fd)
         _client["module"] = pybullet
     return _client["module"]
 
