@@ -1,2 +1,6 @@
-"""Hardware interfaces (``hardware.interfaces``) and their backends: ``hardware.sim``
-(pybullet, the default) and ``hardware.real`` (the robots' SDKs)."""
+"""Hardware interfaces (``hardware.interfaces``, typing.Protocols), their backends:
+``hardware.sim`` (pybullet, the default) and ``hardware.real`` (the robots' SDKs), and
+fakes of them for tests (``hardware.fakes``).
+
+May import ``core`` only.
+"""

@@ -1,5 +1,6 @@
-"""The mission's algorithms as plain functions and small classes on typed inputs.
+"""The mission's algorithms as plain functions and small classes on typed inputs:
+perception, imagination, planning, control, assistance (no py_trees in here).
 
-Nothing in here imports py_trees: the behaviours in ``behaviours/`` call these through
-``skills.toolbox.MissionSkills``.
+May import ``core`` and ``hardware`` (its interfaces, to drive a robot through them).
+The behaviours call these through ``skills.toolbox.MissionSkills``.
 """
