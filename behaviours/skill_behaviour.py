@@ -68,6 +68,7 @@ class SkillBehaviour(py_trees.behaviour.Behaviour):
     def initialise(self) -> None:
         if self._executor is None:
             self.setup()
+        assert self._executor is not None  # setup() makes it
         self._cancel = threading.Event()
         self._started_at = time.monotonic()
         self.feedback_message = f"{self.activity}..."

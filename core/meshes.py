@@ -15,6 +15,7 @@ import tempfile
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 import trimesh
@@ -227,7 +228,8 @@ def write_cached_arrays(path: Path, arrays: dict[str, np.ndarray]) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         descriptor, scratch = tempfile.mkstemp(dir=path.parent, suffix=".tmp.npz")
         with os.fdopen(descriptor, "wb") as stream:
-            np.savez(stream, **plain)
+            # As Any: numpy's stubs match the keys against savez's allow_pickle flag too.
+            np.savez(stream, **cast(dict[str, Any], plain))
         os.replace(scratch, path)
     except OSError as error:
         logger.warning("could not write cache entry %s: %s", path, one_line(error))
@@ -489,7 +491,7 @@ def box_chair_mesh(
                     ),
                 )
             )
-    return trimesh.util.concatenate(parts)
+    return cast(trimesh.Trimesh, trimesh.util.concatenate(parts))  # of Trimeshes: a Trimesh
 
 
 def _box(

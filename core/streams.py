@@ -28,18 +28,18 @@ def silenced_fds(*fds: int, target_fd: int | None = None) -> Iterator[None]:
     """
     _flush_all()
     saved = [os.dup(fd) for fd in fds]
-    devnull = os.open(os.devnull, os.O_WRONLY) if target_fd is None else None
+    destination = os.open(os.devnull, os.O_WRONLY) if target_fd is None else target_fd
     try:
         for fd in fds:
-            os.dup2(devnull if target_fd is None else target_fd, fd)
+            os.dup2(destination, fd)
         yield
     finally:
         _flush_all()
         for fd, original in zip(fds, saved, strict=True):
             os.dup2(original, fd)
             os.close(original)
-        if devnull is not None:
-            os.close(devnull)
+        if target_fd is None:
+            os.close(destination)  # the /dev/null descriptor opened above
 
 
 def _flush_all() -> None:

@@ -12,6 +12,7 @@ stopped is never handed back.
 from __future__ import annotations
 
 import contextlib
+import importlib
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from typing import Any, Protocol
@@ -99,7 +100,8 @@ def _ray_trial(
 def import_ray() -> Any:
     """The ``ray`` module, or a one-line error saying how to install it."""
     try:
-        import ray
+        # By name: Ray is an optional extra, so a type checker may not find it.
+        ray = importlib.import_module("ray")
     except ImportError as error:
         raise BackendUnavailable(
             "--backend ray needs Ray, an optional extra: pip install 'bearchair[trials]'"

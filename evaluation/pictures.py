@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import math
 import shutil
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -64,7 +65,10 @@ def render_chair_pictures(records: list[dict[str, Any]], chairs_dir: Path) -> di
             continue
         import trimesh
 
-        mesh = trimesh.load(Path(record["run_dir"]) / "chair_reconstructed.ply", force="mesh")
+        mesh = cast(
+            "trimesh.Trimesh",  # force="mesh" makes it one
+            trimesh.load(Path(record["run_dir"]) / "chair_reconstructed.ply", force="mesh"),
+        )
         path = chairs_dir / f"{chair.rsplit('.', 1)[0]}.png"
         title = (
             f"{chair}: trial {record['trial_index']} ({record['experiment']}), {record['outcome']}"
@@ -146,7 +150,9 @@ def _draw_from_above(
     from matplotlib.collections import PolyCollection
 
     axes.add_collection(
-        PolyCollection(triangles[:, :, :2], facecolors="0.75", edgecolors="none", alpha=0.35)
+        PolyCollection(
+            _polygons(triangles[:, :, :2]), facecolors="0.75", edgecolors="none", alpha=0.35
+        )
     )
     axes.plot(sitter[1:, 0], sitter[1:, 1], "-", color="tab:red", lw=2)
     axes.plot(*position[:2], "o", color="tab:red")
@@ -175,7 +181,7 @@ def _draw_from_the_side(
 
     side_polys = np.stack([along(triangles), triangles[:, :, 2]], axis=-1)
     axes.add_collection(
-        PolyCollection(side_polys, facecolors="0.75", edgecolors="none", alpha=0.35)
+        PolyCollection(_polygons(side_polys), facecolors="0.75", edgecolors="none", alpha=0.35)
     )
     axes.plot(along(sitter), sitter[:, 2], "-o", color="tab:red", lw=2, ms=3)
     axes.axhline(0.0, color="0.4", lw=1)
@@ -185,6 +191,12 @@ def _draw_from_the_side(
     _fit(
         axes, np.vstack([side_polys.reshape(-1, 2), np.column_stack([along(sitter), sitter[:, 2]])])
     )
+
+
+def _polygons(vertices: np.ndarray) -> Sequence[np.ndarray]:
+    """``vertices`` (N polygons, M vertices, 2) as matplotlib's stubs type PolyCollection's
+    ``verts``: they ask for a Sequence, and it takes the array as it is."""
+    return cast(Sequence[np.ndarray], vertices)
 
 
 def _fit(axes: Any, points: np.ndarray, margin_m: float = 0.08) -> None:

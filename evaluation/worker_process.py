@@ -73,7 +73,7 @@ class WorkerHandle(Protocol):
         ``subprocess.TimeoutExpired`` if it is still running after ``timeout`` s."""
         ...
 
-    def communicate(self, timeout: float | None = None) -> tuple[str, Any]:
+    def communicate(self, *, timeout: float | None = None) -> tuple[str, Any]:
         """Waits as :meth:`wait` does and returns what it printed on stdout (and None)."""
         ...
 
@@ -97,7 +97,7 @@ class CommandLauncher:
     def __init__(self, command: list[str] | None = None) -> None:
         self.command = command or default_worker_command()
 
-    def start(self, payload_json: str, log: IO[str]) -> subprocess.Popen:
+    def start(self, payload_json: str, log: IO[str]) -> subprocess.Popen[str]:
         return subprocess.Popen(
             [*self.command, payload_json],
             stdout=subprocess.PIPE,
@@ -241,9 +241,9 @@ def run_worker(
         return WorkerOutcome(message["summary"], None, elapsed)
     if message is not None and "error" in message:
         return WorkerOutcome(None, f"worker error: {message['error']}", elapsed)
-    return WorkerOutcome(
-        None, _crash_description(process.returncode, log_path), elapsed, crashed=True
-    )
+    returncode = process.returncode
+    assert returncode is not None  # communicate() returned: the worker has exited
+    return WorkerOutcome(None, _crash_description(returncode, log_path), elapsed, crashed=True)
 
 
 def run_worker_with_retry(

@@ -63,6 +63,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    assert __doc__ is not None  # only python -OO strips it, and that strips asserts too
     parser = _Parser(prog="bearchair", description=__doc__.split("\n")[0])
     parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
     subparsers = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -438,7 +439,7 @@ def _exit_now(status: int) -> None:
     # Release the pool's semaphores (multiprocessing's own exit finalizers), so its
     # resource tracker has nothing to warn about.
     with contextlib.suppress(Exception):
-        multiprocessing.util._run_finalizers(0)
+        multiprocessing.util._run_finalizers(0)  # pyright: ignore[reportAttributeAccessIssue]  # private, not in typeshed
     os._exit(status)
 
 

@@ -267,7 +267,7 @@ def _visit_views(
 
 
 def _detect(
-    name: str, joints: Sequence[float], T_base_flange: np.ndarray, frame: Any, board: Any
+    name: str, joints: np.ndarray, T_base_flange: np.ndarray, frame: Any, board: Any
 ) -> View:
     from skills.perception.errors import BoardNotSeenError
     from skills.perception.hand_eye import board_depth_ratio, detect_board
@@ -313,7 +313,8 @@ def _solve_and_report(views: list[View], board: Any, out: Path | None) -> int:
     if len(seen) < len(views):
         print(f"calibrate-hand-eye: the board was seen in {len(seen)} of {len(views)} views")
     result = solve_hand_eye(
-        [view.T_base_flange for view in seen], [view.detection.T_camera_board for view in seen]
+        [view.T_base_flange for view in seen],
+        [detection.T_camera_board for view in seen if (detection := view.detection) is not None],
     )
     residuals = result.residuals
     for view, mm, deg in zip(seen, residuals.translation_mm, residuals.rotation_deg, strict=True):

@@ -54,10 +54,16 @@ def tree_shape(root: py_trees.behaviour.Behaviour) -> list[dict[str, Any]]:
             "name": node.name,
             "type": type(node).__name__,
             "depth": depth,
-            **({"memory": node.memory} if isinstance(getattr(node, "memory", None), bool) else {}),
+            **_memory_field(node),
         }
         for path, node, depth in tree_nodes(root)
     ]
+
+
+def _memory_field(node: py_trees.behaviour.Behaviour) -> dict[str, bool]:
+    """A composite's ``memory`` flag as a field; nothing for a node without one."""
+    memory = getattr(node, "memory", None)
+    return {"memory": memory} if isinstance(memory, bool) else {}
 
 
 _WRITES = frozenset(

@@ -32,7 +32,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 from urllib.parse import quote
 
 import py_trees
@@ -46,6 +46,7 @@ from executive.record import tree_nodes
 if TYPE_CHECKING:
     from core.se2 import SE2Pose
     from executive.runner import MissionRunner
+    from skills.toolbox import MissionSkills
 logger = logging.getLogger(__name__)
 
 RECORDING_FILE = "mission.rrd"
@@ -230,10 +231,11 @@ class MissionRecording:
             static=True,
         )
 
-    def watch_skills(self, skills: Any, clock: Any) -> SkillCalls:
+    def watch_skills(self, skills: MissionSkills, clock: Any) -> MissionSkills:
         """Wraps the tree's skills so that the watched calls are recorded too."""
         self._skill_calls = SkillCalls(skills, clock)
-        return self._skill_calls
+        # SkillCalls passes every attribute through (__getattr__), which pyright cannot see.
+        return cast("MissionSkills", self._skill_calls)
 
     # -- the post-tick hook ------------------------------------------------------------
 

@@ -127,7 +127,7 @@ class TextToSpeech:
         self.spoken.append(sentence)
         logger.info("say: %s", sentence)
         if self._record_dir is not None:
-            self._record(sentence)
+            self._record(self._record_dir, sentence)
         if not self.audible:
             return
         done = threading.Event()
@@ -137,12 +137,12 @@ class TextToSpeech:
         elif self._failures:
             self._fall_back(f"pyttsx3 failed ({self._failures[-1]})")
 
-    def _record(self, sentence: str) -> None:
+    def _record(self, record_dir: Path, sentence: str) -> None:
         espeak = shutil.which("espeak-ng") or shutil.which("espeak")
         if espeak is None:
             return
-        self._record_dir.mkdir(parents=True, exist_ok=True)
-        target = self._record_dir / f"sentence-{len(self.spoken):03d}.wav"
+        record_dir.mkdir(parents=True, exist_ok=True)
+        target = record_dir / f"sentence-{len(self.spoken):03d}.wav"
         try:
             subprocess.run(
                 [espeak, "-s", str(self._rate_wpm), "-w", str(target), sentence],

@@ -168,26 +168,26 @@ class RealSenseCamera:
     """
 
     def __init__(self, rs: Any | None = None, serial: str | None = None, timeout_s: float = 2.0):
-        rs = rs or import_sdk("pyrealsense2", "bearchair[realsense]")
-        self._rs = rs
+        sdk = rs or import_sdk("pyrealsense2", "bearchair[realsense]")
+        self._rs = sdk
         self._timeout_ms = int(timeout_s * 1000)
         width, height = CARMINE_INTRINSICS.width, CARMINE_INTRINSICS.height
-        config = rs.config()
+        config = sdk.config()
         if serial is not None:
             config.enable_device(serial)
-        config.enable_stream(rs.stream.depth, width, height, rs.format.z16, FPS)
-        config.enable_stream(rs.stream.color, width, height, rs.format.rgb8, FPS)
-        self._pipeline = rs.pipeline()
+        config.enable_stream(sdk.stream.depth, width, height, sdk.format.z16, FPS)
+        config.enable_stream(sdk.stream.color, width, height, sdk.format.rgb8, FPS)
+        self._pipeline = sdk.pipeline()
         try:
             profile = self._pipeline.start(config)
         except RuntimeError as error:
             raise BackendUnavailable(f"no RealSense camera at 640x480 found: {error}") from error
         self.depth_scale_m = float(profile.get_device().first_depth_sensor().get_depth_scale())
-        colour = profile.get_stream(rs.stream.color).as_video_stream_profile().get_intrinsics()
+        colour = profile.get_stream(sdk.stream.color).as_video_stream_profile().get_intrinsics()
         self.intrinsics = CameraIntrinsics(
             int(colour.width), int(colour.height), colour.fx, colour.fy, colour.ppx, colour.ppy
         )
-        self._align = rs.align(rs.stream.color)
+        self._align = sdk.align(sdk.stream.color)
 
     def mode(self) -> dict[str, Any]:
         return {

@@ -57,4 +57,5 @@ def connect_robots(config: Any) -> Robot:
 def activate(robot: Robot) -> None:
     """Sets the NAO up for carrying (Autonomous Life and awareness off, no arm swing,
     carrying posture, hands closed, head held): the robots move from here on."""
+    assert isinstance(robot.humanoid, NaoHumanoid)  # connect_robots' humanoid is one
     robot.humanoid.activate()

@@ -318,6 +318,10 @@ def _motion_joint_methods(qi: Any, owner: NaoqiStandin) -> type:
     body = owner.body
 
     class ALMotionJoints:
+        # From ALMotionTasks, ALMotion's other base: kill the running tasks, start one.
+        _kill: Callable[[], None]
+        _start: Callable[[Callable[[threading.Event], None]], Any]
+
         @qi.bind(qi.Void, [qi.List(qi.String)])
         def killTasksUsingResources(self, names: list[str]) -> None:
             owner.record("ALMotion", "killTasksUsingResources", list(names))
@@ -846,6 +850,7 @@ class FakeRealSense:
         self.depth_scale_m = depth_scale_m
         self.enabled: list[tuple[Any, ...]] = []
         self.aligned_to: Any = None
+        self.serial: str  # set by config.enable_device
         fake = self
 
         class config:

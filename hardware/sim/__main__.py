@@ -10,7 +10,9 @@ from __future__ import annotations
 import argparse
 import math
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import cast
 
 import cv2
 import numpy as np
@@ -74,7 +76,9 @@ def _print_capture_and_depth_accuracy(world: SimWorld) -> RGBDFrame:
     frames = [world.panda.capture() for _ in range(5)]
     print(f"capture 640x480 with noise: {(time.perf_counter() - start) / 5 * 1000:.0f} ms")
     frame = frames[-1]
-    mask = (world.panda.last_view.segmentation == world.chair.body) & (frame.depth_m > 0)
+    view = world.panda.last_view
+    assert view is not None  # capture() sets it
+    mask = (view.segmentation == world.chair.body) & (frame.depth_m > 0)
     v, u = np.nonzero(mask)
     z = frame.depth_m[v, u].astype(float)
     K = frame.intrinsics
@@ -84,13 +88,14 @@ def _print_capture_and_depth_accuracy(world: SimWorld) -> RGBDFrame:
     )
     import open3d as o3d
 
+    # open3d's stubs lose the defaults of Tensor's dtype and device (the array's, the CPU).
+    tensor = cast(Callable[[np.ndarray], o3d.core.Tensor], o3d.core.Tensor)
     scene = o3d.t.geometry.RaycastingScene()
     mesh = world.chair_mesh_true
     scene.add_triangles(
-        o3d.core.Tensor(np.asarray(mesh.vertices, np.float32)),
-        o3d.core.Tensor(np.asarray(mesh.faces, np.uint32)),
+        tensor(np.asarray(mesh.vertices, np.float32)), tensor(np.asarray(mesh.faces, np.uint32))
     )
-    distance = scene.compute_distance(o3d.core.Tensor(points.astype(np.float32))).numpy()
+    distance = scene.compute_distance(tensor(points.astype(np.float32))).numpy()
     print(
         f"chair depth pixels: {mask.sum()}, range {z.min():.2f}-{z.max():.2f} m, distance to "
         f"true surface median {np.median(distance) * 1000:.1f} mm, "

@@ -90,7 +90,9 @@ class LockedBullet:
                 self.client.disconnect()
 
 
-def pose_to_matrix(position: Sequence[float], quaternion_xyzw: Sequence[float]) -> np.ndarray:
+def pose_to_matrix(
+    position: Sequence[float] | np.ndarray, quaternion_xyzw: Sequence[float] | np.ndarray
+) -> np.ndarray:
     """4x4 transform from a pybullet position and (x, y, z, w) quaternion."""
     transform = np.eye(4)
     transform[:3, :3] = np.array(pybullet.getMatrixFromQuaternion(quaternion_xyzw)).reshape(3, 3)

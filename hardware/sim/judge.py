@@ -109,4 +109,4 @@ def _leans_back(up: np.ndarray, forward: np.ndarray) -> bool:
     if np.linalg.norm(lean) < 1e-6 or np.linalg.norm(facing) < 1e-6:
         return False
     cosine = -float(np.dot(lean, facing)) / (np.linalg.norm(lean) * np.linalg.norm(facing))
-    return cosine >= math.cos(math.radians(45.0))
+    return bool(cosine >= math.cos(math.radians(45.0)))

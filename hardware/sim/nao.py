@@ -47,7 +47,7 @@ HOLDING_POSTURE_RAD: dict[str, float] = {**CARRYING_POSTURE_RAD, "LHand": 0.0, "
 
 class _Trajectory:
     def __init__(
-        self, joints: list[int], start_s: float, times_s: np.ndarray, positions: np.ndarray
+        self, joints: list[str], start_s: float, times_s: np.ndarray, positions: np.ndarray
     ) -> None:
         self.joints = joints
         self.start_s = start_s

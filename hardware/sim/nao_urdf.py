@@ -147,7 +147,10 @@ def build_nao_urdf_text(tag_mesh_path: Path, tag_height_m: float) -> str:
     """
     root = ET.parse(QIBULLET_NAO_URDF).getroot()
     for joint in root.findall("joint"):
-        child = joint.find("child").get("link", "")
+        child_element = joint.find("child")
+        if child_element is None:
+            raise ValueError(f"{QIBULLET_NAO_URDF}: joint {joint.get('name')} has no child")
+        child = child_element.get("link", "")
         if _dropped(child):
             root.remove(joint)
     for link in root.findall("link"):
