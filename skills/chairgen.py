@@ -29,7 +29,7 @@ Usage::
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
 import trimesh
@@ -299,7 +299,7 @@ def _placed(
     protrusion: float,
 ) -> GeneratedChair:
     """The parts as one mesh in the calibration meshes' frame, with the truth about it."""
-    mesh = trimesh.util.concatenate(parts)
+    mesh = cast(trimesh.Trimesh, trimesh.util.concatenate(parts))
     # The calibration meshes' frame: centred in x and y, lowest point at z = 0.
     centre = mesh.bounds.mean(axis=0)
     shift = np.array([-centre[0], -centre[1], -mesh.bounds[0, 2]])

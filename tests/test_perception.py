@@ -138,6 +138,13 @@ def test_no_tag_gives_none():
     assert estimate_tag_pose(frame) is None
 
 
+def test_a_closed_scene_refuses_to_render():
+    scene = SyntheticScene(floor=False)
+    scene.close()
+    with pytest.raises(RuntimeError, match="closed"):
+        scene.render(look_at(np.array([0.35, 0.0, 0.85]), np.array([1.3, 0.0, 0.35])))
+
+
 def bad_frame(depth: np.ndarray) -> RGBDFrame:
     intrinsics = carmine_intrinsics()
     rgb = np.zeros((intrinsics.height, intrinsics.width, 3), np.uint8)

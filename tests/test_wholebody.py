@@ -253,6 +253,16 @@ def test_trajectory_is_stable_and_within_velocity_limits(chair, plan):
     )
 
 
+def test_a_urdf_joint_without_its_parent_is_refused(tmp_path):
+    urdf = tmp_path / "broken.urdf"
+    urdf.write_text(
+        '<robot name="r"><link name="a"/><link name="b"/>'
+        '<joint name="j" type="revolute"><child link="b"/></joint></robot>'
+    )
+    with pytest.raises(ValueError, match="'link'"):
+        parse_urdf(str(urdf))
+
+
 def test_carrying_posture_matches_the_simulator():
     nao_sim = pytest.importorskip("hardware.sim.nao")
     assert nao_sim.HOLDING_POSTURE_RAD.items() >= CARRYING_POSTURE_RAD.items()

@@ -44,7 +44,7 @@ ways). The two are mirrored only when they disagree (0.15-0.2 s on a scan)."""
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 import trimesh
@@ -156,14 +156,18 @@ def backrest_yaw(
 
 def _surface(chair_mesh: trimesh.Trimesh, seed: int) -> tuple[np.ndarray, np.ndarray]:
     """``SAMPLES`` surface points (metres) and the faces they lie on."""
-    return trimesh.sample.sample_surface(chair_mesh, SAMPLES, seed=seed)
+    # Without sample_color, trimesh returns exactly (points, face indices).
+    return cast(
+        tuple[np.ndarray, np.ndarray],
+        trimesh.sample.sample_surface(chair_mesh, SAMPLES, seed=seed),
+    )
 
 
 def mirror_share(points: np.ndarray, p: np.ndarray, yaw_rad: float, tree: Any = None) -> float:
     """m(γ) (see the module doc): the largest share of ``points`` (N, 3) whose mirror image
     across a vertical plane along ``yaw_rad``, within ``MIRROR_OFFSETS_M`` of p, lies within
     ``MIRROR_TOLERANCE_M`` of a point; ``tree``: a ``cKDTree`` of ``points`` if built."""
-    from scipy.spatial import cKDTree
+    from scipy.spatial import cKDTree  # pyright: ignore[reportAttributeAccessIssue]  # no stub for scipy's compiled _ckdtree
 
     u = np.array([math.cos(yaw_rad), math.sin(yaw_rad)])
     v = np.array([-u[1], u[0]])
@@ -195,7 +199,7 @@ def check_direction(
     disagreement = wrap_angle(sitting_pose.yaw - yaw_rad)
     if abs(disagreement) <= AGREEMENT_RAD:
         return sitting_pose, BackrestCheck(yaw_rad, offset_m, disagreement, False)
-    from scipy.spatial import cKDTree
+    from scipy.spatial import cKDTree  # pyright: ignore[reportAttributeAccessIssue]  # no stub for scipy's compiled _ckdtree
 
     points = surface[0][:MIRROR_SAMPLES]
     tree = cKDTree(points)

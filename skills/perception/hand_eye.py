@@ -51,7 +51,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from functools import lru_cache
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import cv2
 import numpy as np
@@ -352,7 +352,10 @@ def _board_corners(rgb: np.ndarray, board: BoardSpec) -> tuple[np.ndarray, np.nd
         raise BoardNotSeenError(
             f"calibration board seen edge-on: its {found} corners found lie on one line"
         )
-    object_points, image_points = cv_board.matchImagePoints(corners_px, ids)
+    # cv2's stubs type an InputArrayOfArrays as a sequence; the (N, 1, 2) array is one.
+    object_points, image_points = cv_board.matchImagePoints(
+        cast(Sequence[np.ndarray], corners_px), ids
+    )
     return object_points, image_points, found
 
 

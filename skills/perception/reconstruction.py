@@ -20,6 +20,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 import open3d as o3d
@@ -86,12 +87,13 @@ def crop_depth(frame: RGBDFrame, config: ReconstructionConfig) -> np.ndarray:
 def fuse_tsdf(
     frames: Sequence[RGBDFrame], depths: Sequence[np.ndarray], config: ReconstructionConfig
 ) -> o3d.t.geometry.VoxelBlockGrid:
-    """Integrates depth images into a tensor TSDF grid (open3d's VoxelBlockGrid)."""
+    """Integrates depth images (float32 metres, :func:`crop_depth`'s) into a tensor TSDF
+    grid (open3d's VoxelBlockGrid)."""
     device = o3d.core.Device("CPU:0")
     grid = o3d.t.geometry.VoxelBlockGrid(
         attr_names=("tsdf", "weight"),
         attr_dtypes=(o3d.core.float32, o3d.core.float32),
-        attr_channels=((1), (1)),
+        attr_channels=(o3d.core.SizeVector([1]), o3d.core.SizeVector([1])),
         voxel_size=config.voxel_size_m,
         block_resolution=8,
         block_count=40000,
@@ -100,9 +102,12 @@ def fuse_tsdf(
     for frame, depth_m in zip(frames, depths, strict=True):
         if not np.any(depth_m):
             continue
-        depth = o3d.t.geometry.Image(o3d.core.Tensor(np.ascontiguousarray(depth_m)))
-        intrinsic = o3d.core.Tensor(frame.intrinsics.matrix(), o3d.core.float64)
-        extrinsic = o3d.core.Tensor(np.linalg.inv(frame.T_world_camera), o3d.core.float64)
+        # dtype and device as open3d would choose them (its stubs lack their defaults).
+        depth = o3d.t.geometry.Image(
+            o3d.core.Tensor(np.ascontiguousarray(depth_m), o3d.core.float32, device)
+        )
+        intrinsic = o3d.core.Tensor(frame.intrinsics.matrix(), o3d.core.float64, device)
+        extrinsic = o3d.core.Tensor(np.linalg.inv(frame.T_world_camera), o3d.core.float64, device)
         blocks = grid.compute_unique_block_coordinates(
             depth,
             intrinsic,
@@ -179,7 +184,10 @@ def chair_cluster(
     shape = cells.max(axis=0) + 3
     occupancy = np.zeros(shape, dtype=bool)
     occupancy[tuple(cells.T)] = True
-    labels, count = ndimage.label(occupancy, structure=np.ones((3, 3, 3), dtype=bool))
+    labels, count = cast(
+        tuple[np.ndarray, int],
+        ndimage.label(occupancy, structure=np.ones((3, 3, 3), dtype=bool)),
+    )
     if count == 0:
         raise PerceptionError("nothing left above the floor in the scan area")
     point_labels = labels[tuple(cells.T)]
@@ -327,7 +335,10 @@ def _chair_mesh(
     parts = chair.split(only_watertight=False)
     if len(parts) > 1:
         biggest = max(len(part.faces) for part in parts)
-        chair = trimesh.util.concatenate([p for p in parts if len(p.faces) >= 0.02 * biggest])
+        chair = cast(
+            trimesh.Trimesh,
+            trimesh.util.concatenate([p for p in parts if len(p.faces) >= 0.02 * biggest]),
+        )
     return _canonical(chair)
 
 

@@ -354,7 +354,7 @@ def _global_registration(
     voxel = config.global_voxel_m
     clouds = [_cloud(points, voxel) for points in (new_points, reference_points)]
     features = [
-        registration.compute_fpfh_feature(
+        registration.compute_fpfh_feature(  # pyright: ignore[reportCallIssue]  # open3d's stubs lack the default of indices (None: every point)
             cloud, o3d.geometry.KDTreeSearchParamHybrid(radius=5 * voxel, max_nn=100)
         )
         for cloud in clouds

@@ -68,6 +68,16 @@ class SyntheticScene:
             self.bullet = None
         self._scratch.cleanup()
 
+    def _client(self) -> BulletClient:
+        """The scene's pybullet client.
+
+        Raises:
+            RuntimeError: the scene is closed.
+        """
+        if self.bullet is None:
+            raise RuntimeError("the synthetic scene is closed")
+        return self.bullet
+
     def add_mesh(
         self,
         mesh: trimesh.Trimesh,
@@ -78,10 +88,11 @@ class SyntheticScene:
         self._count += 1
         path = Path(self._scratch.name) / f"mesh{self._count}.obj"
         mesh.export(path)
-        shape = self.bullet.createVisualShape(
+        bullet = self._client()
+        shape = bullet.createVisualShape(
             pybullet.GEOM_MESH, fileName=str(path), rgbaColor=list(rgba)
         )
-        body = self.bullet.createMultiBody(0, -1, shape)
+        body = bullet.createMultiBody(0, -1, shape)
         self.set_pose(body, np.eye(4) if T_world_mesh is None else T_world_mesh)
         return body
 
@@ -139,21 +150,22 @@ class SyntheticScene:
         cv2.imwrite(str(png), cv2.cvtColor(image, cv2.COLOR_GRAY2RGB))
         obj = Path(self._scratch.name) / f"{name}{self._count}.obj"
         obj.write_text(obj_text)
-        shape = self.bullet.createVisualShape(pybullet.GEOM_MESH, fileName=str(obj))
-        body = self.bullet.createMultiBody(0, -1, shape)
-        texture = self.bullet.loadTexture(str(png))
-        self.bullet.changeVisualShape(body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1])
+        bullet = self._client()
+        shape = bullet.createVisualShape(pybullet.GEOM_MESH, fileName=str(obj))
+        body = bullet.createMultiBody(0, -1, shape)
+        texture = bullet.loadTexture(str(png))
+        bullet.changeVisualShape(body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1])
         self.set_pose(body, T_world_body)
         return body
 
     def set_pose(self, body: int, T_world_body: np.ndarray) -> None:
         """Places a body (its mesh frame) at a world pose."""
         quat = _quaternion_xyzw(T_world_body[:3, :3])
-        self.bullet.resetBasePositionAndOrientation(body, T_world_body[:3, 3].tolist(), quat)
+        self._client().resetBasePositionAndOrientation(body, T_world_body[:3, 3].tolist(), quat)
 
     def remove(self, body: int) -> None:
         """Removes a body from the scene."""
-        self.bullet.removeBody(body)
+        self._client().removeBody(body)
 
     def render(
         self,
@@ -163,7 +175,7 @@ class SyntheticScene:
     ) -> RGBDFrame:
         """What the Carmine sees from an OpenCV camera pose: colour and depth (metres
         along the optical axis, 0 = missing)."""
-        view = render_view(self.bullet, T_world_camera, intrinsics)
+        view = render_view(self._client(), T_world_camera, intrinsics)
         rgb, depth = carmine_images(view, intrinsics, self._noise, self._rng)
         return RGBDFrame(
             rgb, depth, intrinsics, np.asarray(T_world_camera, dtype=np.float64).copy(), stamp_s
@@ -191,7 +203,7 @@ class PandaKinematics:
             pybullet.disconnect(self.client)
             self.client = -1
 
-    def set_joints(self, joints_rad: Sequence[float]) -> None:
+    def set_joints(self, joints_rad: Sequence[float] | np.ndarray) -> None:
         """Sets the 7 arm joints (fingers stay open)."""
         for index, angle in enumerate(joints_rad):
             pybullet.resetJointState(self.robot, index, float(angle), physicsClientId=self.client)
@@ -211,7 +223,7 @@ class PandaKinematics:
         return transform
 
     def camera_pose(
-        self, joints_rad: Sequence[float], T_hand_camera: np.ndarray = T_HAND_CAMERA
+        self, joints_rad: Sequence[float] | np.ndarray, T_hand_camera: np.ndarray = T_HAND_CAMERA
     ) -> np.ndarray:
         """T_world_camera at a joint configuration."""
         self.set_joints(joints_rad)

@@ -151,8 +151,9 @@ def estimate_tag_pose(
 
 def _tag_pose_and_corners(
     frame: RGBDFrame, tag: TagSpec, planar_heading: bool = True
-) -> tuple[SE2Pose | None, np.ndarray | None]:
-    """:func:`estimate_tag_pose` and the corners (pixels of ``frame``) it used."""
+) -> tuple[SE2Pose, np.ndarray] | tuple[None, None]:
+    """:func:`estimate_tag_pose` and the corners (pixels of ``frame``) it used (both None
+    when no pose)."""
     corners = detect_tag_corners(frame.rgb, tag)
     if corners is None:
         return None, None
@@ -238,6 +239,7 @@ def locate_humanoid(
         frame = capture_region(sighting.x0, sighting.y0, sighting.width, sighting.height)
         pose, corners = _tag_pose_and_corners(frame, tag)
         if pose is not None:
+            assert corners is not None  # found with the pose
             offset = np.array([sighting.x0, sighting.y0], dtype=np.float64)
             _sightings[arm] = _window_around(
                 corners + offset, sighting.image_width, sighting.image_height
@@ -248,5 +250,6 @@ def locate_humanoid(
     if pose is None:
         _sightings.pop(arm, None)
     elif capture_region is not None:
+        assert corners is not None  # found with the pose
         _sightings[arm] = _window_around(corners, frame.intrinsics.width, frame.intrinsics.height)
     return pose

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
 import trimesh
@@ -161,12 +161,14 @@ def _run_rrt_connect(
     def is_valid(state: ob.State) -> bool:
         nonlocal checks_made
         checks_made += 1
-        return checker.is_free(state.getX(), state.getY(), state.getYaw())
+        se2 = cast(ob.SE2StateType, state)  # the states of an SE2StateSpace
+        return checker.is_free(se2.getX(), se2.getY(), se2.getYaw())
 
     setup.setStateValidityChecker(is_valid)
     information = setup.getSpaceInformation()
     information.setStateValidityCheckingResolution(CHECK_RESOLUTION_M / space.getMaximumExtent())
-    start_state, goal_state = space.allocState(), space.allocState()
+    start_state = cast(ob.SE2StateType, space.allocState())
+    goal_state = cast(ob.SE2StateType, space.allocState())
     for state, pose in ((start_state, start), (goal_state, goal)):
         state.setX(pose.x)
         state.setY(pose.y)
@@ -188,7 +190,7 @@ def _run_rrt_connect(
     seconds = time.perf_counter() - began
     waypoints = tuple(
         SE2Pose(float(s.getX()), float(s.getY()), wrap_angle(float(s.getYaw())))
-        for s in (path.getState(i) for i in range(path.getStateCount()))
+        for s in (cast(ob.SE2StateType, path.getState(i)) for i in range(path.getStateCount()))
     )
     # The ends are exactly the requested poses (OMPL may copy them with rounding).
     return PlannedPath((start, *waypoints[1:-1], goal), seconds)

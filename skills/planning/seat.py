@@ -13,7 +13,7 @@ not hide the seat.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
 import trimesh
@@ -105,14 +105,17 @@ def _first_surface_below(chair_mesh: trimesh.Trimesh, xy: np.ndarray, z_from: fl
     heights = np.full(len(xy), np.nan)
     if len(xy) == 0 or len(chair_mesh.faces) == 0:
         return heights
+    # Tensors' dtype and device as open3d would choose them (its stubs lack their defaults).
+    cpu = o3d.core.Device("CPU:0")
     scene = o3d.t.geometry.RaycastingScene()
     scene.add_triangles(
-        o3d.core.Tensor(np.asarray(chair_mesh.vertices, dtype=np.float32)),
-        o3d.core.Tensor(np.asarray(chair_mesh.faces, dtype=np.uint32)),
+        o3d.core.Tensor(np.asarray(chair_mesh.vertices, dtype=np.float32), o3d.core.float32, cpu),
+        o3d.core.Tensor(np.asarray(chair_mesh.faces, dtype=np.uint32), o3d.core.uint32, cpu),
     )
     rays = np.zeros((len(xy), 6), dtype=np.float32)
     rays[:, :2], rays[:, 2], rays[:, 5] = xy, z_from, -1.0
-    distance = scene.cast_rays(o3d.core.Tensor(rays))["t_hit"].numpy().astype(float)
+    hits = scene.cast_rays(o3d.core.Tensor(rays, o3d.core.float32, cpu))
+    distance = hits["t_hit"].numpy().astype(float)
     hit = np.isfinite(distance)
     heights[hit] = z_from - distance[hit]
     return heights
@@ -187,10 +190,10 @@ def seat_map(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatMap:
     radius = round(SLAT_GAP_M / 2.0 / STEP_M)
     disc = np.hypot(*np.mgrid[-radius : radius + 1, -radius : radius + 1]) <= radius + 1e-9
     padded = np.pad(seat, radius + 1, mode="edge")
-    closed = ndimage.binary_closing(padded, structure=disc)[
+    closed = cast(np.ndarray, ndimage.binary_closing(padded, structure=disc))[
         radius + 1 : -radius - 1, radius + 1 : -radius - 1
     ]
-    return SeatMap(along, ndimage.binary_fill_holes(closed | seat), heights, h0)
+    return SeatMap(along, cast(np.ndarray, ndimage.binary_fill_holes(closed | seat)), heights, h0)
 
 
 def _falls_away_ahead(heights: np.ndarray, seat: np.ndarray, along_m: np.ndarray) -> np.ndarray:

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
 import trimesh
@@ -161,7 +161,10 @@ def planner_seat_top(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, ray
 def surface_points(chair_mesh: trimesh.Trimesh) -> np.ndarray:
     """(N, 3) points of the chair's surface the search looks at: 20000 samples (seed 0)
     and the vertices, world frame, metres."""
-    points, _ = trimesh.sample.sample_surface(chair_mesh, 20000, seed=0)
+    # Without sample_color, trimesh returns exactly (points, face indices).
+    points, _ = cast(
+        tuple[np.ndarray, np.ndarray], trimesh.sample.sample_surface(chair_mesh, 20000, seed=0)
+    )
     return np.vstack([points, chair_mesh.vertices])
 
 

@@ -25,7 +25,7 @@ distance.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
 import trimesh
@@ -118,7 +118,11 @@ def fit_chair_profile(
     Raises:
         ChairProfileError: no chair surface lies under the sitting pose in the band.
     """
-    points, face_index = trimesh.sample.sample_surface(chair_mesh, samples, seed=seed)
+    # Without sample_color, trimesh returns exactly (points, face indices).
+    points, face_index = cast(
+        tuple[np.ndarray, np.ndarray],
+        trimesh.sample.sample_surface(chair_mesh, samples, seed=seed),
+    )
     points = np.vstack([points, chair_mesh.vertices])
     normals = np.vstack(
         [chair_mesh.face_normals[face_index], np.zeros((len(chair_mesh.vertices), 3))]

@@ -38,7 +38,7 @@ import math
 import os
 import xml.etree.ElementTree as ElementTree
 from functools import lru_cache
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import casadi as ca
 import numpy as np
@@ -110,6 +110,18 @@ def _floats(text: str | None, default: str) -> np.ndarray:
     return np.array([float(v) for v in (text or default).split()])
 
 
+def _required(element: ElementTree.Element | None, key: str) -> str:
+    """The ``key`` attribute of a URDF element that must be there and have it.
+
+    Raises:
+        ValueError: the element or its attribute is missing.
+    """
+    value = None if element is None else element.get(key)
+    if value is None:
+        raise ValueError(f"URDF element without its {key!r} attribute")
+    return value
+
+
 @lru_cache(maxsize=1)
 def parse_urdf(path: str | None = None) -> tuple[dict[str, UrdfJoint], dict[str, UrdfLink]]:
     """Joints by name and links by name from a URDF (inertial data only, no geometry)."""
@@ -121,19 +133,21 @@ def parse_urdf(path: str | None = None) -> tuple[dict[str, UrdfJoint], dict[str,
         if inertial is not None:
             mass_el = inertial.find("mass")
             origin_el = inertial.find("origin")
-            mass = float(mass_el.get("value")) if mass_el is not None else 0.0
+            mass = float(_required(mass_el, "value")) if mass_el is not None else 0.0
             com = _floats(origin_el.get("xyz") if origin_el is not None else None, "0 0 0")
-        links[link.get("name")] = UrdfLink(link.get("name"), mass, com)
+        name = _required(link, "name")
+        links[name] = UrdfLink(name, mass, com)
     joints: dict[str, UrdfJoint] = {}
     for joint in root.findall("joint"):
         origin = joint.find("origin")
         axis = joint.find("axis")
         limit = joint.find("limit")
-        joints[joint.get("name")] = UrdfJoint(
-            name=joint.get("name"),
-            kind=joint.get("type"),
-            parent=joint.find("parent").get("link"),
-            child=joint.find("child").get("link"),
+        name = _required(joint, "name")
+        joints[name] = UrdfJoint(
+            name=name,
+            kind=_required(joint, "type"),
+            parent=_required(joint.find("parent"), "link"),
+            child=_required(joint.find("child"), "link"),
             xyz=_floats(origin.get("xyz") if origin is not None else None, "0 0 0"),
             rpy=_floats(origin.get("rpy") if origin is not None else None, "0 0 0"),
             axis=_floats(axis.get("xyz") if axis is not None else None, "1 0 0"),
@@ -198,7 +212,7 @@ def to_joint_positions(q_rows: np.ndarray) -> np.ndarray:
     q_rows = np.atleast_2d(q_rows)
     out = np.zeros((len(q_rows), len(DRIVEN_JOINTS)))
     for row, q in enumerate(q_rows):
-        values = joint_values(q)
+        values = cast(dict[str, float], joint_values(q))  # numbers, as q is numeric
         out[row] = [float(values[name]) for name in DRIVEN_JOINTS]
     return out
 
