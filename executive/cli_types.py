@@ -9,17 +9,26 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Callable
+from typing import TypeVar
 
 MAX_SEED = 2**32 - 1
 """numpy's seed range."""
 
+Number = TypeVar("Number", int, float)
+
+
+def _converted(text: str, convert: Callable[[str], Number], message: str) -> Number:
+    """``convert(text)``, or argparse's error with ``message`` when it is not a number."""
+    try:
+        return convert(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(message) from None
+
 
 def seed_value(text: str) -> int:
     """An argparse type: a seed, an integer in [0, 2**32 - 1]."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"invalid int value {text!r} for a seed") from None
+    value = _converted(text, int, f"invalid int value {text!r} for a seed")
     if not 0 <= value <= MAX_SEED:
         raise argparse.ArgumentTypeError(f"seed {value} is outside 0..{MAX_SEED}")
     return value
@@ -27,10 +36,7 @@ def seed_value(text: str) -> int:
 
 def positive_seconds(text: str) -> float:
     """An argparse type: a finite number of seconds above zero."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"invalid number of seconds {text!r}") from None
+    value = _converted(text, float, f"invalid number of seconds {text!r}")
     if not math.isfinite(value) or value <= 0:
         raise argparse.ArgumentTypeError(f"{text!r} seconds: must be finite and positive")
     return value
@@ -38,10 +44,7 @@ def positive_seconds(text: str) -> float:
 
 def positive_int(text: str) -> int:
     """An argparse type: an integer of at least 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"invalid integer {text!r}") from None
+    value = _converted(text, int, f"invalid integer {text!r}")
     if value < 1:
         raise argparse.ArgumentTypeError(f"{value}: must be at least 1")
     return value

@@ -73,6 +73,22 @@ FEEDBACK_LABEL_CHARS = 48
 """Feedback shown in a node's label is cut here; the full text is in ``tree/log``."""
 
 
+SCENE_LOGGERS: dict[str, str] = {
+    keys.ARENA: "log_arena",
+    keys.CHAIR_SCAN: "log_scan",
+    keys.CHAIR_MESH: "log_chair",
+    keys.IMAGINATION: "log_imagination",
+    keys.SITTING_POSE: "log_sitting_pose",
+    keys.REACHABILITY: "log_reachability",
+    keys.ACCESSIBILITY: "log_accessibility",
+    keys.WALK: "log_walk",
+    keys.SEATING_PLAN: "log_seating_plan",
+    keys.JUDGEMENT: "log_judgement",
+}
+"""The blackboard keys drawn in the scene, each with its function in
+:mod:`executive.recording_scene`."""
+
+
 class RecordingUnavailable(BackendUnavailable):
     """A recording was asked for but cannot be made (no rerun-sdk, no display)."""
 
@@ -367,34 +383,15 @@ class MissionRecording:
     def _log_value(self, key: str, value: Any, previous: Any) -> None:
         text = json.dumps(to_jsonable(value), indent=1, sort_keys=True)
         self._stream.log(f"blackboard{key}", self._rr.TextDocument(text, media_type="text/plain"))
-        scene, stream = self._scene, self._stream
         if value is None:
             return
-        if key == keys.ARENA:
-            scene.log_arena(stream, value)
-        elif key == keys.CHAIR_SCAN:
-            scene.log_scan(stream, value)
-        elif key == keys.CHAIR_MESH:
-            scene.log_chair(stream, value)
-        elif key == keys.IMAGINATION:
-            scene.log_imagination(stream, value)
-        elif key == keys.SITTING_POSE:
-            scene.log_sitting_pose(stream, value)
-        elif key == keys.REACHABILITY:
-            scene.log_reachability(stream, value)
-        elif key == keys.ACCESSIBILITY:
-            scene.log_accessibility(stream, value)
-        elif key == keys.HUMANOID_POSE:
+        if key == keys.HUMANOID_POSE:
             self._log_humanoid_pose(value)
         elif key == keys.MEASURED_ROTATIONS:
             for rotation in value[len(previous or []) :]:
-                scene.log_rotation(stream, rotation)
-        elif key == keys.WALK:
-            scene.log_walk(stream, value)
-        elif key == keys.SEATING_PLAN:
-            scene.log_seating_plan(stream, value)
-        elif key == keys.JUDGEMENT:
-            scene.log_judgement(stream, value)
+                self._scene.log_rotation(self._stream, rotation)
+        elif key in SCENE_LOGGERS:
+            getattr(self._scene, SCENE_LOGGERS[key])(self._stream, value)
 
     def _log_skill_calls(self, events: list[tuple[str, Any, float]]) -> None:
         for name, result, robot_s in events:

@@ -18,17 +18,7 @@ import numpy as np
 from core.geometry import SittingPose, yaw_transform
 from core.meshes import box_chair_mesh
 from core.se2 import SE2Pose
-from skills.results import (
-    AccessibilityResult,
-    ChairRotation,
-    ChairScan,
-    ImaginationResult,
-    Instruction,
-    RotationChoice,
-    SeatingPlan,
-    SeatReachability,
-    WalkResult,
-)
+from skills import results as skill_results
 
 SITTING_POSE = SittingPose(np.array([0.6, 0.0, 0.28]), 0.0)
 SE2_GOAL = SE2Pose(0.9, 0.0, np.pi)
@@ -40,24 +30,28 @@ def default_results() -> dict[str, Any]:
     chair_mesh.apply_translation([0.6, 0.0, 0.0])
     joint_names = ("LHipPitch", "RHipPitch")
     return {
-        "scan_chair": ChairScan(chair_mesh, np.asarray(chair_mesh.vertices), 9, {"total": 0.1}),
-        "imagine_sitting": ImaginationResult(True, SITTING_POSE, 3, 24, (), {"total": 0.1}),
+        "scan_chair": skill_results.ChairScan(
+            chair_mesh, np.asarray(chair_mesh.vertices), 9, {"total": 0.1}
+        ),
+        "imagine_sitting": skill_results.ImaginationResult(
+            True, SITTING_POSE, 3, 24, (), {"total": 0.1}
+        ),
         "locate_humanoid": SE2Pose(1.9, 0.0, np.pi),
-        "check_seat_reachable": SeatReachability(True, "", 0.24, 0.0, 0.3, 0.01),
-        "check_accessibility": AccessibilityResult(
+        "check_seat_reachable": skill_results.SeatReachability(True, "", 0.24, 0.0, 0.3, 0.01),
+        "check_accessibility": skill_results.AccessibilityResult(
             True, SE2_GOAL, SITTING_POSE, (SE2Pose(1.9, 0.0, np.pi), SE2_GOAL), "", 0.01
         ),
-        "choose_rotation": RotationChoice(-np.pi / 2, True, "", 1),
-        "compose_instruction": Instruction(
+        "choose_rotation": skill_results.RotationChoice(-np.pi / 2, True, "", 1),
+        "compose_instruction": skill_results.Instruction(
             "Please rotate the chair about the vertical axis clockwise for 90 degrees", True, 90
         ),
         "wait_until_chair_still": 3.0,
-        "measure_chair_rotation": ChairRotation(
+        "measure_chair_rotation": skill_results.ChairRotation(
             yaw_transform(-np.pi / 2), -np.pi / 2, 0.9, 0.004, np.zeros((10, 3))
         ),
-        "walk_path": WalkResult(True, 0.01, 0.02, 12.0),
+        "walk_path": skill_results.WalkResult(True, 0.01, 0.02, 12.0),
         "raise_bear": None,
-        "plan_seating": SeatingPlan(
+        "plan_seating": skill_results.SeatingPlan(
             joint_names,
             np.linspace(0.0, 3.0, 4),
             np.zeros((4, 2)),

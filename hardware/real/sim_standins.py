@@ -21,7 +21,13 @@ import numpy as np
 from core.geometry import make_transform, rot_z
 from core.se2 import SE2Pose
 from hardware.interfaces import Robot
-from hardware.real.standins import FRANKA_HAND_F_T_EE, FakeOpenNI2, FakePanda, NaoqiStandin
+from hardware.real.standins import (
+    FRANKA_HAND_F_T_EE,
+    FakeOpenNI2,
+    FakePanda,
+    JointKeyframes,
+    NaoqiStandin,
+)
 
 T_FLANGE_HAND = make_transform(rot_z(-math.pi / 4), np.zeros(3))
 """panda.urdf's ``panda_hand`` in the flange (``panda_link8``): -45 deg about z."""
@@ -83,13 +89,8 @@ class SimulatedNaoBody:
     def walking(self) -> bool:
         return self._walk_end_s is not None
 
-    def play(
-        self,
-        names: list[str],
-        angles: list[list[float]],
-        times: list[list[float]],
-        cancelled: threading.Event,
-    ) -> None:
+    def play(self, keyframes: JointKeyframes, cancelled: threading.Event) -> None:
+        names, angles, times = keyframes
         if any(joint_times != times[0] for joint_times in times):
             raise RuntimeError("the simulated NAO plays one time list for all joints")
         positions = np.array(angles, dtype=float).T
@@ -130,20 +131,9 @@ class SimulatedPanda(FakePanda):
     def stop_motion(self) -> None:
         self._sim.emergency_stop()
 
-    def move_to_joint_position(
-        self,
-        positions: Any,
-        speed_factor: float = 0.2,
-        stiffness: Any = None,
-        damping: Any = None,
-        dq_threshold: float = 0.001,
-        success_threshold: float = 0.01,
-    ) -> bool:
-        self.calls.append(
-            ("move_to_joint_position", (np.asarray(positions).tolist(), speed_factor))
-        )
+    def _move(self, target: np.ndarray, speed_factor: float, success_threshold: float) -> bool:
         try:
-            self._sim.move_to(np.asarray(positions, dtype=float).reshape(7), timeout_s=30.0)
+            self._sim.move_to(target, timeout_s=30.0)
         except (RuntimeError, TimeoutError) as error:
             from hardware.real.standins import ControlException
 

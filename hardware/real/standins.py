@@ -29,7 +29,7 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -39,6 +39,15 @@ STANDIN_HOST = "standin"
 """The ``panda_host`` that selects :class:`FakePanda` and :class:`FakeOpenNI2`."""
 
 # --- NAOqi ------------------------------------------------------------------------------
+
+
+class JointKeyframes(NamedTuple):
+    """An ``angleInterpolation`` as its body plays it: per joint, its angles (rad) and
+    the times (s from now) to reach them."""
+
+    names: list[str]
+    angles: list[list[float]]
+    times: list[list[float]]
 
 
 class KinematicNao:
@@ -95,13 +104,8 @@ class KinematicNao:
             self._settle()
             return self._walk is not None
 
-    def play(
-        self,
-        names: list[str],
-        angles: list[list[float]],
-        times: list[list[float]],
-        cancelled: threading.Event,
-    ) -> None:
+    def play(self, keyframes: JointKeyframes, cancelled: threading.Event) -> None:
+        names, angles, times = keyframes
         if not cancelled.wait(max(t[-1] for t in times) / self.time_scale):
             self.joints.update({name: a[-1] for name, a in zip(names, angles, strict=True)})
 
@@ -339,7 +343,8 @@ def _motion_joint_methods(qi: Any, owner: NaoqiStandin) -> type:
             names, angles, times = _interpolation_lists(names, angle_lists, time_lists)
             if not absolute:
                 raise RuntimeError("the stand-in plays absolute angles only")
-            return self._start(lambda cancelled: body.play(names, angles, times, cancelled))
+            keyframes = JointKeyframes(names, angles, times)
+            return self._start(lambda cancelled: body.play(keyframes, cancelled))
 
         @qi.bind(qi.Void, [qi.Dynamic, qi.Dynamic, qi.Float])
         def angleInterpolationWithSpeed(
@@ -354,10 +359,8 @@ def _motion_joint_methods(qi: Any, owner: NaoqiStandin) -> type:
             targets = list(targets) if isinstance(targets, list) else [targets]
             if len(targets) != len(names):
                 raise RuntimeError("angleInterpolationWithSpeed: one target per joint")
-            angle_lists = [[float(a)] for a in targets]
-            return self._start(
-                lambda cancelled: body.play(names, angle_lists, [[0.5]] * len(names), cancelled)
-            )
+            keyframes = JointKeyframes(names, [[float(a)] for a in targets], [[0.5]] * len(names))
+            return self._start(lambda cancelled: body.play(keyframes, cancelled))
 
         @qi.bind(qi.Void, [qi.String])
         def openHand(self, hand: str) -> Any:
@@ -428,40 +431,51 @@ def _make_tts(qi: Any, owner: NaoqiStandin) -> Any:
     return ALTextToSpeech()
 
 
+LIFE_STATES = ("disabled", "solitary", "interactive", "safeguard")
+
+
+def _life_state(state: str) -> str:
+    if state not in LIFE_STATES:
+        raise RuntimeError(f"ALAutonomousLife.setState: unknown state {state!r}")
+    return state
+
+
 def _make_life(qi: Any, owner: NaoqiStandin) -> Any:
-    class ALAutonomousLife:
-        state = "solitary"
-
-        @qi.bind(qi.Void, [qi.String])
-        def setState(self, state: str) -> None:
-            owner.record("ALAutonomousLife", "setState", state)
-            if state not in ("disabled", "solitary", "interactive", "safeguard"):
-                raise RuntimeError(f"ALAutonomousLife.setState: unknown state {state!r}")
-            self.state = state
-
-        @qi.bind(qi.String, [])
-        def getState(self) -> str:
-            owner.record("ALAutonomousLife", "getState")
-            return self.state
-
-    return ALAutonomousLife()
+    return _make_setting(
+        qi, owner, "ALAutonomousLife", ("setState", "getState"), qi.String, "solitary", _life_state
+    )
 
 
 def _make_awareness(qi: Any, owner: NaoqiStandin) -> Any:
-    class ALBasicAwareness:
-        enabled = True
+    return _make_setting(
+        qi, owner, "ALBasicAwareness", ("setEnabled", "isEnabled"), qi.Bool, True, bool
+    )
 
-        @qi.bind(qi.Void, [qi.Bool])
-        def setEnabled(self, enabled: bool) -> None:
-            owner.record("ALBasicAwareness", "setEnabled", enabled)
-            self.enabled = bool(enabled)
 
-        @qi.bind(qi.Bool, [])
-        def isEnabled(self) -> bool:
-            owner.record("ALBasicAwareness", "isEnabled")
-            return self.enabled
+def _make_setting(
+    qi: Any,
+    owner: NaoqiStandin,
+    service: str,
+    methods: tuple[str, str],
+    qi_type: Any,
+    initial: Any,
+    accept: Callable[[Any], Any],
+) -> Any:
+    """A NAOqi service holding one setting, with its setter and getter (``methods``),
+    each call recorded; ``accept`` checks and converts what the setter is given."""
+    setter, getter = methods
 
-    return ALBasicAwareness()
+    @qi.bind(qi.Void, [qi_type])
+    def set_value(self: Any, value: Any) -> None:
+        owner.record(service, setter, value)
+        self.value = accept(value)
+
+    @qi.bind(qi_type, [])
+    def get_value(self: Any) -> Any:
+        owner.record(service, getter)
+        return self.value
+
+    return type(service, (), {"value": initial, setter: set_value, getter: get_value})()
 
 
 def _make_battery(qi: Any, owner: NaoqiStandin) -> Any:
@@ -630,10 +644,16 @@ class FakePanda:
         self.calls.append(
             ("move_to_joint_position", (np.asarray(positions).tolist(), speed_factor))
         )
+        return self._move(
+            np.asarray(positions, dtype=float).reshape(7), speed_factor, success_threshold
+        )
+
+    def _move(self, target: np.ndarray, speed_factor: float, success_threshold: float) -> bool:
+        """Moves to ``target`` (7 joint angles, rad) as panda-py's motion does; False
+        (with the error kept for :meth:`raise_error`) when it was aborted."""
         # panda-py recovers from a reflex on its own before every move.
         if self.mode in (_RobotMode.kReflex, _RobotMode.kOther) or self.errors:
             self.recover()
-        target = np.asarray(positions, dtype=float).reshape(7)
         start = self.q.copy()
         duration = float(np.max(np.abs(target - start))) / (self.JOINT_SPEED_RADPS * speed_factor)
         self._abort.clear()

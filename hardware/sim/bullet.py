@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import hashlib
 import math
+import os
 import threading
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -27,6 +29,22 @@ def sim_cache_dir() -> Path:
     """Where generated simulation assets (URDFs, OBJs, textures) are written."""
     path = cache_dir() / "sim"
     path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def cached_asset(stem: str, text: str, suffix: str) -> Path:
+    """Writes ``text`` into :func:`sim_cache_dir` once per content and returns the file.
+
+    The name carries a digest of the content (``STEM-DIGEST.SUFFIX``); the file is
+    written under a process-private name and renamed, so processes building the same
+    world at once never read a half-written file.
+    """
+    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
+    path = sim_cache_dir() / f"{stem}-{digest}{suffix}"
+    if not path.exists():
+        scratch = path.with_suffix(f".{os.getpid()}.tmp")
+        scratch.write_text(text)
+        os.replace(scratch, path)
     return path
 
 

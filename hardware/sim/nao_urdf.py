@@ -11,7 +11,6 @@ The URDF is written into the cache directory at run time.
 
 from __future__ import annotations
 
-import hashlib
 import math
 import os
 import xml.etree.ElementTree as ET
@@ -20,7 +19,7 @@ from typing import NamedTuple
 
 import qibullet
 
-from hardware.sim.bullet import sim_cache_dir
+from hardware.sim.bullet import cached_asset
 
 QIBULLET_NAO_URDF = Path(os.path.dirname(qibullet.__file__)) / "robot_data" / "nao.urdf"
 
@@ -182,11 +181,4 @@ def build_nao_urdf_text(tag_mesh_path: Path, tag_height_m: float) -> str:
 
 def nao_urdf(tag_mesh_path: Path, tag_height_m: float) -> Path:
     """Writes the primitive-geometry NAO URDF into the cache (once per content) and returns it."""
-    text = build_nao_urdf_text(tag_mesh_path, tag_height_m)
-    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
-    path = sim_cache_dir() / f"nao-{digest}.urdf"
-    if not path.exists():
-        scratch = path.with_suffix(f".{os.getpid()}.tmp")
-        scratch.write_text(text)
-        os.replace(scratch, path)
-    return path
+    return cached_asset("nao", build_nao_urdf_text(tag_mesh_path, tag_height_m), ".urdf")

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import hashlib
 import math
-import os
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -15,7 +13,7 @@ import pybullet_data
 
 from core.geometry import make_transform
 from hardware.interfaces import CameraIntrinsics, RGBDFrame
-from hardware.sim.bullet import LockedBullet, T_world_link, link_index_by_name, sim_cache_dir
+from hardware.sim.bullet import LockedBullet, T_world_link, cached_asset, link_index_by_name
 from hardware.sim.camera import (
     CARMINE_INTRINSICS,
     T_HAND_CAMERA,
@@ -63,13 +61,7 @@ def coarse_panda_urdf() -> Path:
     text = PANDA_URDF.read_text()
     text = text.replace("package://meshes/visual/", "package://meshes/collision/")
     text = text.replace("package://meshes/", f"{_PANDA_MESHES.as_posix()}/")
-    digest = hashlib.sha1(text.encode()).hexdigest()[:12]
-    path = sim_cache_dir() / f"panda-coarse-{digest}.urdf"
-    if not path.exists():
-        scratch = path.with_suffix(f".{os.getpid()}.tmp")
-        scratch.write_text(text)
-        os.replace(scratch, path)
-    return path
+    return cached_asset("panda-coarse", text, ".urdf")
 
 
 class SimPanda:

@@ -279,32 +279,34 @@ def choose_stance(
     model: ReachModel | None = None,
 ) -> StanceChoice:
     """Searches stance and sitting point together on the imagined ray, then on rays
-    turned about p₀ by ``TURNS_RAD`` (see :func:`choose_stance_on_ray`).
+    turned about p₀ by ``TURNS_RAD`` (see :func:`_choose_stance_on_ray`).
+
+    Args:
+        chair_mesh: the chair, world frame, z up.
+        sitting_pose: the imagined g = (p₀, γ), world frame.
+        checker: the NAO-versus-scene collision checker.
+        validator: the seating pre-plan, asked about the model's best pairs in turn.
+        scene: also keep the stance clear of walls and obstacles inside the arena.
+        model: the reach model (default: the shipped one).
 
     Returns:
         The first pair found, or the imagined ray's failure with its reason.
     """
     model = model or reach_model()
     points = surface_points(chair_mesh)
-    first = choose_stance_on_ray(
-        chair_mesh, sitting_pose, checker, validator, scene=scene, model=model, points=points
-    )
+
+    def on_ray(pose: SittingPose, max_preplans: int) -> StanceChoice:
+        return _choose_stance_on_ray(
+            chair_mesh, pose, checker, validator, scene, model, max_preplans, points
+        )
+
+    first = on_ray(sitting_pose, MAX_PREPLANS)
     if first.se2_goal is not None or not _turning_may_help(first, model):
         return first
     preplans = first.preplans
     p0 = np.asarray(sitting_pose.position, dtype=float)
     for turn in TURNS_RAD:
-        turned = SittingPose(p0, wrap_angle(sitting_pose.yaw + turn))
-        choice = choose_stance_on_ray(
-            chair_mesh,
-            turned,
-            checker,
-            validator,
-            scene=scene,
-            model=model,
-            max_preplans=PREPLANS_PER_TURN,
-            points=points,
-        )
+        choice = on_ray(SittingPose(p0, wrap_angle(sitting_pose.yaw + turn)), PREPLANS_PER_TURN)
         preplans += choice.preplans
         if choice.se2_goal is not None:
             return choice._replace(preplans=preplans, turned_rad=turn)
@@ -317,39 +319,28 @@ def _turning_may_help(choice: StanceChoice, model: ReachModel) -> bool:
     return model.min_seat_height_m() <= height <= model.max_seat_height_m()
 
 
-def choose_stance_on_ray(
+def _choose_stance_on_ray(
     chair_mesh: trimesh.Trimesh,
     sitting_pose: SittingPose,
     checker: NaoCollisionChecker,
     validator: SeatingValidator,
-    *,
-    scene: bool = True,
-    model: ReachModel | None = None,
-    max_preplans: int = MAX_PREPLANS,
-    points: np.ndarray | None = None,
+    scene: bool,
+    model: ReachModel,
+    max_preplans: int,
+    points: np.ndarray,
 ) -> StanceChoice:
     """Searches stance and sitting point together on one ray (see the module doc).
 
     Stances where the walking NAO's ellipsoid is clear come first (it walks there);
     then stances nearer the chair, down to the front of the feet at the chair's front,
-    which it reaches by stepping straight in from the first clear one.
-
-    Args:
-        chair_mesh: the chair, world frame, z up.
-        sitting_pose: the imagined g = (p₀, γ), world frame.
-        checker: the NAO-versus-scene collision checker.
-        validator: the seating pre-plan, asked about the model's best pairs in turn.
-        scene: also keep the stance clear of walls and obstacles inside the arena.
-        model: the reach model (default: the shipped one).
-        max_preplans: how many pairs the pre-plan may be asked about.
-        points: the chair's :func:`surface_points` (taken here when None).
+    which it reaches by stepping straight in from the first clear one. The arguments
+    are :func:`choose_stance`'s; ``max_preplans`` is how many pairs the pre-plan may be
+    asked about, ``points`` the chair's :func:`surface_points`.
     """
-    model = model or reach_model()
     ray = seat_ray(chair_mesh, sitting_pose)
     if len(ray.slides_m) == 0:
         return StanceChoice(None, sitting_pose, "no seat under the sitting position")
     seat_top = planner_seat_top(chair_mesh, sitting_pose, ray)
-    points = surface_points(chair_mesh) if points is None else points
     sitting_pose, ray, seat_top, centred_m = _centred_ray(
         chair_mesh, sitting_pose, ray, seat_top, points
     )
