@@ -32,7 +32,8 @@ from __future__ import annotations
 
 
 class BearchairError(Exception):
-    """A failure the user can act on: printed as one line, exit status 2."""
+    """The root of the project's exceptions: a failure of the input, a place, a backend
+    or a skill, not a bug (at the command line: one line, exit status 2)."""
 
 
 class InputError(BearchairError):
