@@ -230,23 +230,23 @@ def markdown_report(
     return "\n".join(out) + "\n"
 
 
+def _md_rate_table(title: str, columns: tuple[str, str, str], rows: Any) -> list[str]:
+    """A section of Table 1: its title and one row per condition (count of n, and rate)."""
+    out = [f"## {title}", "", f"| {' | '.join(columns)} | Rate |", "|---|---:|---:|---:|"]
+    return out + [f"| {r.label} | {r.n} | {r.count} | {_rate(r)} |" for r in rows]
+
+
 def _md_table_1(table: TrialsTable) -> list[str]:
     """The report's lines of Table 1: (1) seating success, (2) accessible after assistance."""
-    out = [
-        "## (1) Seating bear success",
-        "",
-        "| Experiment | Trial num. | Successes | Rate |",
-        "|---|---:|---:|---:|",
-    ]
-    out += [f"| {r.label} | {r.n} | {r.count} | {_rate(r)} |" for r in table.seating]
-    out += [
-        "",
-        "## (2) Chair accessible after human assistance",
-        "",
-        "| Helper (inaccessible placements) | Assist. num. | Accessible num. | Rate |",
-        "|---|---:|---:|---:|",
-    ]
-    out += [f"| {r.label} | {r.n} | {r.count} | {_rate(r)} |" for r in table.assistance]
+    out = _md_rate_table(
+        "(1) Seating bear success", ("Experiment", "Trial num.", "Successes"), table.seating
+    )
+    out += [""]
+    out += _md_rate_table(
+        "(2) Chair accessible after human assistance",
+        ("Helper (inaccessible placements)", "Assist. num.", "Accessible num."),
+        table.assistance,
+    )
     out += [
         "",
         "Assist. num. counts the trials in which at least one instruction was given; a chair "
