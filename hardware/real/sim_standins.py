@@ -33,17 +33,6 @@ T_FLANGE_HAND = make_transform(rot_z(-math.pi / 4), np.zeros(3))
 """panda.urdf's ``panda_hand`` in the flange (``panda_link8``): -45 deg about z."""
 
 
-def _compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """SE(2) composition a ∘ b of [x, y, theta] poses."""
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return np.array([a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], a[2] + b[2]])
-
-
-def _inverse(a: np.ndarray) -> np.ndarray:
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return np.array([-(c * a[0] + s * a[1]), s * a[0] - c * a[1], -a[2]])
-
-
 class SimulatedNaoBody:
     """The simulated NAO behind the NAOqi stand-in's services.
 
@@ -57,17 +46,15 @@ class SimulatedNaoBody:
         self._nao = world.nao
         self._clock = world.clock
         self.joints: dict[str, float] = {}
-        start = self._nao.pose()
-        self._start_inverse = _inverse(np.array([start.x, start.y, start.theta]))
-        self._boot = np.asarray(boot_odometry, dtype=float)
+        self._start = self._nao.pose()
+        self._boot = SE2Pose(*map(float, boot_odometry))
         self._walk_end_s: float | None = None
         self._lock = threading.Lock()
         self._clock.add_process(self._end_walk)
 
     def odometry(self) -> np.ndarray:
-        pose = self._nao.pose()
-        since_start = _compose(self._start_inverse, np.array([pose.x, pose.y, pose.theta]))
-        return _compose(self._boot, since_start)
+        # NAOqi's odometry: the walk since the start, carried from where the boot put it.
+        return np.array(self._boot.compose(self._start.between(self._nao.pose())))
 
     def walk(self, velocity: np.ndarray, duration_s: float) -> None:
         with self._lock:

@@ -126,9 +126,8 @@ class _PoseEstimate:
 
 def _errors(pose: SE2Pose, target: SE2Pose) -> tuple[float, float, float]:
     """Target minus pose in the robot frame: (forward m, left m, yaw rad)."""
-    dx, dy = target.x - pose.x, target.y - pose.y
-    c, s = math.cos(pose.theta), math.sin(pose.theta)
-    return c * dx + s * dy, -s * dx + c * dy, wrap_angle(target.theta - pose.theta)
+    forward, left, yaw = pose.between(target)
+    return forward, left, yaw
 
 
 def walk_path(
