@@ -15,6 +15,7 @@ only its fork.
 
 from __future__ import annotations
 
+import json
 import multiprocessing
 import os
 import subprocess
@@ -23,6 +24,9 @@ import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
+
+from evaluation.worker import main, run_guarded
+from evaluation.worker_process import LOG_NAME, die_with_parent
 
 PRELOAD_MODULE = "evaluation.server_preload"
 STDOUT_NAME = "worker.stdout"
@@ -43,47 +47,24 @@ def _forkserver() -> Any:
 
 
 def _run_forked(entry: Callable[[list[str]], int], payload_json: str, out_dir: str) -> None:
-    """In the fork: a session of its own, stdout and stderr to files, then ``entry``.
-
-    The worker's stderr is the ``log`` the harness opened (``worker.log``), reopened
-    here by path: the fork cannot share the harness's file object.
+    """In the fork: a session of its own, stdout to a file and stderr to the run
+    folder's log, then ``entry`` guarded as a worker (``evaluation.worker.run_guarded``).
     """
     os.setsid()
-    from evaluation.worker_process import die_with_parent
-
     die_with_parent()
-    folder = Path(out_dir)
     for fd, path, mode in (
-        (1, folder / STDOUT_NAME, os.O_WRONLY | os.O_CREAT | os.O_TRUNC),
-        (2, folder / "worker.log", os.O_WRONLY | os.O_CREAT | os.O_APPEND),
+        (1, Path(out_dir) / STDOUT_NAME, os.O_WRONLY | os.O_CREAT | os.O_TRUNC),
+        (2, Path(out_dir) / LOG_NAME, os.O_WRONLY | os.O_CREAT | os.O_APPEND),
     ):
         target = os.open(path, mode, 0o644)
         os.dup2(target, fd)
         os.close(target)
-    import faulthandler
-
-    faulthandler.enable()
-    from evaluation.worker import watch_for_orphaning
-    from executive.interrupts import handling_signals
-    from skills.imagination import shutdown_workers
-
-    watch_for_orphaning()
     try:
-        with handling_signals():
-            code = entry([payload_json])
+        code = run_guarded(entry, [payload_json])
     finally:
-        # multiprocessing ends a fork without the interpreter's exit hooks: the
-        # imagination's worker processes (if any) are stopped here.
-        shutdown_workers()
         sys.stdout.flush()
         sys.stderr.flush()
     sys.exit(code)
-
-
-def _trial_entry(argv: list[str]) -> int:
-    from evaluation.worker import main
-
-    return main(argv)
 
 
 class ForkedWorker:
@@ -126,12 +107,10 @@ class PreloadedLauncher:
             the trial worker, ``evaluation.worker.main``.
     """
 
-    def __init__(self, entry: Callable[[list[str]], int] = _trial_entry) -> None:
+    def __init__(self, entry: Callable[[list[str]], int] = main) -> None:
         self.entry = entry
 
     def start(self, payload_json: str, log: IO[str]) -> ForkedWorker:
-        import json
-
         out_dir = Path(json.loads(payload_json)["out_dir"])
         log.flush()
         process = _forkserver().Process(

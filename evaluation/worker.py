@@ -18,6 +18,7 @@ import sys
 import threading
 import time
 import traceback
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -123,13 +124,27 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    from executive.interrupts import handling_signals
+def run_guarded(entry: Callable[[list[str]], int], argv: list[str]) -> int:
+    """``entry(argv)`` as a trial worker runs it, started as a command or as a fork.
 
-    faulthandler.enable()  # a segfault leaves "Fatal Python error" in worker.log
-    if os.getpgid(0) == os.getpid():  # started by the harness, in its own group
+    A segfault leaves "Fatal Python error" in worker.log; a worker in a process group of
+    its own (started by the harness) dies with the harness; the harness's SIGTERM
+    (timeout, Ctrl-C) stops the mission like Ctrl-C, so the robots stop and the run
+    folder gets its summary before the SIGKILL that follows. The imagination's worker
+    processes are stopped at the end (a fork ends without the interpreter's exit hooks).
+    """
+    from executive.interrupts import handling_signals
+    from skills.imagination import shutdown_workers
+
+    faulthandler.enable()
+    if os.getpgid(0) == os.getpid():
         watch_for_orphaning()
-    # The harness's SIGTERM (timeout, Ctrl-C) stops the mission like Ctrl-C: the robots
-    # stop and the run folder gets its summary before the SIGKILL that follows.
-    with handling_signals():
-        sys.exit(main())
+    try:
+        with handling_signals():
+            return entry(argv)
+    finally:
+        shutdown_workers()
+
+
+if __name__ == "__main__":
+    sys.exit(run_guarded(main, sys.argv[1:]))

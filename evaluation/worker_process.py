@@ -27,6 +27,8 @@ from pathlib import Path
 from typing import IO, Any, NamedTuple, Protocol
 
 RESULT_MARKER = "BEARCHAIR-TRIAL-RESULT "
+LOG_NAME = "worker.log"
+"""The worker's stderr, in its run folder."""
 KILL_GRACE_S = 3.0
 """Time a worker gets between SIGTERM and SIGKILL."""
 
@@ -212,7 +214,7 @@ def run_worker(
     group = group or ProcessGroup()
     out_dir = Path(payload["out_dir"])
     out_dir.mkdir(parents=True, exist_ok=True)
-    log_path = out_dir / "worker.log"
+    log_path = out_dir / LOG_NAME
     start = time.monotonic()
     with open(log_path, "w") as log:
         process = group.start(as_launcher(launcher), json.dumps(payload), log)

@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from core.memo import BoundedMemo
 from evaluation.store import TrialStore, campaign_lock
 from executive import cli, mission
 from executive.inspect_run import RecordedRun
@@ -427,7 +428,9 @@ def test_the_imagination_cache_survives_a_damaged_entry(tmp_path, monkeypatch):
 
     monkeypatch.setenv("BEARCHAIR_CACHE", str(tmp_path))
     # An earlier test may have prepared the same chair into this process's memory.
-    monkeypatch.setattr(imagination_chair, "_memory", {})
+    monkeypatch.setattr(
+        imagination_chair, "_memory", BoundedMemo(imagination_chair.MEMORY_MAX_CHAIRS)
+    )
     mesh = box_chair_mesh()
     first = imagination_chair.prepare_chair(mesh)
     entries = list((tmp_path / "imagination").glob("*.npz"))

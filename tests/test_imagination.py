@@ -12,6 +12,7 @@ import pytest
 import trimesh
 
 from core.geometry import make_transform, rot_z, wrap_angle
+from core.memo import BoundedMemo
 from core.meshes import box_chair_mesh, solid_below_surface_boxes
 from skills.imagination import imagine_sitting
 from skills.imagination.agent import JOINTS, LINKS, TOTAL_MASS_KG, agent_urdf_path
@@ -93,7 +94,9 @@ def test_the_chair_memory_keeps_the_most_recently_used_chairs(tmp_path, monkeypa
         return digest
 
     monkeypatch.setenv("BEARCHAIR_CACHE", str(tmp_path))
-    monkeypatch.setattr(imagination_chair, "_memory", {})
+    monkeypatch.setattr(
+        imagination_chair, "_memory", BoundedMemo(imagination_chair.MEMORY_MAX_CHAIRS)
+    )
     monkeypatch.setattr(imagination_chair, "read_cached_arrays", lambda path: None)
     monkeypatch.setattr(imagination_chair, "write_cached_arrays", lambda path, arrays: None)
     monkeypatch.setattr(imagination_chair, "_to_cache", lambda chair: {})

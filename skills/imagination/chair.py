@@ -24,6 +24,7 @@ import trimesh
 
 from core.errors import SkillError
 from core.geometry import make_transform, rot_z, yaw_of
+from core.memo import BoundedMemo
 from core.meshes import (
     cache_dir,
     mesh_digest,
@@ -89,10 +90,8 @@ MEMORY_MAX_CHAIRS = 4
 at most two chairs (the one scanned and, once the helper has turned it, its new scan),
 so four keep both chairs of the mission before too; an older one is read back from the
 disk cache, which holds every chair prepared."""
-_memory: dict[str, PreparedChair] = {}
-"""This process's prepared chairs by mesh digest, at most ``MEMORY_MAX_CHAIRS``, the most
-recently used last (a dict keeps its insertion order)."""
-_memory_lock = threading.Lock()
+_memory: BoundedMemo[str, PreparedChair] = BoundedMemo(MEMORY_MAX_CHAIRS)
+"""This process's prepared chairs by mesh digest."""
 
 
 class ChairPreparationError(SkillError, ValueError):
@@ -138,10 +137,9 @@ def prepare_chair(mesh: trimesh.Trimesh) -> PreparedChair:
         ChairPreparationError: when the mesh has no usable volume.
     """
     digest = mesh_digest(mesh)
-    with _memory_lock:
-        if digest in _memory:
-            _memory[digest] = _memory.pop(digest)
-            return _memory[digest]
+    remembered = _memory.get(digest)
+    if remembered is not None:
+        return remembered
     path = cache_dir() / "imagination" / f"{digest}-{PREPARATION_VERSION}.npz"
     prepared = _from_cache(read_cached_arrays(path))
     if prepared is not None and not all(
@@ -151,11 +149,7 @@ def prepare_chair(mesh: trimesh.Trimesh) -> PreparedChair:
     if prepared is None:
         prepared = _prepare(mesh, digest)
         write_cached_arrays(path, _to_cache(prepared))
-    with _memory_lock:
-        _memory.pop(digest, None)
-        _memory[digest] = prepared
-        while len(_memory) > MEMORY_MAX_CHAIRS:
-            del _memory[next(iter(_memory))]
+    _memory.put(digest, prepared)
     return prepared
 
 

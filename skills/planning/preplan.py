@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import hashlib
 import math
-import threading
-from collections import OrderedDict
 from collections.abc import Callable
 from typing import NamedTuple
 
@@ -19,6 +17,7 @@ import numpy as np
 import trimesh
 
 from core.geometry import SittingPose
+from core.memo import BoundedMemo
 from core.se2 import SE2Pose
 from skills.planning.wholebody import STANCE, InfeasibleSeating, preplan_approach
 from skills.planning.wholebody.chair_profile import ChairProfileError, fit_chair_profile
@@ -84,7 +83,7 @@ PREPLAN_MEMO_SIZE = 64
 few to a few dozen questions)."""
 
 
-class PreplanMemo:
+class PreplanMemo(BoundedMemo[tuple, SeatingCheck]):
     """The whole-body pre-plan's answers by chair, sitting pose and stance.
 
     The pre-plan is a pure function of the three (no warm starts), and the mission asks
@@ -95,10 +94,7 @@ class PreplanMemo:
     """
 
     def __init__(self, max_size: int = PREPLAN_MEMO_SIZE) -> None:
-        self._answers: OrderedDict[tuple, SeatingCheck] = OrderedDict()
-        self._max_size = max_size
-        self._lock = threading.Lock()
-        self.hits = 0
+        super().__init__(max_size)
 
     @staticmethod
     def key(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose) -> tuple:
@@ -107,23 +103,6 @@ class PreplanMemo:
         digest.update(np.ascontiguousarray(chair_mesh.faces).tobytes())
         pose = (*np.asarray(sitting_pose.position, dtype=float).tolist(), float(sitting_pose.yaw))
         return digest.hexdigest(), pose, tuple(float(v) for v in se2_goal)
-
-    def get(self, key: tuple) -> SeatingCheck | None:
-        """The answer kept for ``key`` (now the most recently used), or None."""
-        with self._lock:
-            answer = self._answers.get(key)
-            if answer is not None:
-                self._answers.move_to_end(key)
-                self.hits += 1
-            return answer
-
-    def put(self, key: tuple, answer: SeatingCheck) -> None:
-        """Keeps ``answer``, dropping the least recently used beyond the memo's size."""
-        with self._lock:
-            self._answers[key] = answer
-            self._answers.move_to_end(key)
-            while len(self._answers) > self._max_size:
-                self._answers.popitem(last=False)
 
 
 PREPLANS = PreplanMemo()
