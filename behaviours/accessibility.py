@@ -8,11 +8,11 @@ from collections.abc import Callable
 
 from py_trees.common import Status
 
-from behaviours import keys
-from behaviours.skill_behaviour import SkillBehaviour
-from behaviours.tracking import tracked_humanoid_pose
-from core.se2 import SE2Pose
-from skills.results import AccessibilityResult, SeatReachability
+from bearchair.behaviours import keys
+from bearchair.behaviours.skill_behaviour import SkillBehaviour
+from bearchair.behaviours.tracking import tracked_humanoid_pose
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.results import AccessibilityResult, SeatReachability
 
 REFUSED = "refused: "
 """How CheckSeatReachable's message starts when it refuses the mission: the seat is out

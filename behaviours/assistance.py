@@ -1,6 +1,6 @@
 """The human-assistance loop's leaves: instruct, wait, measure, and give up.
 
-The loop itself (at most :data:`behaviours.keys.MAX_ROTATIONS` rotations) is composed in
+The loop itself (at most :data:`bearchair.behaviours.keys.MAX_ROTATIONS` rotations) is composed in
 ``trees/mission.py``.
 """
 
@@ -12,15 +12,15 @@ from collections.abc import Callable
 import py_trees
 from py_trees.common import Access, Status
 
-from behaviours import keys
-from behaviours.skill_behaviour import SkillBehaviour
-from behaviours.tracking import tracked_humanoid_pose
-from skills.results import ChairRotation, Instruction, RotationChoice
+from bearchair.behaviours import keys
+from bearchair.behaviours.skill_behaviour import SkillBehaviour
+from bearchair.behaviours.tracking import tracked_humanoid_pose
+from bearchair.skills.results import ChairRotation, Instruction, RotationChoice
 
 
 class InstructHelper(SkillBehaviour):
     """Asks the helper to rotate the chair so that it faces the humanoid, or by the
-    smallest rotation the accessibility check plans with (``skills.choose_rotation``);
+    smallest rotation the accessibility check plans with (``bearchair.skills.choose_rotation``);
     fails, saying why, when no rotation helps and the chair already faces the humanoid.
 
     Blackboard:

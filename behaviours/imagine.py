@@ -7,9 +7,9 @@ from collections.abc import Callable
 
 from py_trees.common import Status
 
-from behaviours import keys
-from behaviours.skill_behaviour import SkillBehaviour
-from skills.results import ImaginationResult
+from bearchair.behaviours import keys
+from bearchair.behaviours.skill_behaviour import SkillBehaviour
+from bearchair.skills.results import ImaginationResult
 
 
 class ImagineSitting(SkillBehaviour):

@@ -6,9 +6,9 @@ from collections.abc import Callable
 
 from py_trees.common import Status
 
-from behaviours import keys
-from behaviours.skill_behaviour import SkillBehaviour
-from skills.results import ChairScan
+from bearchair.behaviours import keys
+from bearchair.behaviours.skill_behaviour import SkillBehaviour
+from bearchair.skills.results import ChairScan
 
 
 class ScanChair(SkillBehaviour):

@@ -6,11 +6,11 @@ from collections.abc import Callable
 
 from py_trees.common import Status
 
-from behaviours import keys
-from behaviours.skill_behaviour import SkillBehaviour
-from behaviours.tracking import tracked_humanoid_pose
-from hardware.interfaces import SeatingJudgement
-from skills.results import SeatingPlan
+from bearchair.behaviours import keys
+from bearchair.behaviours.skill_behaviour import SkillBehaviour
+from bearchair.behaviours.tracking import tracked_humanoid_pose
+from bearchair.hardware.interfaces import SeatingJudgement
+from bearchair.skills.results import SeatingPlan
 
 
 class SeatBear(SkillBehaviour):

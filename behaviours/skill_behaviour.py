@@ -19,8 +19,8 @@ from typing import Any
 import py_trees
 from py_trees.common import Access, Status
 
-from hardware.interfaces import Robot
-from skills.toolbox import MissionSkills
+from bearchair.hardware.interfaces import Robot
+from bearchair.skills.toolbox import MissionSkills
 
 
 class SkillBehaviour(py_trees.behaviour.Behaviour):

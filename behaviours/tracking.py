@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import logging
 
-from core.se2 import SE2Pose
-from hardware.interfaces import Robot
-from skills.toolbox import MissionSkills
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import Robot
+from bearchair.skills.toolbox import MissionSkills
 
 logger = logging.getLogger(__name__)
 

@@ -1,6 +1,6 @@
 """Benchmark: does the mission's planning generalise to chairs it has never seen?
 
-Generates chairs (``skills.chairgen``: every family, seeded) and, for each, runs the
+Generates chairs (``bearchair.skills.chairgen``: every family, seeded) and, for each, runs the
 stages that decide whether the bear can be seated, without a whole mission:
 
 1. imagination (``--imagine``): the sitting pose from drops of the virtual child; its
@@ -40,11 +40,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from core.arena import DEFAULT_ARENA, accessible_sitting_yaws
-from core.geometry import SittingPose, wrap_angle, yaw_transform
-from skills.chairgen import FAMILIES, GeneratedChair, generate_chair
-from skills.planning.se2 import check_accessibility
-from skills.planning.stance import check_seat_reachable
+from bearchair.core.arena import DEFAULT_ARENA, accessible_sitting_yaws
+from bearchair.core.geometry import SittingPose, wrap_angle, yaw_transform
+from bearchair.skills.chairgen import FAMILIES, GeneratedChair, generate_chair
+from bearchair.skills.planning.se2 import check_accessibility
+from bearchair.skills.planning.stance import check_seat_reachable
 
 PELVIS_ABOVE_SEAT_M = 0.05
 DIRECTION_TOLERANCE_DEG = 30.0
@@ -72,7 +72,7 @@ def imagined_pose(
 ) -> tuple[SittingPose | None, bool]:
     """The imagined sitting pose, and whether its direction is within the tolerance
     (``workers``: the imagination's processes; a seed gives the same pose for any)."""
-    from skills.imagination import imagine_sitting
+    from bearchair.skills.imagination import imagine_sitting
 
     result = imagine_sitting(chair.mesh, seed=seed, workers=workers)
     pose = result.sitting_pose
@@ -242,7 +242,7 @@ def calibration_reach(limit: int | None) -> None:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from planning import load_chairs
 
-    from skills.planning.seat import seat_ray
+    from bearchair.skills.planning.seat import seat_ray
 
     chairs = load_chairs()[:limit]
     if not chairs:

@@ -2,7 +2,7 @@
 
 Runs the whole mission on the box chair and on the first N calibration chairs with a
 front in ../shared/chairs, each in a process of its own as ``bearchair trials`` runs a
-trial: a fork of the preloaded trial server (``evaluation.forked_workers``), or
+trial: a fork of the preloaded trial server (``bearchair.evaluation.forked_workers``), or
 with ``--fresh`` a fresh interpreter, which pays the imports and the planner's casadi
 problems (about 3 s) in every run. Calibration chair k runs the paper protocol's trial k mod 6 (seeded as in the
 campaign), so the six conditions (accessible, inaccessible with a helper who obeys or
@@ -97,7 +97,7 @@ class StageMeter:
         self._charge()
 
     def _charge(self) -> None:
-        from hardware.sim.clock import WorldTimers
+        from bearchair.hardware.sim.clock import WorldTimers
 
         timers = self.clock.timers.copy()
         now = (time.perf_counter(), self.clock.now(), timers, time.process_time())
@@ -146,8 +146,8 @@ def run_one(payload: dict[str, Any], started: float = PROCESS_STARTED) -> dict[s
     profiler = _ThreadProfiles() if payload.get("profile") else None
     if profiler is not None:
         profiler.start()
-    from executive.config import RunConfig
-    from executive.mission import run_in_simulation
+    from bearchair.executive.config import RunConfig
+    from bearchair.executive.mission import run_in_simulation
 
     meter = StageMeter(started)
     config = RunConfig(
@@ -173,14 +173,14 @@ def run_one(payload: dict[str, Any], started: float = PROCESS_STARTED) -> dict[s
     }
     if profiler is not None:
         result["pstats"] = profiler.dump(Path(payload["out_dir"]) / "profile.pstats")
-    preload = sys.modules.get("evaluation.server_preload")
+    preload = sys.modules.get("bearchair.evaluation.server_preload")
     result["server_preload_s"] = getattr(preload, "PRELOAD_S", None)
     return result
 
 
 def forked_entry(argv: list[str]) -> int:
     """:func:`run_one` in a fork of the trial server (``PreloadedLauncher``'s entry)."""
-    from evaluation.worker_process import RESULT_MARKER as TRIAL_RESULT
+    from bearchair.evaluation.worker_process import RESULT_MARKER as TRIAL_RESULT
 
     started = time.perf_counter()
     result = run_one(json.loads(argv[0]), started)
@@ -251,7 +251,7 @@ def _cases(chairs: int, seed: int, box: bool, out: Path) -> list[dict[str, Any]]
         if not (SHARED_CHAIRS / "manifest.json").is_file():
             print(f"{SHARED_CHAIRS} not found: only the box chair is run", file=sys.stderr)
         else:
-            from evaluation.protocol import discover_chairs, expand_protocol
+            from bearchair.evaluation.protocol import discover_chairs, expand_protocol
 
             found, _ = discover_chairs(SHARED_CHAIRS, chairs)
             specs = expand_protocol(found, "paper", seed)
@@ -275,9 +275,9 @@ def _cases(chairs: int, seed: int, box: bool, out: Path) -> list[dict[str, Any]]
 def _run_forked(case: dict[str, Any]) -> dict[str, Any]:
     # By its package name, so that the trial server can import the entry.
     sys.path.insert(0, str(ROOT))
+    from bearchair.evaluation.forked_workers import PreloadedLauncher
+    from bearchair.evaluation.worker_process import run_worker
     from bench import mission as this_module
-    from evaluation.forked_workers import PreloadedLauncher
-    from evaluation.worker_process import run_worker
 
     outcome = run_worker(PreloadedLauncher(this_module.forked_entry), case, 1800.0)
     if outcome.summary is None:

@@ -38,12 +38,12 @@ import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
 
-from core.geometry import wrap_angle, yaw_of, yaw_transform
-from core.se2 import SE2Pose
-from hardware.sim.world import SimConfig, SimWorld
-from skills.perception import PerceptionError, measure_chair_rotation, scan_chair
-from skills.perception.tags import estimate_tag_pose
-from skills.perception.views import HOME_CONFIGURATION, OVERVIEW_CONFIGURATION
+from bearchair.core.geometry import wrap_angle, yaw_of, yaw_transform
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.sim.world import SimConfig, SimWorld
+from bearchair.skills.perception import PerceptionError, measure_chair_rotation, scan_chair
+from bearchair.skills.perception.tags import estimate_tag_pose
+from bearchair.skills.perception.views import HOME_CONFIGURATION, OVERVIEW_CONFIGURATION
 
 CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 ROTATIONS_DEG = (30, -60, 90, -120, 150, -180)
@@ -92,7 +92,7 @@ def main() -> int:
         print(f"skipped: no calibration chairs at {CHAIRS}")
         return 0
     try:
-        from skills.imagination import imagine_sitting
+        from bearchair.skills.imagination import imagine_sitting
     except ImportError:
         imagine_sitting = None
 

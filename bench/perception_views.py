@@ -18,8 +18,8 @@ import numpy as np
 import pybullet
 from scipy.optimize import least_squares
 
-from skills.perception.synthetic import PandaKinematics
-from skills.perception.views import CHAIR_VOLUME, look_at
+from bearchair.skills.perception.synthetic import PandaKinematics
+from bearchair.skills.perception.views import CHAIR_VOLUME, look_at
 
 # The scan looks at the chair area's centre, 0.2 m up, from 9 directions spread as far
 # apart as the arm allows: random joint vectors are sampled, those whose camera looks at

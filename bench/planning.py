@@ -3,7 +3,7 @@
 Prints, for the box chair and (when ../shared/chairs exists) the calibration chairs:
 
 * accessible placements (sitting direction within ±30 degrees of the NAO, leaving room
-  to stand in front inside the arena: ``core.arena.accessible_sitting_yaws``): how often a
+  to stand in front inside the arena: ``bearchair.core.arena.accessible_sitting_yaws``): how often a
   path is found and the planning times (median over the runs, max);
 * inaccessible placements (sitting direction toward the arm, or toward a side edge):
   how many the arena really makes inaccessible, and with a simulated helper who turns the
@@ -36,14 +36,14 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
-from core.arena import DEFAULT_ARENA, Arena, accessible_sitting_yaws
-from core.geometry import SittingPose, yaw_transform
-from core.meshes import box_chair_mesh, load_mesh
-from skills.assistance import compose_instruction
-from skills.planning.preplan import reach_validator
-from skills.planning.se2 import check_accessibility
-from skills.planning.seat import seat_support_heights
-from skills.results import AccessibilityResult
+from bearchair.core.arena import DEFAULT_ARENA, Arena, accessible_sitting_yaws
+from bearchair.core.geometry import SittingPose, yaw_transform
+from bearchair.core.meshes import box_chair_mesh, load_mesh
+from bearchair.skills.assistance import compose_instruction
+from bearchair.skills.planning.preplan import reach_validator
+from bearchair.skills.planning.se2 import check_accessibility
+from bearchair.skills.planning.seat import seat_support_heights
+from bearchair.skills.results import AccessibilityResult
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 PELVIS_ABOVE_SEAT_M = 0.05

@@ -20,15 +20,15 @@ import tempfile
 import time
 from pathlib import Path
 
-from evaluation.store import TrialStore
-from executive import cli
+from bearchair.evaluation.store import TrialStore
+from bearchair.executive import cli
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 
 
 def box_chair_folder() -> Path:
     """A folder holding the project's box chair and a manifest giving its front (+x)."""
-    from core.meshes import box_chair_mesh
+    from bearchair.core.meshes import box_chair_mesh
 
     folder = Path(tempfile.mkdtemp(prefix="bearchair-box-chair-"))
     box_chair_mesh().export(folder / "box-chair.obj")

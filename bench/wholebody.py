@@ -37,15 +37,15 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from core.geometry import SittingPose, make_transform, rot_z, wrap_angle
-from core.meshes import box_chair_mesh, load_mesh
-from core.se2 import SE2Pose
-from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
-from skills.planning.preplan import wholebody_validator
-from skills.planning.seat import seat_support_heights
-from skills.planning.stance import choose_stance, open_floor_arena
-from skills.planning.wholebody import InfeasibleSeating, plan_seating, preplan_seating
-from skills.planning.wholebody.chair_profile import (
+from bearchair.core.geometry import SittingPose, make_transform, rot_z, wrap_angle
+from bearchair.core.meshes import box_chair_mesh, load_mesh
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
+from bearchair.skills.planning.preplan import wholebody_validator
+from bearchair.skills.planning.seat import seat_support_heights
+from bearchair.skills.planning.stance import choose_stance, open_floor_arena
+from bearchair.skills.planning.wholebody import InfeasibleSeating, plan_seating, preplan_seating
+from bearchair.skills.planning.wholebody.chair_profile import (
     HORIZONTAL_NORMAL_Z,
     largest_horizontal_surface_height,
 )
@@ -134,7 +134,7 @@ def feasible_stance(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose
 ) -> tuple[SE2Pose, SittingPose, SE2Pose | None] | None:
     """The stance, sitting point and raising pose (None: no raise) the mission's search
-    chooses with the chair alone (:func:`skills.planning.stance.choose_stance`: reach
+    chooses with the chair alone (:func:`bearchair.skills.planning.stance.choose_stance`: reach
     model, then the pre-plan)."""
     checker = NaoCollisionChecker(open_floor_arena(chair_mesh), chair_solid_boxes(chair_mesh))
     choice = choose_stance(chair_mesh, sitting_pose, checker, wholebody_validator, scene=False)
@@ -152,8 +152,8 @@ def sim_run(chair_path: Path | None, front_yaw_deg: float, seed: int) -> tuple[b
     says so), plans from its own pose, plays the motion, releases the bear, stands up and
     the judge decides.
     """
-    from hardware.sim.world import SimConfig, SimWorld
-    from skills.planning.wholebody import execute_seating, raise_bear, release_and_stand
+    from bearchair.hardware.sim.world import SimConfig, SimWorld
+    from bearchair.skills.planning.wholebody import execute_seating, raise_bear, release_and_stand
 
     config = SimConfig(
         chair_path=chair_path,
@@ -202,8 +202,8 @@ def sim_run(chair_path: Path | None, front_yaw_deg: float, seed: int) -> tuple[b
 
 def walk_error(chairs: list[tuple[str, trimesh.Trimesh, float]]) -> None:
     """Prints, per chair, the stop-box corners from which the seating does not plan."""
-    from skills.control.walk import WalkGains
-    from skills.planning.wholebody import plan_seating_where_standing
+    from bearchair.skills.control.walk import WalkGains
+    from bearchair.skills.planning.wholebody import plan_seating_where_standing
 
     gains = WalkGains()
     step_m, step_rad = gains.stop_tolerance_m, gains.stop_tolerance_rad
@@ -263,7 +263,7 @@ def main() -> None:
     args = parser.parse_args()
 
     started = time.perf_counter()
-    from skills.planning.wholebody.optimisation import seating_problems
+    from bearchair.skills.planning.wholebody.optimisation import seating_problems
 
     seating_problems()
     print(f"problems built in {time.perf_counter() - started:.2f} s (once per process)")

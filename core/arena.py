@@ -18,7 +18,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from core.se2 import SE2Pose
+from bearchair.core.se2 import SE2Pose
 
 
 class Box2D(NamedTuple):

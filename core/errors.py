@@ -19,7 +19,7 @@ domain class here::
     └── Cancelled           a long skill stopped because it was asked to (ScanCancelled,
                             SeatingCancelled)
 
-At the command line (``executive.cli.main``) a BearchairError is printed as one line
+At the command line (``bearchair.executive.cli.main``) a BearchairError is printed as one line
 and the command exits with status 2; anything else that escapes a command is a bug:
 status 3, one line on the terminal, the traceback in the run folder's log. In the
 mission tree, a leaf turns any exception of its skill into FAILURE with its message.

@@ -21,7 +21,7 @@ import numpy as np
 import trimesh
 from scipy import ndimage
 
-from core.errors import MeshError, one_line
+from bearchair.core.errors import MeshError, one_line
 
 logger = logging.getLogger(__name__)
 

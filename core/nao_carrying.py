@@ -70,7 +70,7 @@ bear."""
 PLACEMENT_TOLERANCE_M = 0.015
 """How far (metres, in the NAO frame) the whole-body goal posture may set the bear's seat
 point from the sitting point g: the goal problem's placement box
-(``skills.planning.wholebody.optimisation``), which a reach-limited goal uses to put the
+(``bearchair.skills.planning.wholebody.optimisation``), which a reach-limited goal uses to put the
 bear nearer the NAO. Along x either way; along z only down, never up: the bear is let go
 where the hands hold it and drops what it hangs over the seat. Above g a posture is
 cheaper (less crouching), so a box open upward made every goal let go at its top,

@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from core.geometry import wrap_angle, yaw_of, yaw_transform
+from bearchair.core.geometry import wrap_angle, yaw_of, yaw_transform
 
 
 class SE2Pose(NamedTuple):

@@ -2,12 +2,12 @@
 each trial a mission in a subprocess of its own, with SQLite records and a report.
 
 It sits on top of the layering and may import every package below it, ``executive``
-included; nothing imports it (``executive.cli`` finds its command by entry point).
+included; nothing imports it (``bearchair.executive.cli`` finds its command by entry point).
 
 Modules:
     cli             the ``bearchair trials`` subcommand (entry point ``bearchair.commands``).
     protocol        the chairs of a folder and the trials of a protocol (seeds included).
-    worker          one trial's process: ``python -m evaluation.worker '<json>'``.
+    worker          one trial's process: ``python -m bearchair.evaluation.worker '<json>'``.
     worker_process  running that worker in a subprocess: crash and timeout become errors.
     forked_workers  workers forked from a trial server preloaded by ``server_preload``.
     backends        where the subprocesses run: locally, a few at once, or as Ray tasks.

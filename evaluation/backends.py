@@ -1,7 +1,7 @@
 """Where trial subprocesses run: here (a few at once) or as Ray tasks.
 
-Both backends run the same trial worker (``evaluation.worker_process``): here as
-forks of a preloaded trial server (``evaluation.forked_workers``), on Ray as a
+Both backends run the same trial worker (``bearchair.evaluation.worker_process``): here as
+forks of a preloaded trial server (``bearchair.evaluation.forked_workers``), on Ray as a
 command on the node that runs the task. They hand each :class:`WorkerOutcome` back to
 the caller in the caller's thread, as soon as it is ready, so the harness alone writes
 the records. On Ctrl-C (KeyboardInterrupt in
@@ -17,10 +17,10 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from typing import Any, Protocol
 
-from core.errors import BackendUnavailable
-from evaluation.forked_workers import PreloadedLauncher
-from evaluation.protocol import TrialSpec
-from evaluation.worker_process import (
+from bearchair.core.errors import BackendUnavailable
+from bearchair.evaluation.forked_workers import PreloadedLauncher
+from bearchair.evaluation.protocol import TrialSpec
+from bearchair.evaluation.worker_process import (
     ProcessGroup,
     WorkerLauncher,
     WorkerOutcome,
@@ -28,7 +28,7 @@ from evaluation.worker_process import (
     default_worker_command,
     run_worker_with_retry,
 )
-from executive.interrupts import emergency_stop_on_second_signal
+from bearchair.executive.interrupts import emergency_stop_on_second_signal
 
 Job = tuple[TrialSpec, dict[str, Any]]
 """A trial and its worker payload."""

@@ -12,12 +12,12 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from evaluation.backends import Backend, Job
-from evaluation.progress import Progress
-from evaluation.protocol import TrialSpec
-from evaluation.store import TrialStore, record_from_error, record_from_summary
-from evaluation.worker_process import WorkerOutcome
-from skills.imagination import DEFAULT_WORKERS
+from bearchair.evaluation.backends import Backend, Job
+from bearchair.evaluation.progress import Progress
+from bearchair.evaluation.protocol import TrialSpec
+from bearchair.evaluation.store import TrialStore, record_from_error, record_from_summary
+from bearchair.evaluation.worker_process import WorkerOutcome
+from bearchair.skills.imagination import DEFAULT_WORKERS
 
 
 class CampaignResult(NamedTuple):

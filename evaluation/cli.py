@@ -16,15 +16,15 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from core.errors import InputError
-from executive.cli_types import positive_int, positive_seconds, seed_value
-from skills.imagination import DEFAULT_WORKERS
+from bearchair.core.errors import InputError
+from bearchair.executive.cli_types import positive_int, positive_seconds, seed_value
+from bearchair.skills.imagination import DEFAULT_WORKERS
 
 if TYPE_CHECKING:
-    from evaluation.backends import Backend
-    from evaluation.campaign import CampaignResult
-    from evaluation.protocol import ChairEntry, SkippedChair, TrialSpec
-    from evaluation.store import TrialStore
+    from bearchair.evaluation.backends import Backend
+    from bearchair.evaluation.campaign import CampaignResult
+    from bearchair.evaluation.protocol import ChairEntry, SkippedChair, TrialSpec
+    from bearchair.evaluation.store import TrialStore
 
 DEFAULT_OUT = Path("trials")
 DEFAULT_TIMEOUT_S = 300.0
@@ -74,7 +74,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--worker-cmd",
-        help="run each trial with this command instead of 'python -m evaluation.worker' "
+        help="run each trial with this command instead of 'python -m bearchair.evaluation.worker' "
         "(the trial's JSON is appended)",
     )
     parser.set_defaults(func=run)
@@ -101,7 +101,7 @@ def resume_command(args: argparse.Namespace) -> str:
 
 def _recording_available() -> bool:
     """Recordings are on by default; without rerun-sdk the campaign runs without them."""
-    from executive.recording import INSTALL_HINT, rerun_available
+    from bearchair.executive.recording import INSTALL_HINT, rerun_available
 
     if rerun_available():
         return True
@@ -129,10 +129,10 @@ def run(args: argparse.Namespace) -> int:
     manifest entry (one line per bad one; ``--skip-bad`` goes on without them), the
     output folder and the database (readable, of this schema, writable, not in use).
     """
-    from evaluation.protocol import expand_protocol
-    from evaluation.store import TrialStore, campaign_lock
-    from executive.interrupts import exit_status
-    from executive.outputs import ensure_writable_dir
+    from bearchair.evaluation.protocol import expand_protocol
+    from bearchair.evaluation.store import TrialStore, campaign_lock
+    from bearchair.executive.interrupts import exit_status
+    from bearchair.executive.outputs import ensure_writable_dir
 
     _check_arguments(args)
     chairs, skipped = _chairs(args)
@@ -179,8 +179,8 @@ def _check_arguments(args: argparse.Namespace) -> None:
 
 def _chairs(args: argparse.Namespace) -> tuple[list[ChairEntry], list[SkippedChair]]:
     """The campaign's chairs and the skipped meshes; one stderr line per bad chair."""
-    from core.errors import ChairSetError
-    from evaluation.protocol import BadChairsError, discover_chairs
+    from bearchair.core.errors import ChairSetError
+    from bearchair.evaluation.protocol import BadChairsError, discover_chairs
 
     try:
         chairs, skipped = discover_chairs(
@@ -203,8 +203,8 @@ def _chairs(args: argparse.Namespace) -> tuple[list[ChairEntry], list[SkippedCha
 
 def _backend(args: argparse.Namespace) -> Backend:
     """The backend of ``--backend``, with ``--worker-cmd`` if given."""
-    from core.errors import BackendUnavailable
-    from evaluation.backends import LocalBackend, RayBackend
+    from bearchair.core.errors import BackendUnavailable
+    from bearchair.evaluation.backends import LocalBackend, RayBackend
 
     command = shlex.split(args.worker_cmd) if args.worker_cmd else None
     try:
@@ -224,9 +224,9 @@ def _run_campaign(
     record: bool,
 ) -> CampaignResult:
     """``run_campaign`` with a progress bar; a backend that fails to start is one line."""
-    from core.errors import BackendUnavailable
-    from evaluation.campaign import run_campaign
-    from evaluation.progress import Progress
+    from bearchair.core.errors import BackendUnavailable
+    from bearchair.evaluation.campaign import run_campaign
+    from bearchair.evaluation.progress import Progress
 
     progress = Progress(len(specs), done_before)
     try:
@@ -248,9 +248,9 @@ def write_report(
     args: argparse.Namespace, records: list[dict[str, Any]], skipped: list[SkippedChair]
 ) -> str:
     """Writes OUT/report.md and the pictures; returns the table as text."""
-    from evaluation.pictures import copy_trial_scenes, render_chair_pictures
-    from evaluation.report import compute_table, format_table, markdown_report
-    from executive.outputs import write_text_atomic
+    from bearchair.evaluation.pictures import copy_trial_scenes, render_chair_pictures
+    from bearchair.evaluation.report import compute_table, format_table, markdown_report
+    from bearchair.executive.outputs import write_text_atomic
 
     table = compute_table(records)
     args.out.mkdir(parents=True, exist_ok=True)

@@ -3,7 +3,7 @@
 A trial started as a command pays, in a fresh interpreter, about 1.9 s of imports
 (open3d, casadi, pybullet, the project) and 1.2 s building the whole-body planner's
 casadi problems, in every trial. Here one server process (the standard library's
-``multiprocessing`` forkserver, preloading :mod:`evaluation.server_preload`)
+``multiprocessing`` forkserver, preloading :mod:`bearchair.evaluation.server_preload`)
 pays them once, and each trial is a fork of it.
 
 A trial still runs in a process of its own that no other trial has run in, in a session
@@ -25,10 +25,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
-from evaluation.worker import main, run_guarded
-from evaluation.worker_process import LOG_NAME, die_with_parent
+from bearchair.evaluation.worker import main, run_guarded
+from bearchair.evaluation.worker_process import LOG_NAME, die_with_parent
 
-PRELOAD_MODULE = "evaluation.server_preload"
+PRELOAD_MODULE = "bearchair.evaluation.server_preload"
 STDOUT_NAME = "worker.stdout"
 """A forked worker's stdout, in its run folder until the harness has read it."""
 
@@ -48,7 +48,7 @@ def _forkserver() -> Any:
 
 def _run_forked(entry: Callable[[list[str]], int], payload_json: str, out_dir: str) -> None:
     """In the fork: a session of its own, stdout to a file and stderr to the run
-    folder's log, then ``entry`` guarded as a worker (``evaluation.worker.run_guarded``).
+    folder's log, then ``entry`` guarded as a worker (``bearchair.evaluation.worker.run_guarded``).
     """
     os.setsid()
     die_with_parent()
@@ -104,7 +104,7 @@ class PreloadedLauncher:
     Args:
         entry: what the fork runs on ``[payload_json]``, returning its exit status; a
             module-level function (it is sent to the server by name). The default is
-            the trial worker, ``evaluation.worker.main``.
+            the trial worker, ``bearchair.evaluation.worker.main``.
     """
 
     def __init__(self, entry: Callable[[list[str]], int] = main) -> None:

@@ -75,7 +75,7 @@ class Progress:
         self._print(self.line("starting"))
 
     def update(self, record: dict[str, Any]) -> None:
-        """Counts one finished trial (a record of ``evaluation.store``)."""
+        """Counts one finished trial (a record of ``bearchair.evaluation.store``)."""
         self.done += 1
         self._session_done += 1
         if record.get("outcome") == "success":

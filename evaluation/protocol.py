@@ -15,9 +15,9 @@ import math
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from core.errors import ChairSetError
-from core.meshes import SUPPORTED_SUFFIXES
-from skills.imagination import DEFAULT_WORKERS
+from bearchair.core.errors import ChairSetError
+from bearchair.core.meshes import SUPPORTED_SUFFIXES
+from bearchair.skills.imagination import DEFAULT_WORKERS
 
 EXPERIMENTS = ("accessible", "inaccessible_obeys", "inaccessible_disobeys")
 """The three experiments of the paper's Table 1, in its row order."""
@@ -265,7 +265,7 @@ def _verdict(
 ) -> ChairEntry | SkippedChair | str:
     """What one mesh of the folder is: a chair that takes part, a mesh skipped, or (a
     ``str``) the one-line problem of an unusable manifest entry or mesh."""
-    from core.meshes import MeshLoadError, load_chair_mesh
+    from bearchair.core.meshes import MeshLoadError, load_chair_mesh
 
     if path.name not in manifest:
         return SkippedChair(path.name, "not in manifest.json")

@@ -17,10 +17,10 @@ from collections import Counter
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from behaviours.accessibility import REFUSED
-from evaluation.pictures import trial_picture_name
-from evaluation.protocol import EXPERIMENT_LABELS, EXPERIMENTS, SkippedChair
-from trees.mission import STAGES
+from bearchair.behaviours.accessibility import REFUSED
+from bearchair.evaluation.pictures import trial_picture_name
+from bearchair.evaluation.protocol import EXPERIMENT_LABELS, EXPERIMENTS, SkippedChair
+from bearchair.trees.mission import STAGES
 
 
 class RateRow(NamedTuple):
@@ -67,7 +67,7 @@ class TrialsTable(NamedTuple):
 
 
 def compute_table(records: list[dict[str, Any]]) -> TrialsTable:
-    """Table 1, stage medians and failure causes from records of ``evaluation.store``."""
+    """Table 1, stage medians and failure causes from records of ``bearchair.evaluation.store``."""
     seating = []
     for experiment in EXPERIMENTS:
         rows = [r for r in records if r["experiment"] == experiment]

@@ -17,10 +17,10 @@ import sys
 import time
 
 PRELOADED_MODULES = (
-    "executive.mission",
-    "evaluation.worker",
-    "trees.mission",
-    "skills.default_skills",  # every skill
+    "bearchair.executive.mission",
+    "bearchair.evaluation.worker",
+    "bearchair.trees.mission",
+    "bearchair.skills.default_skills",  # every skill
 )
 
 
@@ -30,7 +30,7 @@ def _preload() -> float:
     started = time.perf_counter()
     for module_name in PRELOADED_MODULES:
         importlib.import_module(module_name)
-    from skills.planning.wholebody.optimisation import seating_problems
+    from bearchair.skills.planning.wholebody.optimisation import seating_problems
 
     problems = seating_problems()
     problems.trajectory_solver(problems.n_knots)

@@ -18,8 +18,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from core.errors import RecordStoreError
-from evaluation.protocol import TrialSpec
+from bearchair.core.errors import RecordStoreError
+from bearchair.evaluation.protocol import TrialSpec
 
 COLUMNS: dict[str, str] = {
     "chair": "TEXT NOT NULL",
@@ -235,7 +235,7 @@ def record_from_summary(
     run_dir: str | None,
     attempts: int = 1,
 ) -> dict[str, Any]:
-    """A row from a finished mission's ``summary.json`` (see ``executive.mission``)."""
+    """A row from a finished mission's ``summary.json`` (see ``bearchair.executive.mission``)."""
     judgement = summary.get("judgement") or {}
     instructions = len(summary.get("instructions") or [])
     accessible = bool(summary.get("accessible", False))

@@ -1,8 +1,8 @@
-"""One trial of a campaign, in its own process: ``python -m evaluation.worker '<json>'``.
+"""One trial of a campaign, in its own process: ``python -m bearchair.evaluation.worker '<json>'``.
 
-The JSON is ``evaluation.protocol.TrialSpec.to_payload``: chair_path, placement,
+The JSON is ``bearchair.evaluation.protocol.TrialSpec.to_payload``: chair_path, placement,
 helper, seed, trial_index, out_dir, timeout_s, record. The worker runs the whole mission in the
-simulated world (``executive.mission.run_in_simulation``), which writes the run record
+simulated world (``bearchair.executive.mission.run_in_simulation``), which writes the run record
 into out_dir, keeps the robot's reconstructed chair (``chair_reconstructed.ply``) for the
 imagined-pose picture, and prints one line ``BEARCHAIR-TRIAL-RESULT {...}`` on stdout
 for the harness. Exit status: 0 the mission ended (success or failure), 3 an exception.
@@ -22,8 +22,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from evaluation.worker_process import RESULT_MARKER
-from skills.imagination import DEFAULT_WORKERS
+from bearchair.evaluation.worker_process import RESULT_MARKER
+from bearchair.skills.imagination import DEFAULT_WORKERS
 
 MISSION_TIMEOUT_MARGIN_S = 30.0
 """The mission stops itself this long before the harness would kill the worker, so a
@@ -43,7 +43,7 @@ class ChairKeeper:
     def __call__(self, runner: Any) -> None:
         import py_trees
 
-        from behaviours import keys
+        from bearchair.behaviours import keys
 
         storage = py_trees.blackboard.Blackboard.storage
         mesh = storage.get(keys.CHAIR_MESH)
@@ -56,7 +56,7 @@ class ChairKeeper:
 
 
 def _rerun_installed() -> bool:
-    from executive.recording import rerun_available
+    from bearchair.executive.recording import rerun_available
 
     if rerun_available():
         return True
@@ -89,12 +89,12 @@ def watch_for_orphaning(poll_s: float = 0.5) -> None:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) != 1:
-        print("usage: python -m evaluation.worker '<trial json>'", file=sys.stderr)
+        print("usage: python -m bearchair.evaluation.worker '<trial json>'", file=sys.stderr)
         return 2
     try:
         payload = json.loads(argv[0])
-        from executive.config import RunConfig
-        from executive.mission import run_in_simulation
+        from bearchair.executive.config import RunConfig
+        from bearchair.executive.mission import run_in_simulation
 
         out_dir = Path(payload["out_dir"])
         config = RunConfig(
@@ -133,8 +133,8 @@ def run_guarded(entry: Callable[[list[str]], int], argv: list[str]) -> int:
     folder gets its summary before the SIGKILL that follows. The imagination's worker
     processes are stopped at the end (a fork ends without the interpreter's exit hooks).
     """
-    from executive.interrupts import handling_signals
-    from skills.imagination import shutdown_workers
+    from bearchair.executive.interrupts import handling_signals
+    from bearchair.skills.imagination import shutdown_workers
 
     faulthandler.enable()
     if os.getpgid(0) == os.getpid():

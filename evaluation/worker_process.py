@@ -1,10 +1,10 @@
 """Running one trial in its own subprocess, whatever happens to it.
 
-The trial worker (``evaluation.worker.main``) prints one line
+The trial worker (``bearchair.evaluation.worker.main``) prints one line
 ``BEARCHAIR-TRIAL-RESULT {"summary": ...}`` (or ``{"error": ...}``) on stdout. Its
 stderr goes to ``worker.log`` in the trial's run directory. A :class:`WorkerLauncher`
-starts it: :class:`CommandLauncher` as a command (``python -m evaluation.worker
-'<json>'``, a fresh interpreter), ``evaluation.forked_workers.PreloadedLauncher``
+starts it: :class:`CommandLauncher` as a command (``python -m bearchair.evaluation.worker
+'<json>'``, a fresh interpreter), ``bearchair.evaluation.forked_workers.PreloadedLauncher``
 as a fork of a server that has already imported the mission's modules. A worker that dies (for
 example a segfault in a native library) or outlives its timeout is reported with an
 error instead; a timed-out worker is killed with its whole process group (the
@@ -37,7 +37,7 @@ class WorkerOutcome(NamedTuple):
     """What came back from one trial subprocess.
 
     Attributes:
-        summary: the mission's summary (``executive.mission``), None when it did not end.
+        summary: the mission's summary (``bearchair.executive.mission``), None when it did not end.
         error: why there is no summary (crash, timeout, exception), None otherwise.
         wall_seconds: the subprocess's wall time, world building included.
         cancelled: the harness stopped it (Ctrl-C): not a result, never recorded.
@@ -56,7 +56,7 @@ class WorkerOutcome(NamedTuple):
 
 def default_worker_command() -> list[str]:
     """The real trial worker, with this interpreter (the trial JSON is appended)."""
-    return [sys.executable, "-m", "evaluation.worker"]
+    return [sys.executable, "-m", "bearchair.evaluation.worker"]
 
 
 class WorkerHandle(Protocol):

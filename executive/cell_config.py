@@ -20,7 +20,7 @@ F frame), not against the end effector set in Desk (``O_T_EE``): the backend rem
 Checks (each failure is one line naming the field): unknown keys are refused (with the
 nearest known name), rotations are proper and orthonormal (a scaled or mirrored matrix
 is refused), translations are bounded (millimetres written as metres are refused), the
-arm's base stands where the scan views assume it (:data:`core.arena.DEFAULT_ARENA`,
+arm's base stands where the scan views assume it (:data:`bearchair.core.arena.DEFAULT_ARENA`,
 within :data:`BASE_TOLERANCE_M` and :data:`BASE_TOLERANCE_RAD`), the NAO starts inside
 the arena, headings are radians in [-pi, pi].
 """
@@ -36,10 +36,10 @@ from typing import Any
 
 import numpy as np
 
-from core.arena import DEFAULT_ARENA, Arena
-from core.errors import BackendUnavailable
-from core.geometry import yaw_of
-from core.se2 import SE2Pose
+from bearchair.core.arena import DEFAULT_ARENA, Arena
+from bearchair.core.errors import BackendUnavailable
+from bearchair.core.geometry import yaw_of
+from bearchair.core.se2 import SE2Pose
 
 ROTATION_TOLERANCE = 1e-3
 """Largest element of R^T R - I (and |det R - 1|) accepted: a 4-decimal matrix passes."""

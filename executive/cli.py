@@ -4,7 +4,7 @@ Subcommands:
     run       the whole mission in the simulated world, with a run record.
     tree      render the mission tree (text, dot, SVG, PNG).
     inspect   replay a recorded run: the tree at any tick, the blackboard, the timeline.
-    imagine, scan, ...  skill commands, each registered by its own ``executive.cmd_*``.
+    imagine, scan, ...  skill commands, each registered by its own ``bearchair.executive.cmd_*``.
     trials    the evaluation harness: a command of a package above this one
               (``evaluation``), found through the entry points of :data:`COMMANDS_GROUP`.
 """
@@ -26,18 +26,18 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TextIO
 
-from core.errors import BackendUnavailable, BearchairError, InputError, one_line
-from executive import (
+from bearchair.core.errors import BackendUnavailable, BearchairError, InputError, one_line
+from bearchair.executive import (
     cmd_calibrate_hand_eye,
     cmd_check_hardware,
     cmd_imagine,
     cmd_scan,
     cmd_view,
 )
-from executive.cli_types import positive_seconds, seed_value
-from executive.config import RunConfig
-from executive.interrupts import exit_status, handling_signals, received, signal_name
-from executive.operator import ask_operator
+from bearchair.executive.cli_types import positive_seconds, seed_value
+from bearchair.executive.config import RunConfig
+from bearchair.executive.interrupts import exit_status, handling_signals, received, signal_name
+from bearchair.executive.operator import ask_operator
 
 OWN_COMMANDS = (cmd_imagine, cmd_scan, cmd_check_hardware, cmd_calibrate_hand_eye, cmd_view)
 """executive's own commands: each module has ``register(subparsers)``."""
@@ -143,14 +143,14 @@ def registered_commands() -> list[Callable[[Any], None]]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from core.meshes import load_chair_mesh
-    from executive.mission import (
+    from bearchair.core.meshes import load_chair_mesh
+    from bearchair.executive.mission import (
         StageProgress,
         format_summary,
         run_in_simulation,
         run_on_robots,
     )
-    from executive.outputs import default_run_dir, prepare_run_dir
+    from bearchair.executive.outputs import default_run_dir, prepare_run_dir
 
     config = RunConfig(
         chair_path=args.chair,
@@ -216,7 +216,7 @@ def _log_to(path: Path):
 
 
 def add_recording_arguments(parser: argparse.ArgumentParser, *, record_default: bool) -> None:
-    """``--record/--no-record`` and ``--live`` (Rerun recordings, ``executive.recording``)."""
+    """``--record/--no-record`` and ``--live`` (Rerun recordings, ``bearchair.executive.recording``)."""
     parser.add_argument(
         "--record",
         action=argparse.BooleanOptionalAction,
@@ -236,7 +236,7 @@ def add_recording_arguments(parser: argparse.ArgumentParser, *, record_default: 
 
 def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
     """One line before any work when a recording was asked for and cannot be made."""
-    from executive.recording import INSTALL_HINT, has_display, rerun_available
+    from bearchair.executive.recording import INSTALL_HINT, has_display, rerun_available
 
     live = getattr(args, "live", None)
     if (args.record or live) and not rerun_available():
@@ -255,9 +255,9 @@ def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
 
 
 def _tree(args: argparse.Namespace) -> int:
-    from executive.outputs import check_output_file
-    from executive.render import TEXT_FORMATS, render_graph, render_text
-    from trees.mission import create_tree
+    from bearchair.executive.outputs import check_output_file
+    from bearchair.executive.render import TEXT_FORMATS, render_graph, render_text
+    from bearchair.trees.mission import create_tree
 
     if args.format in TEXT_FORMATS:
         if args.out is not None:
@@ -274,7 +274,7 @@ def _tree(args: argparse.Namespace) -> int:
 
 
 def _inspect(args: argparse.Namespace) -> int:
-    from executive.inspect_run import RecordedRun
+    from bearchair.executive.inspect_run import RecordedRun
 
     run = RecordedRun(args.run_dir)
     state = run.at(args.tick)
@@ -335,7 +335,7 @@ class _TolerantStream:
 
 def _error_line(error: BaseException) -> str:
     """One line for a user-facing error, prefixed ``bearchair:`` unless it names itself."""
-    from executive.outputs import describe_os_error
+    from bearchair.executive.outputs import describe_os_error
 
     if isinstance(error, OSError):
         text = describe_os_error(error)
@@ -365,7 +365,7 @@ def _crash_log(args: argparse.Namespace | None) -> Path:
     run_dir = getattr(args, "run_dir", None) if args is not None else None
     if run_dir is not None and Path(run_dir).is_dir():
         return Path(run_dir) / LOG_FILE
-    from core.meshes import cache_dir
+    from bearchair.core.meshes import cache_dir
 
     stamp = f"crash-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}.log"
     try:

@@ -5,7 +5,7 @@ Three ways in, one of them per call:
 * ``--robots cell.json``: connects the Panda and its camera (moves nothing), says what
   will move and asks (``--yes`` skips the question; no terminal counts as no); then moves
   the arm at a tenth of its speed limits to HOME and through the first ``--views`` of
-  :data:`skills.perception.hand_eye.CALIBRATION_CONFIGURATIONS`, back to HOME between
+  :data:`bearchair.skills.perception.hand_eye.CALIBRATION_CONFIGURATIONS`, back to HOME between
   views (each motion is the straight joint-space motion from HOME that was checked),
   captures a frame at each, finds the board, solves and ends at HOME. A failed motion
   or Ctrl-C stops the arm (libfranka's ``Robot::stop``).
@@ -37,11 +37,11 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from executive.cli_types import positive_int, positive_seconds
+from bearchair.executive.cli_types import positive_int, positive_seconds
 
 if TYPE_CHECKING:
-    from executive.cell_config import CellConfig
-    from hardware.real.panda import PandaArm
+    from bearchair.executive.cell_config import CellConfig
+    from bearchair.hardware.real.panda import PandaArm
 
 SETTLE_S = 0.5
 """Wait after each motion before capturing: the arm's last vibration and the camera's
@@ -102,7 +102,7 @@ class View(NamedTuple):
         detection: the board's pose in the camera frame, None when it was not seen.
         note: why the board was not seen.
         depth_ratio: the depth image's distance to the board over its pose's
-            (:func:`skills.perception.hand_eye.board_depth_ratio`), None without depth.
+            (:func:`bearchair.skills.perception.hand_eye.board_depth_ratio`), None without depth.
     """
 
     name: str
@@ -114,13 +114,13 @@ class View(NamedTuple):
 
 
 def _error(message: str) -> Exception:
-    from core.errors import InputError
+    from bearchair.core.errors import InputError
 
     return InputError(f"bearchair calibrate-hand-eye: {message}")
 
 
 def _board(args: argparse.Namespace, recorded: dict[str, Any] | None = None) -> Any:
-    from skills.perception.hand_eye import CALIBRATION_BOARD, BoardSpec
+    from bearchair.skills.perception.hand_eye import CALIBRATION_BOARD, BoardSpec
 
     board = CALIBRATION_BOARD
     if recorded is not None:
@@ -136,7 +136,7 @@ def _board(args: argparse.Namespace, recorded: dict[str, Any] | None = None) -> 
 
 
 def calibrate_hand_eye(args: argparse.Namespace) -> int:
-    from executive.outputs import check_output_file
+    from bearchair.executive.outputs import check_output_file
 
     if args.board_png is not None:
         return _write_board(args)
@@ -169,8 +169,8 @@ def _rescaled(view: View, factor: float) -> View:
 def _write_board(args: argparse.Namespace) -> int:
     import cv2
 
-    from executive.outputs import atomic_path, check_output_file
-    from skills.perception.hand_eye import board_image
+    from bearchair.executive.outputs import atomic_path, check_output_file
+    from bearchair.skills.perception.hand_eye import board_image
 
     if args.views is not None or args.yes or args.out is not None:
         raise _error("--board-png writes the board only; no --views, --yes or --out")
@@ -190,11 +190,14 @@ def _write_board(args: argparse.Namespace) -> int:
 
 def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     """Connects, asks, moves through the views and captures; always ends at HOME."""
-    from executive.cell_config import load_cell_config
-    from executive.cmd_check_hardware import MOVE_SPEED_FACTOR, _within
-    from executive.operator import ask_operator
-    from hardware.real import robots
-    from skills.perception.hand_eye import BOARD_CENTRE_BASE_XY_M, CALIBRATION_CONFIGURATIONS
+    from bearchair.executive.cell_config import load_cell_config
+    from bearchair.executive.cmd_check_hardware import MOVE_SPEED_FACTOR, _within
+    from bearchair.executive.operator import ask_operator
+    from bearchair.hardware.real import robots
+    from bearchair.skills.perception.hand_eye import (
+        BOARD_CENTRE_BASE_XY_M,
+        CALIBRATION_CONFIGURATIONS,
+    )
 
     count = len(CALIBRATION_CONFIGURATIONS) if args.views is None else args.views
     if not 3 <= count <= len(CALIBRATION_CONFIGURATIONS):
@@ -231,10 +234,10 @@ def _visit_views(
 ) -> list[View]:
     """HOME, then each configuration (capture, detect the board) and back to HOME; any
     failure emergency-stops the arm."""
-    from core.errors import BackendUnavailable
-    from executive.cmd_check_hardware import _within
-    from executive.interrupts import emergency_stop_on_second_signal
-    from skills.perception.views import HOME_CONFIGURATION
+    from bearchair.core.errors import BackendUnavailable
+    from bearchair.executive.cmd_check_hardware import _within
+    from bearchair.executive.interrupts import emergency_stop_on_second_signal
+    from bearchair.skills.perception.views import HOME_CONFIGURATION
 
     T_base_world = np.linalg.inv(cell.T_world_base)
     T_camera_flange = np.linalg.inv(cell.T_flange_camera)
@@ -269,8 +272,8 @@ def _visit_views(
 def _detect(
     name: str, joints: np.ndarray, T_base_flange: np.ndarray, frame: Any, board: Any
 ) -> View:
-    from skills.perception.errors import BoardNotSeenError
-    from skills.perception.hand_eye import board_depth_ratio, detect_board
+    from bearchair.skills.perception.errors import BoardNotSeenError
+    from bearchair.skills.perception.hand_eye import board_depth_ratio, detect_board
 
     configuration = tuple(round(float(q), 4) for q in joints)
     try:
@@ -295,8 +298,8 @@ def _print_view(view: View) -> None:
 
 
 def _solve_and_report(views: list[View], board: Any, out: Path | None) -> int:
-    from skills.perception.errors import HandEyeError
-    from skills.perception.hand_eye import (
+    from bearchair.skills.perception.errors import HandEyeError
+    from bearchair.skills.perception.hand_eye import (
         MAX_SCALE_ERROR,
         MAX_SPREAD_DEG,
         MAX_SPREAD_MM,
@@ -357,7 +360,7 @@ def _solve_and_report(views: list[View], board: Any, out: Path | None) -> int:
 
 
 def _write_views(path: Path, views: list[View], board: Any, result: Any) -> None:
-    from executive.outputs import write_text_atomic
+    from bearchair.executive.outputs import write_text_atomic
 
     record = {
         "board": board._asdict(),
@@ -387,7 +390,7 @@ def _write_views(path: Path, views: list[View], board: Any, result: Any) -> None
 
 def _load_views(path: Path) -> tuple[Any, list[View]]:
     """The board and views of a ``--out`` file (exact matrices, as written)."""
-    from skills.perception.hand_eye import BoardDetection, BoardSpec
+    from bearchair.skills.perception.hand_eye import BoardDetection, BoardSpec
 
     if not path.is_file():
         raise _error(f"--from {path}: no such file")

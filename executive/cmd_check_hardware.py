@@ -74,12 +74,12 @@ def _describe(error: BaseException) -> str:
 
 
 def check_hardware(args: argparse.Namespace) -> int:
-    from executive.cell_config import load_cell_config
-    from hardware.real import SDK_DISTRIBUTIONS, sdk_versions
-    from hardware.real.panda import into_walls
+    from bearchair.executive.cell_config import load_cell_config
+    from bearchair.hardware.real import SDK_DISTRIBUTIONS, sdk_versions
+    from bearchair.hardware.real.panda import into_walls
 
     if not args.timeout > 0:
-        from core.errors import InputError
+        from bearchair.core.errors import InputError
 
         raise InputError("bearchair check-hardware: --timeout must be positive")
     report = _Report()
@@ -97,7 +97,7 @@ def check_hardware(args: argparse.Namespace) -> int:
     _check_nao(cell, args.timeout, report)
     arm = _check_panda(cell, args.timeout, report)
 
-    from skills.perception.views import (
+    from bearchair.skills.perception.views import (
         HOME_CONFIGURATION,
         OVERVIEW_CONFIGURATION,
         SCAN_CONFIGURATIONS,
@@ -128,7 +128,7 @@ def check_hardware(args: argparse.Namespace) -> int:
 
 
 def _check_nao(cell: Any, timeout_s: float, report: _Report) -> None:
-    from hardware.real.nao import NaoHumanoid, connect
+    from bearchair.hardware.real.nao import NaoHumanoid, connect
 
     try:
         session = connect(cell.nao_url, cell.nao_user, cell.nao_password, timeout_s=timeout_s)
@@ -157,7 +157,7 @@ def _check_nao(cell: Any, timeout_s: float, report: _Report) -> None:
 
 
 def _check_panda(cell: Any, timeout_s: float, report: _Report) -> Any:
-    from hardware.real.robots import connect_panda
+    from bearchair.hardware.real.robots import connect_panda
 
     try:
         arm = _within(timeout_s, lambda: connect_panda(cell))
@@ -176,9 +176,9 @@ def _check_panda(cell: Any, timeout_s: float, report: _Report) -> Any:
 
 
 def _check_camera(arm: Any, timeout_s: float, report: _Report, move: bool) -> None:
-    from core.arena import HUMANOID_TAG
-    from skills.perception.tags import estimate_tag_pose
-    from skills.perception.views import HOME_CONFIGURATION, OVERVIEW_CONFIGURATION
+    from bearchair.core.arena import HUMANOID_TAG
+    from bearchair.skills.perception.tags import estimate_tag_pose
+    from bearchair.skills.perception.views import HOME_CONFIGURATION, OVERVIEW_CONFIGURATION
 
     if move:
         arm._speed_factor = MOVE_SPEED_FACTOR

@@ -19,13 +19,13 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from executive import interrupts
-from executive.cli_types import positive_int, seed_value
+from bearchair.executive import interrupts
+from bearchair.executive.cli_types import positive_int, seed_value
 
 if TYPE_CHECKING:
     import trimesh
 
-    from skills.results import ImaginationResult
+    from bearchair.skills.results import ImaginationResult
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -45,9 +45,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Runs the imagination on ``args.mesh``; returns the exit status."""
-    from core.meshes import load_chair_mesh
-    from executive.outputs import check_output_file
-    from skills.imagination import imagine_sitting
+    from bearchair.core.meshes import load_chair_mesh
+    from bearchair.executive.outputs import check_output_file
+    from bearchair.skills.imagination import imagine_sitting
 
     mesh = load_chair_mesh(args.mesh)
     if args.image is not None:  # before the minutes of simulation, not after
@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _draw(mesh: trimesh.Trimesh, result: ImaginationResult, name: str, image: Path) -> None:
     """The mesh and the sitting pose found (if any) drawn into the PNG ``image``."""
-    from skills.imagination.render import render_sitting
+    from bearchair.skills.imagination.render import render_sitting
 
     title = (
         f"{name}: yaw {math.degrees(result.sitting_pose.yaw):.1f} deg, "

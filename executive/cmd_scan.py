@@ -14,8 +14,8 @@ import json
 import sys
 from pathlib import Path
 
-from core.streams import silenced_fds
-from executive.cli_types import seed_value
+from bearchair.core.streams import silenced_fds
+from bearchair.executive.cli_types import seed_value
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -39,10 +39,10 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import trimesh
 
-    from core.meshes import load_chair_mesh
-    from executive.outputs import atomic_path, ensure_writable_dir
-    from hardware.sim.world import SimConfig, SimWorld
-    from skills.perception import PerceptionError, scan_chair
+    from bearchair.core.meshes import load_chair_mesh
+    from bearchair.executive.outputs import atomic_path, ensure_writable_dir
+    from bearchair.hardware.sim.world import SimConfig, SimWorld
+    from bearchair.skills.perception import PerceptionError, scan_chair
 
     load_chair_mesh(args.chair)
     ensure_writable_dir(args.out, "--out")  # before the scan, not after

@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from executive.recording import (
+from bearchair.executive.recording import (
     DEFAULT_WEB_PORT,
     INSTALL_HINT,
     RECORDING_FILE,
@@ -93,7 +93,7 @@ def _free_port() -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    from core.errors import InputError
+    from bearchair.core.errors import InputError
 
     if not rerun_available():
         raise InputError(f"bearchair view: needs rerun-sdk: {INSTALL_HINT}")

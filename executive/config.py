@@ -9,8 +9,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
-from core.arena import DEFAULT_ARENA, Arena
-from skills.imagination import DEFAULT_WORKERS
+from bearchair.core.arena import DEFAULT_ARENA, Arena
+from bearchair.skills.imagination import DEFAULT_WORKERS
 
 logger = logging.getLogger(__name__)
 
@@ -33,7 +33,7 @@ class RunConfig:
         timeout_s: wall time after which the mission is stopped as failed.
         arena: the workspace layout.
         snapshots: in simulation, save a picture whenever a stage ends.
-        record: write a Rerun recording, ``out_dir/mission.rrd`` (``executive.recording``).
+        record: write a Rerun recording, ``out_dir/mission.rrd`` (``bearchair.executive.recording``).
         live: stream to a Rerun viewer while running: ``"spawn"``, ``"web"`` or a URL.
         imagination_workers: processes the imagination's drops run in (1: the run's own;
             the result is the same for any number).

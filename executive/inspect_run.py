@@ -9,15 +9,15 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
-from core.errors import RunRecordError
-from executive.record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, read_ticks
-from executive.render import render_text
+from bearchair.core.errors import RunRecordError
+from bearchair.executive.record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, read_ticks
+from bearchair.executive.render import render_text
 
 __all__ = ["RecordedRun", "RunRecordError"]
 
 
 class RecordedRun:
-    """A run directory written by :class:`executive.record.RunRecorder`.
+    """A run directory written by :class:`bearchair.executive.record.RunRecorder`.
 
     A damaged record is read as far as it can be: unreadable lines of ``ticks.jsonl``
     are skipped and an unreadable ``summary.json`` is ignored, each with a note

@@ -13,20 +13,20 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
-from core.errors import one_line
-from core.geometry import wrap_angle
-from core.meshes import load_mesh
-from executive.config import RunConfig, front_yaw_from_manifest
-from executive.interrupts import raise_if_received, signal_name
-from executive.outputs import atomic_path
-from executive.record import RecordWriteError, RunRecorder
-from executive.recording import open_recording
-from executive.runner import MissionRunner, summarise
-from skills.toolbox import MissionSkills
-from trees.mission import create_tree
+from bearchair.core.errors import one_line
+from bearchair.core.geometry import wrap_angle
+from bearchair.core.meshes import load_mesh
+from bearchair.executive.config import RunConfig, front_yaw_from_manifest
+from bearchair.executive.interrupts import raise_if_received, signal_name
+from bearchair.executive.outputs import atomic_path
+from bearchair.executive.record import RecordWriteError, RunRecorder
+from bearchair.executive.recording import open_recording
+from bearchair.executive.runner import MissionRunner, summarise
+from bearchair.skills.toolbox import MissionSkills
+from bearchair.trees.mission import create_tree
 
 if TYPE_CHECKING:
-    from hardware.sim.world import SimConfig, SimWorld
+    from bearchair.hardware.sim.world import SimConfig, SimWorld
 
 logger = logging.getLogger(__name__)
 
@@ -163,8 +163,8 @@ def _sim_config(config: RunConfig) -> SimConfig:
         load_mesh(config.chair_path)  # fail fast, with one line, on a bad file
         front_yaw_deg = front_yaw_from_manifest(config.chair_path)
 
-    from hardware.sim.world import SimConfig
-    from hardware.speech import TextToSpeech
+    from bearchair.hardware.sim.world import SimConfig
+    from bearchair.hardware.speech import TextToSpeech
 
     return SimConfig(
         chair_path=config.chair_path,
@@ -181,7 +181,7 @@ def _sim_config(config: RunConfig) -> SimConfig:
 def _open_world(sim_config: SimConfig) -> SimWorld:
     """The simulated world, unless a stop signal came
     before or while it was built (then it is closed and ``KeyboardInterrupt`` raised)."""
-    from hardware.sim.world import SimWorld
+    from bearchair.hardware.sim.world import SimWorld
 
     raise_if_received()
     world = SimWorld(sim_config)
@@ -210,10 +210,10 @@ def run_on_robots(
         core.errors.BackendUnavailable: an SDK or a robot is missing, or the operator
             said no.
     """
-    from core.errors import BackendUnavailable
-    from executive.cell_config import load_cell_config
-    from hardware.real import sdk_versions
-    from hardware.real.robots import activate, connect_robots
+    from bearchair.core.errors import BackendUnavailable
+    from bearchair.executive.cell_config import load_cell_config
+    from bearchair.hardware.real import sdk_versions
+    from bearchair.hardware.real.robots import activate, connect_robots
 
     cell = load_cell_config(cell_file, config.arena)
     robot = connect_robots(cell)
@@ -260,7 +260,7 @@ def _run_tree(
     try:
         if skills is None:
             # Imported only when a mission runs: it imports every skill (about 2 s).
-            from skills.default_skills import DefaultSkills
+            from bearchair.skills.default_skills import DefaultSkills
 
             skills = DefaultSkills(imagination_workers=config.imagination_workers)
             skills.warm_up()
@@ -314,7 +314,7 @@ def summary_before_start(
     """The summary of a run that ended before its first tick (Ctrl-C, a failed world)."""
     from py_trees.common import Status
 
-    from executive.runner import MissionOutcome, StageTiming
+    from bearchair.executive.runner import MissionOutcome, StageTiming
 
     interrupted = isinstance(error, KeyboardInterrupt)
     outcome = MissionOutcome(
@@ -380,6 +380,6 @@ def format_summary(summary: dict[str, Any]) -> str:
 
 def default_out_dir(config: RunConfig) -> Path:
     """``runs/<date>-<time>-seed<N>``: a new directory per run, made now (unique)."""
-    from executive.outputs import default_run_dir
+    from bearchair.executive.outputs import default_run_dir
 
     return default_run_dir(config.seed)

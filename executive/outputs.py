@@ -20,7 +20,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from core.errors import OutputError
+from bearchair.core.errors import OutputError
 
 MIN_FREE_BYTES = 20 * 1024 * 1024
 """Room a run needs on its file system: a mission's ticks.jsonl is a few MB, its

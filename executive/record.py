@@ -22,9 +22,9 @@ from typing import Any
 
 import py_trees
 
-from core.errors import OutputError, RunRecordError
-from executive.jsonable import to_jsonable
-from executive.outputs import describe_os_error, write_text_atomic
+from bearchair.core.errors import OutputError, RunRecordError
+from bearchair.executive.jsonable import to_jsonable
+from bearchair.executive.outputs import describe_os_error, write_text_atomic
 
 TICKS_FILE = "ticks.jsonl"
 TREE_FILE = "tree.json"

@@ -10,7 +10,7 @@ tree's tick count) and ``robot`` (seconds on the robot's clock):
   also logged as plain strings per node, in the order of :func:`record.tree_nodes`);
   ``tree/log`` has a line per status change;
 * ``blackboard/<key>``: each blackboard value as JSON text whenever it changes;
-* the scene: the skills' typed results drawn by :mod:`executive.recording_scene`
+* the scene: the skills' typed results drawn by :mod:`bearchair.executive.recording_scene`
   when they appear on the blackboard, and two skill calls the blackboard does not
   keep (the tag's detections, the rotations asked for), seen by :class:`SkillCalls`.
 
@@ -38,15 +38,15 @@ from urllib.parse import quote
 import py_trees
 from py_trees.common import Status
 
-from behaviours import keys
-from core.errors import BackendUnavailable
-from executive.jsonable import to_jsonable
-from executive.record import tree_nodes
+from bearchair.behaviours import keys
+from bearchair.core.errors import BackendUnavailable
+from bearchair.executive.jsonable import to_jsonable
+from bearchair.executive.record import tree_nodes
 
 if TYPE_CHECKING:
-    from core.se2 import SE2Pose
-    from executive.runner import MissionRunner
-    from skills.toolbox import MissionSkills
+    from bearchair.core.se2 import SE2Pose
+    from bearchair.executive.runner import MissionRunner
+    from bearchair.skills.toolbox import MissionSkills
 logger = logging.getLogger(__name__)
 
 RECORDING_FILE = "mission.rrd"
@@ -86,7 +86,7 @@ SCENE_LOGGERS: dict[str, str] = {
     keys.JUDGEMENT: "log_judgement",
 }
 """The blackboard keys drawn in the scene, each with its function in
-:mod:`executive.recording_scene`."""
+:mod:`bearchair.executive.recording_scene`."""
 
 
 class RecordingUnavailable(BackendUnavailable):
@@ -122,7 +122,7 @@ class SkillCalls:
     watched skills; the recording logs them at the next tick, from the tick's thread.
 
     Args:
-        skills: the :class:`skills.toolbox.MissionSkills` the tree uses.
+        skills: the :class:`bearchair.skills.toolbox.MissionSkills` the tree uses.
         clock: the robot's clock (stamps each call).
     """
 
@@ -181,7 +181,7 @@ class MissionRecording:
         grpc_port: int = DEFAULT_VIEWER_PORT,
     ) -> None:
         rr = _rerun()
-        from executive import recording_scene
+        from bearchair.executive import recording_scene
 
         self._rr = rr
         self._scene = recording_scene

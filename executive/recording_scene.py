@@ -1,7 +1,7 @@
 """Small loggers that turn the skills' typed results into Rerun archetypes.
 
 One function per result type, each ``log_x(stream, value)``: the recording
-(:mod:`executive.recording`) calls them from the tick loop's post-tick hook when a
+(:mod:`bearchair.executive.recording`) calls them from the tick loop's post-tick hook when a
 blackboard value changes, or when a watched skill call returns. Nothing here computes
 anything the mission uses: it only draws what the skills already said.
 
@@ -36,11 +36,11 @@ import numpy as np
 import rerun as rr
 from scipy.spatial.transform import Rotation
 
-from core.arena import Arena, Box2D
-from core.geometry import SittingPose
-from core.se2 import SE2Pose
-from hardware.interfaces import RGBDFrame, SeatingJudgement
-from skills.results import (
+from bearchair.core.arena import Arena, Box2D
+from bearchair.core.geometry import SittingPose
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import RGBDFrame, SeatingJudgement
+from bearchair.skills.results import (
     AccessibilityResult,
     ChairRotation,
     ChairScan,
@@ -171,7 +171,7 @@ def log_chair(stream: rr.RecordingStream, chair_mesh: Any) -> None:
 def log_imagination(stream: rr.RecordingStream, result: ImaginationResult) -> None:
     """Every drop's final agent (links as boxes, coloured by the SAM's verdict) and a
     table of the verdicts."""
-    from skills.imagination.agent import LINKS
+    from bearchair.skills.imagination.agent import LINKS
 
     half_sizes, centres = _link_boxes(LINKS)
     T_world_chair = result.T_mesh_chair if result.T_mesh_chair is not None else np.eye(4)

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import py_trees
 
-from behaviours import keys
-from core.errors import RenderError
-from executive.outputs import atomic_path
+from bearchair.behaviours import keys
+from bearchair.core.errors import RenderError
+from bearchair.executive.outputs import atomic_path
 
 TEXT_FORMATS = ("ascii", "unicode")
 GRAPH_FORMATS = ("dot", "svg", "png")
@@ -53,9 +53,9 @@ def blackboard_users(root: py_trees.behaviour.Behaviour) -> dict[str, list[tuple
 
 
 def blackboard_table(root: py_trees.behaviour.Behaviour) -> str:
-    """The table of ``behaviours.keys``' docstring, from the blackboard registrations.
+    """The table of ``bearchair.behaviours.keys``' docstring, from the blackboard registrations.
 
-    One row per key, in :data:`behaviours.keys.VALUES`' order then any key only the
+    One row per key, in :data:`bearchair.behaviours.keys.VALUES`' order then any key only the
     registrations know: what it holds, the behaviour classes (and the executive) that
     register it for writing, and those that register it for reading, in tree order.
     """

@@ -12,17 +12,17 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
-from behaviours import keys
-from core.arena import Arena
-from executive.interrupts import (
+from bearchair.behaviours import keys
+from bearchair.core.arena import Arena
+from bearchair.executive.interrupts import (
     emergency_stop_on_second_signal,
     raise_if_received,
     signal_name,
 )
-from executive.jsonable import to_jsonable
-from executive.record import RecordWriteError, RunRecorder
-from hardware.interfaces import Robot
-from skills.toolbox import MissionSkills
+from bearchair.executive.jsonable import to_jsonable
+from bearchair.executive.record import RecordWriteError, RunRecorder
+from bearchair.hardware.interfaces import Robot
+from bearchair.skills.toolbox import MissionSkills
 
 logger = logging.getLogger(__name__)
 
@@ -68,7 +68,7 @@ class MissionRunner:
     stops the mission (the running leaf's ``terminate()`` cancels its worker) and fails.
 
     Args:
-        root: the tree (``trees.mission.create_tree()``).
+        root: the tree (``bearchair.trees.mission.create_tree()``).
         skills: the skills given to every leaf at setup.
         robot: the hardware given to every leaf at setup.
         seed: the run's seed, on the blackboard for the skills.
@@ -78,7 +78,7 @@ class MissionRunner:
         timeout_s: wall time after which the mission is stopped as failed.
         on_tick: called after each tick (progress display).
         post_tick: hooks called after each tick and once more when the run has ended
-            (the tree stopped): recordings and viewers (``executive.recording``).
+            (the tree stopped): recordings and viewers (``bearchair.executive.recording``).
     """
 
     def __init__(

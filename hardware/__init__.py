@@ -1,6 +1,6 @@
-"""Hardware interfaces (``hardware.interfaces``, typing.Protocols), their backends:
-``hardware.sim`` (pybullet, the default) and ``hardware.real`` (the robots' SDKs), and
-fakes of them for tests (``hardware.fakes``).
+"""Hardware interfaces (``bearchair.hardware.interfaces``, typing.Protocols), their backends:
+``bearchair.hardware.sim`` (pybullet, the default) and ``bearchair.hardware.real`` (the robots' SDKs), and
+fakes of them for tests (``bearchair.hardware.fakes``).
 
 May import ``core`` only.
 """

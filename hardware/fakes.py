@@ -16,9 +16,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from core.geometry import wrap_angle
-from core.se2 import SE2Pose
-from hardware.interfaces import CameraIntrinsics, RGBDFrame, Robot, SeatingJudgement
+from bearchair.core.geometry import wrap_angle
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import CameraIntrinsics, RGBDFrame, Robot, SeatingJudgement
 
 HUMANOID_START = SE2Pose(1.9, 0.0, np.pi)
 """Where a :class:`FakeHumanoid` stands unless told otherwise (metres, radians)."""

@@ -14,7 +14,7 @@ from typing import NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
-from core.se2 import SE2Pose
+from bearchair.core.se2 import SE2Pose
 
 
 class CameraIntrinsics(NamedTuple):

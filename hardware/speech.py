@@ -1,7 +1,7 @@
 """The robot's voice: pyttsx3 (espeak-ng) text to speech, or logged text when it cannot speak.
 
-:class:`TextToSpeech` implements :class:`hardware.interfaces.Speaker`. Every sentence is
-logged (logger ``hardware.speech``, level INFO) whether or not it is heard. It speaks
+:class:`TextToSpeech` implements :class:`bearchair.hardware.interfaces.Speaker`. Every sentence is
+logged (logger ``bearchair.hardware.speech``, level INFO) whether or not it is heard. It speaks
 only when it is not muted, pyttsx3 (the optional extra ``bearchair[voice]``) is installed
 and starts, and there is an audio device (pyttsx3 2.99 on Linux plays espeak-ng's audio
 through ``aplay``); otherwise it falls back to text with one warning. pyttsx3's

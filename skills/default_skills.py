@@ -1,7 +1,7 @@
 """The real skills, bound for the mission tree: :class:`DefaultSkills`.
 
 Importing this module imports every skill (open3d, casadi, pybullet, OMPL: about 2 s),
-which is why the tree's leaves see only the :class:`skills.toolbox.MissionSkills`
+which is why the tree's leaves see only the :class:`bearchair.skills.toolbox.MissionSkills`
 protocol and the executive imports this module when a mission runs.
 """
 
@@ -10,9 +10,9 @@ from __future__ import annotations
 import functools
 import threading
 
-from skills import assistance, control, imagination, perception
-from skills.planning import se2, stance, wholebody
-from skills.planning.wholebody.optimisation import start_building_problems
+from bearchair.skills import assistance, control, imagination, perception
+from bearchair.skills.planning import se2, stance, wholebody
+from bearchair.skills.planning.wholebody.optimisation import start_building_problems
 
 
 class DefaultSkills:

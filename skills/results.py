@@ -13,9 +13,9 @@ from typing import Any, NamedTuple
 import numpy as np
 import trimesh
 
-from core.geometry import SittingPose
-from core.se2 import SE2Pose
-from hardware.interfaces import RGBDFrame
+from bearchair.core.geometry import SittingPose
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import RGBDFrame
 
 
 class ChairScan(NamedTuple):
@@ -63,7 +63,7 @@ class DropOutcome(NamedTuple):
         lower_contacts: contact points of lower-body links with the chair.
         correct: every threshold of the sitting affordance model holds.
         link_poses: (n_links, 4, 4) each link's final frame T_chair_link, in
-            ``skills.imagination.agent.LINK_NAMES`` order (None when not measured).
+            ``bearchair.skills.imagination.agent.LINK_NAMES`` order (None when not measured).
     """
 
     rotation_index: int
@@ -87,7 +87,7 @@ class RotationVote(NamedTuple):
         chosen: the rotation whose sittings give the pose.
         runner_up: the strongest other rotation (None when no other has a sitting).
         share: the chosen rotation's share of all correct sittings (1: unanimous).
-        split: the vote was split (see ``skills.imagination.imagine``).
+        split: the vote was split (see ``bearchair.skills.imagination.imagine``).
         resolved_by: what decided a split vote (empty when it was not split).
         extra_drops: drops added to settle a split vote.
     """
@@ -139,7 +139,7 @@ class ImaginationResult(NamedTuple):
             the mesh given (None when no drop was simulated).
         vote: how the correct sittings were spread over the rotations (None when none).
         backrest: the sitting direction checked against the backrest's
-            (``skills.imagination.backrest.BackrestCheck``; None when the seat has none).
+            (``bearchair.skills.imagination.backrest.BackrestCheck``; None when the seat has none).
     """
 
     found: bool

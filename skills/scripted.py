@@ -1,6 +1,6 @@
 """Scripted skills for testing behaviours and trees without running any algorithm.
 
-:class:`ScriptedSkills` implements :class:`skills.toolbox.MissionSkills`. Each skill
+:class:`ScriptedSkills` implements :class:`bearchair.skills.toolbox.MissionSkills`. Each skill
 returns a plausible typed result; a test overrides any of them with a value, a list of
 values (one per call), an exception to raise, or a delay during which the skill blocks
 (and honours its cancel event), and then inspects ``calls``.
@@ -15,10 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from core.geometry import SittingPose, yaw_transform
-from core.meshes import box_chair_mesh
-from core.se2 import SE2Pose
-from skills import results as skill_results
+from bearchair.core.geometry import SittingPose, yaw_transform
+from bearchair.core.meshes import box_chair_mesh
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills import results as skill_results
 
 SITTING_POSE = SittingPose(np.array([0.6, 0.0, 0.28]), 0.0)
 SE2_GOAL = SE2Pose(0.9, 0.0, np.pi)

@@ -2,8 +2,8 @@
 
 Behaviours never import skill modules: they call methods of a :class:`MissionSkills`
 object passed to ``tree.setup(skills=...)``: the real ones
-(``skills.default_skills.DefaultSkills``) or a test's stubs
-(``skills.scripted.ScriptedSkills``). A stub for a skill that is not ready raises
+(``bearchair.skills.default_skills.DefaultSkills``) or a test's stubs
+(``bearchair.skills.scripted.ScriptedSkills``). A stub for a skill that is not ready raises
 :class:`SkillNotReady`, and the tree fails at the leaf that needs it, naming it.
 """
 
@@ -16,12 +16,12 @@ from typing import Protocol
 import numpy as np
 import trimesh
 
-from core.arena import Arena
-from core.errors import SkillError
-from core.geometry import SittingPose
-from core.se2 import SE2Pose
-from hardware.interfaces import Clock, Humanoid, ScanningArm
-from skills.results import (
+from bearchair.core.arena import Arena
+from bearchair.core.errors import SkillError
+from bearchair.core.geometry import SittingPose
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import Clock, Humanoid, ScanningArm
+from bearchair.skills.results import (
     AccessibilityResult,
     ChairRotation,
     ChairScan,

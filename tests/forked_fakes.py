@@ -9,7 +9,7 @@ import signal
 import sys
 import time
 
-from evaluation.worker_process import RESULT_MARKER
+from bearchair.evaluation.worker_process import RESULT_MARKER
 
 runs_in_this_process = 0
 """How many entries this process has run: a fork starts from the server's 0."""

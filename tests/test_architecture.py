@@ -33,7 +33,7 @@ def graph():
     sys.path.insert(0, str(ROOT))
     try:
         return grimp.build_graph(
-            *MAY_IMPORT,
+            "bearchair",
             include_external_packages=False,
             exclude_type_checking_imports=True,
             cache_dir=None,
@@ -43,17 +43,42 @@ def graph():
 
 
 def test_every_package_of_the_distribution_has_its_place_in_the_layering():
-    packages = {p.parent.name for p in ROOT.glob("*/__init__.py")} - {"tests"}
+    packages = {p.parent.name for p in ROOT.glob("*/__init__.py")} - {"tests", "bearchair"}
     assert packages == set(MAY_IMPORT)
+    rooms = {p.name for p in (ROOT / "bearchair").iterdir() if (p / "__init__.py").exists()}
+    assert rooms == set(MAY_IMPORT), "each room is a subpackage of bearchair"
+
+
+def test_the_project_imports_its_rooms_only_under_the_one_package_name():
+    # A bare ``import core`` would load a second copy of a module beside bearchair.core's.
+    bare = []
+    for path in sorted(ROOT.glob("*/**/*.py")):
+        if path.parts[len(ROOT.parts)] in {".venv", "bearchair", "build"}:
+            continue
+        for number, line in enumerate(path.read_text().splitlines(), 1):
+            words = line.split()
+            if (
+                len(words) >= 2
+                and words[0] in {"import", "from"}
+                and words[1].split(".")[0] in MAY_IMPORT
+            ):
+                bare.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()}")
+    assert not bare, "imports outside bearchair:\n" + "\n".join(bare)
+
+
+def room(module: str) -> str:
+    """The package a module belongs to: ``bearchair.skills.x`` is in ``skills``."""
+    parts = module.split(".")
+    return parts[1] if parts[0] == "bearchair" and len(parts) > 1 else parts[0]
 
 
 def layering_breaches(graph, may_import: dict[str, set[str]]) -> list[str]:
     """Every import from one package into another it may not import."""
     breaches = []
     for module in sorted(graph.modules):
-        package = module.split(".")[0]
+        package = room(module)
         for imported in sorted(graph.find_modules_directly_imported_by(module)):
-            other = imported.split(".")[0]
+            other = room(imported)
             if other != package and other not in may_import[package]:
                 line = graph.get_import_details(importer=module, imported=imported)[0]
                 breaches.append(f"{module}:{line['line_number']} imports {imported}")

@@ -7,18 +7,18 @@ import math
 import numpy as np
 import pytest
 
-from core.arena import DEFAULT_ARENA
-from core.geometry import SittingPose
-from core.meshes import box_chair_mesh
-from core.se2 import SE2Pose
-from skills.assistance import (
+from bearchair.core.arena import DEFAULT_ARENA
+from bearchair.core.geometry import SittingPose
+from bearchair.core.meshes import box_chair_mesh
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.assistance import (
     choose_rotation,
     compose_instruction,
     instructed_rotation,
     rotation_toward,
 )
-from skills.assistance.rotation import turned_about_centre
-from skills.results import AccessibilityResult
+from bearchair.skills.assistance.rotation import turned_about_centre
+from bearchair.skills.results import AccessibilityResult
 
 HUMANOID = SE2Pose(1.9, 0.0, math.pi)
 

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from core.geometry import SittingPose, make_transform, rot_z, wrap_angle
-from core.meshes import box_chair_mesh
-from skills.chairgen import FAMILIES, generate_chair
-from skills.imagination.backrest import (
+from bearchair.core.geometry import SittingPose, make_transform, rot_z, wrap_angle
+from bearchair.core.meshes import box_chair_mesh
+from bearchair.skills.chairgen import FAMILIES, generate_chair
+from bearchair.skills.imagination.backrest import (
     AGREEMENT_RAD,
     MIRROR_MARGIN,
     backrest_yaw,

@@ -1,7 +1,7 @@
 """Bad inputs to every subcommand: each one is refused with exit status 2 and one line
 on stderr that names the problem, never a traceback, and before any work is done.
 
-Most cases call ``executive.cli.main`` in this process (a bad input is refused before
+Most cases call ``bearchair.executive.cli.main`` in this process (a bad input is refused before
 any world is built, so each takes milliseconds); a few run the real console process,
 where the exit status and stderr are the point.
 """
@@ -19,11 +19,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from core.meshes import box_chair_mesh, check_chair_mesh
-from evaluation.store import campaign_lock
-from executive import cli
-from executive.record import RunRecorder
-from trees.mission import create_tree
+from bearchair.core.meshes import box_chair_mesh, check_chair_mesh
+from bearchair.evaluation.store import campaign_lock
+from bearchair.executive import cli
+from bearchair.executive.record import RunRecorder
+from bearchair.trees.mission import create_tree
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -417,7 +417,7 @@ def test_every_bad_chair_gets_its_line_and_skip_bad_goes_on_without_them(tmp_pat
     assert len(lines) == 2 and "c.off" in lines[0] and "d.obj" in lines[1]
     assert "2 unusable" in lines[1] and "Traceback" not in "".join(lines)
 
-    from evaluation.protocol import discover_chairs
+    from bearchair.evaluation.protocol import discover_chairs
 
     chosen, skipped = discover_chairs(folder, check_meshes=True, skip_bad=True)
     assert [c.name for c in chosen] == ["a.obj"]
@@ -493,7 +493,10 @@ def test_a_tall_or_y_up_chair_is_warned_with_what_to_do():
 )
 def test_the_console_process_exits_2_with_one_line(argv, problem):
     done = subprocess.run(
-        [sys.executable, "-m", "executive.cli", *argv], cwd=REPO, capture_output=True, text=True
+        [sys.executable, "-m", "bearchair.executive.cli", *argv],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
     )
     assert done.returncode == 2 and done.stdout == ""
     lines = done.stderr.strip().splitlines()
@@ -503,18 +506,20 @@ def test_the_console_process_exits_2_with_one_line(argv, problem):
 def test_a_full_file_system_is_refused_before_the_run(tmp_path, capsys, monkeypatch):
     import shutil
 
-    import executive.outputs
+    import bearchair.executive.outputs
 
     usage = shutil.disk_usage(tmp_path)
     monkeypatch.setattr(
-        executive.outputs.shutil, "disk_usage", lambda path: usage._replace(free=3_000_000)
+        bearchair.executive.outputs.shutil,
+        "disk_usage",
+        lambda path: usage._replace(free=3_000_000),
     )
     line = refused(["run", "--mute", "--out", str(tmp_path / "run")], capsys)
     assert "only 3.0 MB free" in line and "free some space" in line
 
 
 def test_a_read_only_database_is_refused_before_the_first_trial(tmp_path, capsys, monkeypatch):
-    from evaluation import store
+    from bearchair.evaluation import store
 
     folder = chair_set(tmp_path, GOOD)
     db = tmp_path / "t.sqlite"

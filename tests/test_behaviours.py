@@ -11,26 +11,30 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from behaviours import keys
-from behaviours.accessibility import CheckAccessibility, CheckSeatReachable
-from behaviours.assistance import InstructHelper, MeasureChairRotation, WaitUntilChairStill
-from behaviours.imagine import ImagineSitting
-from behaviours.scan import ScanChair
-from behaviours.seat import ReleaseAndStand, SeatBear
-from behaviours.walk import WalkToChair
-from core.arena import DEFAULT_ARENA
-from core.se2 import SE2Pose
-from hardware.fakes import FakeJudge, fake_robot
-from hardware.interfaces import SeatingJudgement
-from skills.results import (
+from bearchair.behaviours import keys
+from bearchair.behaviours.accessibility import CheckAccessibility, CheckSeatReachable
+from bearchair.behaviours.assistance import (
+    InstructHelper,
+    MeasureChairRotation,
+    WaitUntilChairStill,
+)
+from bearchair.behaviours.imagine import ImagineSitting
+from bearchair.behaviours.scan import ScanChair
+from bearchair.behaviours.seat import ReleaseAndStand, SeatBear
+from bearchair.behaviours.walk import WalkToChair
+from bearchair.core.arena import DEFAULT_ARENA
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.fakes import FakeJudge, fake_robot
+from bearchair.hardware.interfaces import SeatingJudgement
+from bearchair.skills.results import (
     AccessibilityResult,
     ImaginationResult,
     RotationChoice,
     SeatReachability,
     WalkResult,
 )
-from skills.scripted import ScriptedSkills, default_results
-from skills.toolbox import SkillNotReady
+from bearchair.skills.scripted import ScriptedSkills, default_results
+from bearchair.skills.toolbox import SkillNotReady
 
 DEFAULTS = default_results()
 
@@ -274,7 +278,7 @@ def test_seat_bear_fails_when_the_step_in_falls_short():
 def test_imagine_says_when_the_backrest_gave_the_direction(used):
     import math
 
-    from skills.imagination.backrest import BackrestCheck
+    from bearchair.skills.imagination.backrest import BackrestCheck
 
     check = BackrestCheck(0.0, 0.12, math.radians(45.0 if used else 10.0), used)
     result = DEFAULTS["imagine_sitting"]._replace(backrest=check)
@@ -288,7 +292,7 @@ def test_imagine_says_when_the_backrest_gave_the_direction(used):
 def test_imagine_says_when_the_vote_stood_against_the_backrest():
     import math
 
-    from skills.imagination.backrest import BackrestCheck
+    from bearchair.skills.imagination.backrest import BackrestCheck
 
     check = BackrestCheck(0.0, 0.08, math.radians(-46.0), False, 0.37, 0.86)
     result = DEFAULTS["imagine_sitting"]._replace(backrest=check)

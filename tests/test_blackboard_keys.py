@@ -1,5 +1,5 @@
 """The blackboard registrations are what the leaves do: each leaf registers READ exactly
-the keys it reads and WRITE exactly those it writes, and ``behaviours.keys``' table is
+the keys it reads and WRITE exactly those it writes, and ``bearchair.behaviours.keys``' table is
 the one generated from the registrations."""
 
 from __future__ import annotations
@@ -9,15 +9,15 @@ from collections import defaultdict
 import py_trees
 import pytest
 
-from behaviours import keys
-from core.arena import DEFAULT_ARENA
-from executive.render import blackboard_table
-from executive.runner import MissionRunner
-from hardware.fakes import FakeJudge, fake_robot
-from skills.perception.errors import RegistrationError
-from skills.results import AccessibilityResult
-from skills.scripted import ScriptedSkills, default_results
-from trees.mission import create_tree
+from bearchair.behaviours import keys
+from bearchair.core.arena import DEFAULT_ARENA
+from bearchair.executive.render import blackboard_table
+from bearchair.executive.runner import MissionRunner
+from bearchair.hardware.fakes import FakeJudge, fake_robot
+from bearchair.skills.perception.errors import RegistrationError
+from bearchair.skills.results import AccessibilityResult
+from bearchair.skills.scripted import ScriptedSkills, default_results
+from bearchair.trees.mission import create_tree
 
 ACCESSIBLE = default_results()["check_accessibility"]
 BLOCKED = AccessibilityResult(False, None, ACCESSIBLE.sitting_pose, (), "s_goal outside the arena")

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from executive.cell_config import CellConfigError, load_cell_config, parse_cell_config
-from executive.cli import main
+from bearchair.executive.cell_config import CellConfigError, load_cell_config, parse_cell_config
+from bearchair.executive.cli import main
 
 GOOD = {
     "nao_url": "tcp://nao.local:9559",

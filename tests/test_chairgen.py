@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skills.chairgen import FAMILIES, SEAT_HEIGHT_RANGE_M, generate_chair, generate_chairs
-from skills.planning.seat import seat_support_heights
+from bearchair.skills.chairgen import FAMILIES, SEAT_HEIGHT_RANGE_M, generate_chair, generate_chairs
+from bearchair.skills.planning.seat import seat_support_heights
 
 
 @pytest.mark.parametrize("family", FAMILIES)

@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 
-from executive.cli import main
+from bearchair.executive.cli import main
 
 pytest.importorskip("qi")
 
@@ -32,7 +32,7 @@ def _cell(tmp_path, nao_url):
 
 
 def test_check_hardware_prints_every_check_and_moves_nothing(tmp_path, capsys):
-    from hardware.real.standins import NaoqiStandin
+    from bearchair.hardware.real.standins import NaoqiStandin
 
     with NaoqiStandin() as naoqi:
         status = main(["check-hardware", "--robots", str(_cell(tmp_path, naoqi.url))])
@@ -67,7 +67,7 @@ def test_check_hardware_names_an_unreachable_nao_within_five_seconds(tmp_path, c
 def test_run_on_robots_asks_first_then_records_the_cell_and_sdk_versions(
     tmp_path, capsys, monkeypatch
 ):
-    from hardware.real.standins import NaoqiStandin
+    from bearchair.hardware.real.standins import NaoqiStandin
 
     with NaoqiStandin(time_scale=20.0) as naoqi:
         cell = _cell(tmp_path, naoqi.url)

@@ -8,13 +8,13 @@ import sys
 
 import pytest
 
-from core.arena import DEFAULT_ARENA
-from executive.cli import main
-from executive.record import RunRecorder
-from executive.runner import MissionRunner, summarise
-from hardware.fakes import FakeJudge, fake_robot
-from skills.scripted import ScriptedSkills
-from trees.mission import STAGES, create_tree
+from bearchair.core.arena import DEFAULT_ARENA
+from bearchair.executive.cli import main
+from bearchair.executive.record import RunRecorder
+from bearchair.executive.runner import MissionRunner, summarise
+from bearchair.hardware.fakes import FakeJudge, fake_robot
+from bearchair.skills.scripted import ScriptedSkills
+from bearchair.trees.mission import STAGES, create_tree
 
 
 def test_tree_unicode_shows_every_stage(capsys):
@@ -48,7 +48,7 @@ def test_py_trees_render_can_build_the_tree_offline(tmp_path):
     if render is None:
         pytest.skip("py-trees-render not installed")
     done = subprocess.run(
-        [render, "trees.mission.create_tree"],
+        [render, "bearchair.trees.mission.create_tree"],
         cwd=tmp_path,
         capture_output=True,
         text=True,
@@ -118,7 +118,7 @@ def test_stage_snapshots_picture_each_stage_end_once(tmp_path) -> None:
     from collections import namedtuple
     from types import SimpleNamespace
 
-    from executive.mission import StageSnapshots
+    from bearchair.executive.mission import StageSnapshots
 
     Stage = namedtuple("Stage", "name status")
     calls: list[tuple[str, str]] = []
@@ -164,7 +164,7 @@ def _registered(monkeypatch, **commands: str) -> None:
     """Makes the installed metadata hold these commands (name = "module:function")."""
     from importlib import metadata
 
-    from executive.cli import COMMANDS_GROUP
+    from bearchair.executive.cli import COMMANDS_GROUP
 
     found = metadata.EntryPoints(
         metadata.EntryPoint(name, value, COMMANDS_GROUP) for name, value in commands.items()
@@ -208,11 +208,11 @@ def test_pyproject_registers_the_trials_command_of_evaluation():
     from importlib import metadata
     from pathlib import Path
 
-    from executive.cli import COMMANDS_GROUP
+    from bearchair.executive.cli import COMMANDS_GROUP
 
     pyproject = Path(__file__).resolve().parents[1] / "pyproject.toml"
     declared = tomllib.loads(pyproject.read_text())["project"]["entry-points"][COMMANDS_GROUP]
-    assert declared == {"trials": "evaluation.cli:register"}
+    assert declared == {"trials": "bearchair.evaluation.cli:register"}
     subparsers = argparse.ArgumentParser().add_subparsers()
     metadata.EntryPoint("trials", declared["trials"], COMMANDS_GROUP).load()(subparsers)
     assert list(subparsers.choices) == ["trials"]

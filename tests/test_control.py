@@ -8,10 +8,10 @@ import threading
 import numpy as np
 import pytest
 
-from core.geometry import wrap_angle
-from core.se2 import SE2Pose
-from hardware.fakes import FakeClock, FakeHumanoid, FakeTagTracker
-from skills.control import PID, WalkError, walk_path
+from bearchair.core.geometry import wrap_angle
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.fakes import FakeClock, FakeHumanoid, FakeTagTracker
+from bearchair.skills.control import PID, WalkError, walk_path
 
 START = SE2Pose(1.9, 0.0, math.pi)
 PATH = (

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from core.geometry import wrap_angle
-from core.se2 import SE2Pose
+from bearchair.core.geometry import wrap_angle
+from bearchair.core.se2 import SE2Pose
 
 
 def random_poses(count: int, seed: int = 0) -> list[SE2Pose]:

@@ -1,4 +1,4 @@
-"""core.streams: C-level output inside silenced_fds goes nowhere, output after it arrives."""
+"""bearchair.core.streams: C-level output inside silenced_fds goes nowhere, output after it arrives."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import os
 
 import pytest
 
-from core.streams import silenced_fds
+from bearchair.core.streams import silenced_fds
 
 
 def test_a_c_level_write_inside_is_lost_and_one_after_arrives(capfd):

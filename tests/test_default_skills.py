@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import inspect
 
-from skills.default_skills import DefaultSkills
-from skills.toolbox import MissionSkills
+from bearchair.skills.default_skills import DefaultSkills
+from bearchair.skills.toolbox import MissionSkills
 
 
 def protocol_methods() -> set[str]:

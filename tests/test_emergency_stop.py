@@ -20,9 +20,9 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from hardware.interfaces import Robot
-from hardware.sim.world import SimConfig, SimWorld
-from skills.perception.views import HOME_CONFIGURATION, SCAN_CONFIGURATIONS
+from bearchair.hardware.interfaces import Robot
+from bearchair.hardware.sim.world import SimConfig, SimWorld
+from bearchair.skills.perception.views import HOME_CONFIGURATION, SCAN_CONFIGURATIONS
 
 STOP_BOUND_S = 0.2
 STILL_RADPS = 0.01
@@ -125,8 +125,8 @@ def _robot(world: SimWorld, backend: str) -> Iterator[Robot]:
         yield world.robot
         return
     pytest.importorskip("qi")
-    from hardware.real.sim_standins import SimulatedNaoBody, robot_over_standins
-    from hardware.real.standins import NaoqiStandin
+    from bearchair.hardware.real.sim_standins import SimulatedNaoBody, robot_over_standins
+    from bearchair.hardware.real.standins import NaoqiStandin
 
     with NaoqiStandin(body=SimulatedNaoBody(world)) as standin:
         robot, session = robot_over_standins(world, standin)

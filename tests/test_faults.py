@@ -24,13 +24,14 @@ import numpy as np
 import pytest
 import trimesh
 
-from core.memo import BoundedMemo
-from evaluation.store import TrialStore, campaign_lock
-from executive import cli, mission
-from executive.inspect_run import RecordedRun
-from executive.record import RunRecorder
-from hardware.fakes import FakeJudge, fake_robot
-from skills.scripted import ScriptedSkills
+from bearchair.core.memo import BoundedMemo
+from bearchair.evaluation.store import TrialStore, campaign_lock
+from bearchair.executive import cli, mission
+from bearchair.executive.inspect_run import RecordedRun
+from bearchair.executive.record import RunRecorder
+from bearchair.hardware.fakes import FakeJudge, fake_robot
+from bearchair.skills.scripted import ScriptedSkills
+from bearchair.trees.mission import create_tree
 from tests.test_trials import (
     FAKE_WORKER,
     REPO,
@@ -39,13 +40,12 @@ from tests.test_trials import (
     worker_pids,
     write_chairs,
 )
-from trees.mission import create_tree
 
 # --- a mission on fakes behind the real CLI ----------------------------------------------
 
 
 class FakeMission:
-    """Stands in for ``executive.mission.run_in_simulation``: the real tree, runner and
+    """Stands in for ``bearchair.executive.mission.run_in_simulation``: the real tree, runner and
     record on a fake robot, with scripted skills (no physics)."""
 
     def __init__(self, delays_s: dict[str, float] | None = None, on_tick=None) -> None:
@@ -142,10 +142,10 @@ class SlowWorld:
 
 @pytest.mark.parametrize("swallow", [False, True], ids=["raised", "swallowed-by-a-library"])
 def test_ctrl_c_while_the_world_is_built_leaves_a_summary(tmp_path, monkeypatch, swallow):
-    import hardware.sim.world
+    import bearchair.hardware.sim.world
 
     world = type("World", (SlowWorld,), {"swallow": swallow})
-    monkeypatch.setattr(hardware.sim.world, "SimWorld", world)
+    monkeypatch.setattr(bearchair.hardware.sim.world, "SimWorld", world)
     out = tmp_path / "run"
     timer = signal_later(signal.SIGINT, 0.5)
     start = time.monotonic()
@@ -162,7 +162,7 @@ SECOND_SIGNAL = textwrap.dedent(
     """
     import sys, time
     from pathlib import Path
-    from executive import interrupts
+    from bearchair.executive import interrupts
     marker = Path(sys.argv[1])
     with interrupts.handling_signals():
         with interrupts.emergency_stop_on_second_signal(lambda: marker.write_text("stopped")):
@@ -249,7 +249,7 @@ def test_a_full_disk_while_ticking_is_one_line_and_the_robots_stop(tmp_path, mon
 
 
 def test_a_failed_summary_write_leaves_no_half_file(tmp_path, monkeypatch, capsys):
-    import executive.outputs
+    import bearchair.executive.outputs
 
     real_replace = os.replace
 
@@ -259,7 +259,7 @@ def test_a_failed_summary_write_leaves_no_half_file(tmp_path, monkeypatch, capsy
         real_replace(source, target)
 
     monkeypatch.setattr(mission, "run_in_simulation", FakeMission())
-    monkeypatch.setattr(executive.outputs.os, "replace", full)
+    monkeypatch.setattr(bearchair.executive.outputs.os, "replace", full)
     out = tmp_path / "run"
     assert cli.main(["run", "--mute", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
@@ -298,7 +298,7 @@ def test_a_bug_outside_a_run_logs_to_the_cache(tmp_path, monkeypatch, capsys):
 
 def test_a_closed_stdout_is_not_a_traceback():
     # `bearchair tree | head -1`: the reader goes away after the first line.
-    command = f"{sys.executable} -m executive.cli tree --format ascii | head -1"
+    command = f"{sys.executable} -m bearchair.executive.cli tree --format ascii | head -1"
     done = subprocess.run(
         ["bash", "-o", "pipefail", "-c", command], cwd=REPO, capture_output=True, text=True
     )
@@ -311,8 +311,8 @@ def test_a_closed_stdout_is_not_a_traceback():
 
 @pytest.fixture(scope="module")
 def recorded_run(tmp_path_factory) -> Path:
-    from core.arena import DEFAULT_ARENA
-    from executive.runner import MissionRunner, summarise
+    from bearchair.core.arena import DEFAULT_ARENA
+    from bearchair.executive.runner import MissionRunner, summarise
 
     out = tmp_path_factory.mktemp("recorded")
     root = create_tree()
@@ -377,7 +377,7 @@ def test_a_new_run_never_sits_beside_an_old_record(recorded_run, tmp_path, monke
 
 
 def test_runs_started_in_the_same_second_get_their_own_folders(tmp_path):
-    from executive.outputs import claim_new_run_dir
+    from bearchair.executive.outputs import claim_new_run_dir
 
     folders: list[Path] = []
     barrier = threading.Barrier(8)
@@ -398,7 +398,7 @@ def test_runs_started_in_the_same_second_get_their_own_folders(tmp_path):
 
 
 def test_a_damaged_or_pickled_cache_entry_is_rebuilt_never_executed(tmp_path):
-    from core.meshes import read_cached_arrays, write_cached_arrays
+    from bearchair.core.meshes import read_cached_arrays, write_cached_arrays
 
     entry = tmp_path / "entry.npz"
     write_cached_arrays(entry, {"a": np.arange(3.0), "name": np.asarray("box")})
@@ -423,8 +423,8 @@ def test_a_damaged_or_pickled_cache_entry_is_rebuilt_never_executed(tmp_path):
 
 
 def test_the_imagination_cache_survives_a_damaged_entry(tmp_path, monkeypatch):
-    from core.meshes import box_chair_mesh
-    from skills.imagination import chair as imagination_chair
+    from bearchair.core.meshes import box_chair_mesh
+    from bearchair.skills.imagination import chair as imagination_chair
 
     monkeypatch.setenv("BEARCHAIR_CACHE", str(tmp_path))
     # An earlier test may have prepared the same chair into this process's memory.
@@ -528,9 +528,9 @@ CRASH_ONCE = FAKE_WORKER.replace(
 
 
 def test_a_killed_worker_is_retried_once_and_marked(tmp_path, monkeypatch):
-    from evaluation.backends import LocalBackend
-    from evaluation.campaign import run_campaign
-    from evaluation.protocol import ChairEntry, expand_protocol
+    from bearchair.evaluation.backends import LocalBackend
+    from bearchair.evaluation.campaign import run_campaign
+    from bearchair.evaluation.protocol import ChairEntry, expand_protocol
 
     command = fake_worker_command(tmp_path, monkeypatch, CRASH_ONCE).split()
     chairs = [ChairEntry(tmp_path / name, "chair", 90.0) for name in ("flaky.obj", "crash.obj")]
@@ -552,7 +552,7 @@ def test_a_sigkilled_campaign_resumes_to_the_same_table_with_no_orphan(tmp_path,
 
     def campaign(out: Path) -> list[str]:
         return [
-            sys.executable, "-m", "executive.cli", "trials", "--chairs", str(folder),
+            sys.executable, "-m", "bearchair.executive.cli", "trials", "--chairs", str(folder),
             "--out", str(out), "--seed", "4", "--workers", "2", "--worker-cmd", command,
         ]  # fmt: skip
 
@@ -601,7 +601,7 @@ def test_a_closed_stderr_does_not_stop_a_campaign(tmp_path, monkeypatch):
     folder = write_chairs(tmp_path / "chairs", ["a.obj"])
     out = tmp_path / "out"
     shell = (
-        f"{sys.executable} -m executive.cli trials --chairs {folder} --out {out} "
+        f"{sys.executable} -m bearchair.executive.cli trials --chairs {folder} --out {out} "
         f"--worker-cmd '{command}' 2>&1 >/dev/null | head -c 1 >/dev/null"
     )
     done = subprocess.run(["bash", "-c", shell], cwd=REPO, capture_output=True, text=True)
@@ -615,7 +615,7 @@ def test_a_closed_stderr_does_not_stop_a_campaign(tmp_path, monkeypatch):
 
 
 def test_up_axis_warnings_over_the_calibration_meshes(shared_chairs, shared_manifest):
-    from core.meshes import check_chair_mesh, load_mesh
+    from bearchair.core.meshes import check_chair_mesh, load_mesh
 
     turned_up = trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0])
     upright_warned, turned_warned, turned = [], 0, 0

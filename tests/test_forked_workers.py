@@ -6,8 +6,8 @@ import os
 import time
 from pathlib import Path
 
-from evaluation.forked_workers import STDOUT_NAME, PreloadedLauncher
-from evaluation.worker_process import run_worker, run_worker_with_retry
+from bearchair.evaluation.forked_workers import STDOUT_NAME, PreloadedLauncher
+from bearchair.evaluation.worker_process import run_worker, run_worker_with_retry
 from tests import forked_fakes
 
 
@@ -73,7 +73,7 @@ def test_an_entry_that_raises_is_a_crash_with_its_last_words(tmp_path):
 def test_stopping_the_harness_stops_a_forked_trial(tmp_path):
     import threading
 
-    from evaluation.worker_process import ProcessGroup
+    from bearchair.evaluation.worker_process import ProcessGroup
 
     group = ProcessGroup()
     outcomes = []

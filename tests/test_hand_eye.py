@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from executive.cli import main
-from hardware.real.camera import CARMINE_INTRINSICS
-from hardware.real.standins import panda_flange_pose
-from skills.perception.errors import BoardNotSeenError, HandEyeError
-from skills.perception.hand_eye import (
+from bearchair.executive.cli import main
+from bearchair.hardware.real.camera import CARMINE_INTRINSICS
+from bearchair.hardware.real.standins import panda_flange_pose
+from bearchair.skills.perception.errors import BoardNotSeenError, HandEyeError
+from bearchair.skills.perception.hand_eye import (
     BOARD_CENTRE_BASE_XY_M,
     CALIBRATION_BOARD,
     CALIBRATION_CONFIGURATIONS,
@@ -29,7 +29,7 @@ from skills.perception.hand_eye import (
     rotation_diversity_deg,
     solve_hand_eye,
 )
-from skills.perception.synthetic import board_view
+from bearchair.skills.perception.synthetic import board_view
 
 # The simulated camera mount (hardware.sim: T_HAND_CAMERA on panda_hand, -45 deg about the
 # flange's z), moved by a few millimetres and degrees: the answer must come from the data.
@@ -294,8 +294,8 @@ def test_rendered_in_pybullet_the_stored_views_recover_the_simulated_mount():
     camera where the Panda's kinematics and the simulated mount put it at each stored
     view; measured 3.8 mm and 0.12 deg from the truth (TinyRenderer's nearest-texel
     sampling costs accuracy against the warped pictures above)."""
-    from hardware.sim.camera import carmine_intrinsics
-    from skills.perception.synthetic import PandaKinematics, SyntheticScene
+    from bearchair.hardware.sim.camera import carmine_intrinsics
+    from bearchair.skills.perception.synthetic import PandaKinematics, SyntheticScene
 
     scene = SyntheticScene(noise=False)
     kinematics = PandaKinematics()
@@ -327,9 +327,9 @@ def test_rendered_in_pybullet_the_stored_views_recover_the_simulated_mount():
 
 
 def test_the_stored_views_are_reachable_clear_and_see_any_board_yaw():
-    from hardware.real.panda import into_walls
-    from skills.perception.clearance import ArmClearance
-    from skills.perception.views import HOME_CONFIGURATION
+    from bearchair.hardware.real.panda import into_walls
+    from bearchair.skills.perception.clearance import ArmClearance
+    from bearchair.skills.perception.views import HOME_CONFIGURATION
 
     assert len(CALIBRATION_CONFIGURATIONS) == 9
     flange = [panda_flange_pose(np.asarray(q)) for q in CALIBRATION_CONFIGURATIONS]
@@ -421,10 +421,10 @@ def cell(tmp_path):
 def board_arm(monkeypatch):
     """connect_panda returns the real PandaArm backend on a stand-in Panda whose OpenNI
     camera sees the board; SETTLE_S is 0 (the stand-in does not vibrate)."""
-    from hardware.real import robots
-    from hardware.real.camera import CarmineCamera
-    from hardware.real.panda import PandaArm
-    from hardware.real.standins import FakeOpenNI2, FakePanda
+    from bearchair.hardware.real import robots
+    from bearchair.hardware.real.camera import CarmineCamera
+    from bearchair.hardware.real.panda import PandaArm
+    from bearchair.hardware.real.standins import FakeOpenNI2, FakePanda
 
     made = {}
 
@@ -438,7 +438,7 @@ def board_arm(monkeypatch):
         return arm
 
     monkeypatch.setattr(robots, "connect_panda", connect_panda)
-    monkeypatch.setattr("executive.cmd_calibrate_hand_eye.SETTLE_S", 0.0)
+    monkeypatch.setattr("bearchair.executive.cmd_calibrate_hand_eye.SETTLE_S", 0.0)
     return made
 
 
@@ -461,8 +461,8 @@ def test_calibrate_asks_first_and_moves_nothing_without_a_yes(cell, board_arm, m
 def test_calibrate_moves_slowly_through_the_views_and_recovers_the_mount(
     cell, board_arm, tmp_path, monkeypatch, capsys
 ):
-    from executive.cell_config import check_rigid
-    from skills.perception.views import HOME_CONFIGURATION
+    from bearchair.executive.cell_config import check_rigid
+    from bearchair.skills.perception.views import HOME_CONFIGURATION
 
     monkeypatch.setattr("builtins.input", lambda prompt: "y")
     out = tmp_path / "calibration.json"
@@ -504,7 +504,7 @@ def test_calibrate_moves_slowly_through_the_views_and_recovers_the_mount(
 
 def test_calibrate_with_no_board_in_view_fails_in_one_line(cell, monkeypatch, capsys):
     # The plain stand-ins ("panda_host": "standin"): the camera sees a grey wall.
-    monkeypatch.setattr("executive.cmd_calibrate_hand_eye.SETTLE_S", 0.0)
+    monkeypatch.setattr("bearchair.executive.cmd_calibrate_hand_eye.SETTLE_S", 0.0)
     status = main(["calibrate-hand-eye", "--robots", str(cell), "--yes", "--views", "3"])
     captured = capsys.readouterr()
     assert status == 2
@@ -518,7 +518,7 @@ def test_calibrate_with_no_board_in_view_fails_in_one_line(cell, monkeypatch, ca
 def test_a_fault_during_the_views_stops_the_arm_and_is_one_line(
     cell, board_arm, monkeypatch, capsys
 ):
-    from hardware.real import robots
+    from bearchair.hardware.real import robots
 
     connect = robots.connect_panda
 
@@ -543,7 +543,7 @@ def test_a_fault_during_the_views_stops_the_arm_and_is_one_line(
 
 
 def test_a_faulted_panda_is_refused_before_anything_moves(cell, board_arm, monkeypatch, capsys):
-    from hardware.real import robots
+    from bearchair.hardware.real import robots
 
     connect = robots.connect_panda
 

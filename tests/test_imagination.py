@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 import trimesh
 
-from core.geometry import make_transform, rot_z, wrap_angle
-from core.memo import BoundedMemo
-from core.meshes import box_chair_mesh, solid_below_surface_boxes
-from skills.imagination import imagine_sitting
-from skills.imagination.agent import JOINTS, LINKS, TOTAL_MASS_KG, agent_urdf_path
-from skills.imagination.chair import prepare_chair, yaw_obb
-from skills.imagination.sam import joint_score, link_score
+from bearchair.core.geometry import make_transform, rot_z, wrap_angle
+from bearchair.core.memo import BoundedMemo
+from bearchair.core.meshes import box_chair_mesh, solid_below_surface_boxes
+from bearchair.skills.imagination import imagine_sitting
+from bearchair.skills.imagination.agent import JOINTS, LINKS, TOTAL_MASS_KG, agent_urdf_path
+from bearchair.skills.imagination.chair import prepare_chair, yaw_obb
+from bearchair.skills.imagination.sam import joint_score, link_score
 
 
 def _placed(mesh: trimesh.Trimesh, yaw_rad: float, xy: tuple[float, float]) -> trimesh.Trimesh:
@@ -85,7 +85,7 @@ def test_preparation_is_cached(box_chair: trimesh.Trimesh) -> None:
 
 
 def test_the_chair_memory_keeps_the_most_recently_used_chairs(tmp_path, monkeypatch) -> None:
-    from skills.imagination import chair as imagination_chair
+    from bearchair.skills.imagination import chair as imagination_chair
 
     prepared: list[str] = []
 
@@ -115,7 +115,7 @@ def test_the_chair_memory_keeps_the_most_recently_used_chairs(tmp_path, monkeypa
 
 
 def test_chair_stands_and_tips_over_on_its_support_hull(box_chair: trimesh.Trimesh) -> None:
-    from skills.imagination.simulation import (
+    from bearchair.skills.imagination.simulation import (
         ChairBody,
         SimulationSettings,
         _connection,
@@ -211,7 +211,7 @@ def test_solid_below_surface_fills_an_open_scan_like_surface(box_chair: trimesh.
 def test_column_tops_close_cracks_as_a_3d_binary_closing_does() -> None:
     from scipy import ndimage
 
-    from core.meshes import _column_tops, surface_samples
+    from bearchair.core.meshes import _column_tops, surface_samples
 
     # A scan-like seat: a 0.3 m plate 0.2 m up, of 1 cm quads with 5 % of them missing
     # (one-cell holes at a 1 cm pitch), on one leg.
@@ -250,7 +250,7 @@ def test_column_tops_close_cracks_as_a_3d_binary_closing_does() -> None:
 def test_a_sliver_is_sampled_in_rows_and_covered_within_the_spacing() -> None:
     from scipy.spatial import cKDTree
 
-    from core.meshes import surface_samples
+    from bearchair.core.meshes import surface_samples
 
     # 1 m long, 1 cm wide: a lattice at 5 mm would put 20,000 points on it.
     sliver = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0.5, 0.01, 0]], [[0, 1, 2]], process=False)
@@ -322,7 +322,7 @@ def test_a_one_metre_cube_is_not_a_chair() -> None:
 
 @pytest.mark.parametrize("family", ["stool", "bench"])
 def test_a_seat_without_a_backrest_is_sat_on_by_upright_sitters(family: str) -> None:
-    from skills.chairgen import generate_chair
+    from bearchair.skills.chairgen import generate_chair
 
     chair = generate_chair(3, family)  # a 0.20 m seat, within the sitting heights
     result = imagine_sitting(chair.mesh, seed=0)
@@ -346,9 +346,14 @@ def test_a_table_top_gets_no_upright_sitters() -> None:
 
 
 def test_the_righting_torque_balances_on_a_stool_but_not_on_a_post() -> None:
-    from skills.chairgen import generate_chair
-    from skills.imagination.sam import score_drop
-    from skills.imagination.simulation import DropSpec, SimulationSettings, TaskSpec, run_task
+    from bearchair.skills.chairgen import generate_chair
+    from bearchair.skills.imagination.sam import score_drop
+    from bearchair.skills.imagination.simulation import (
+        DropSpec,
+        SimulationSettings,
+        TaskSpec,
+        run_task,
+    )
 
     # A 6 cm post with its top at sitting height: the agent's weight falls outside it
     # by more than the righting torque's lean.
@@ -396,7 +401,7 @@ def test_same_seed_same_result_and_worker_count_does_not_matter(
 
 
 def test_cli_json_and_errors(tmp_path, capsys) -> None:
-    from executive import cmd_imagine
+    from bearchair.executive import cmd_imagine
 
     parser = argparse.ArgumentParser()
     cmd_imagine.register(parser.add_subparsers())
@@ -410,7 +415,7 @@ def test_cli_json_and_errors(tmp_path, capsys) -> None:
     assert payload["found"] is False and payload["n_drops"] == 56 and payload["reason"]
     assert {"position", "yaw_deg", "n_correct", "seconds"} <= set(payload)
 
-    from executive.cli import main
+    from bearchair.executive.cli import main
 
     empty = tmp_path / "empty.obj"
     empty.write_text("")
@@ -440,7 +445,7 @@ def _prepared_identity():
 
 
 def _sitting(rotation: int, yaw_deg: float, jl: float, upper: int = 4, y: float = 0.0):
-    from skills.results import DropOutcome
+    from bearchair.skills.results import DropOutcome
 
     return DropOutcome(
         rotation_index=rotation,
@@ -461,7 +466,7 @@ def _failed(rotation: int):
 
 
 def _choose(drops):
-    from skills.imagination.imagine import choose_sitting_pose
+    from bearchair.skills.imagination.imagine import choose_sitting_pose
 
     return choose_sitting_pose(_prepared_identity(), tuple(drops), {"total": 0.0})
 
@@ -518,7 +523,7 @@ def test_a_gap_between_two_steady_directions_keeps_the_chosen_rotation() -> None
 
 
 def test_cli_json_reports_the_vote(tmp_path, capsys) -> None:
-    from executive import cmd_imagine
+    from bearchair.executive import cmd_imagine
 
     parser = argparse.ArgumentParser()
     cmd_imagine.register(parser.add_subparsers())
@@ -535,9 +540,9 @@ def test_cli_json_reports_the_vote(tmp_path, capsys) -> None:
 
 
 def test_the_picture_without_matplotlib_names_the_extra(tmp_path, monkeypatch):
-    from core.errors import RenderError
-    from core.meshes import box_chair_mesh
-    from skills.imagination.render import render_sitting
+    from bearchair.core.errors import RenderError
+    from bearchair.core.meshes import box_chair_mesh
+    from bearchair.skills.imagination.render import render_sitting
 
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib raises
     with pytest.raises(RenderError, match=r"bearchair\[trials\]"):

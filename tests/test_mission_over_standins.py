@@ -8,20 +8,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.arena import DEFAULT_ARENA
-from executive.runner import MissionRunner, summarise
-from hardware.real.panda import wall_limits
-from hardware.sim.world import SimConfig, SimWorld
-from skills.default_skills import DefaultSkills
-from trees.mission import create_tree
+from bearchair.core.arena import DEFAULT_ARENA
+from bearchair.executive.runner import MissionRunner, summarise
+from bearchair.hardware.real.panda import wall_limits
+from bearchair.hardware.sim.world import SimConfig, SimWorld
+from bearchair.skills.default_skills import DefaultSkills
+from bearchair.trees.mission import create_tree
 
 pytest.importorskip("qi")
 
 
 def test_flange_kinematics_of_the_fake_panda_match_the_simulated_panda():
-    from hardware.real.sim_standins import SimulatedPanda
-    from hardware.real.standins import panda_flange_pose
-    from hardware.sim.bullet import T_world_link, link_index_by_name
+    from bearchair.hardware.real.sim_standins import SimulatedPanda
+    from bearchair.hardware.real.standins import panda_flange_pose
+    from bearchair.hardware.sim.bullet import T_world_link, link_index_by_name
 
     with SimWorld(SimConfig(seed=0, camera_noise=False)) as world:
         panda = SimulatedPanda(world)
@@ -38,8 +38,8 @@ def test_flange_kinematics_of_the_fake_panda_match_the_simulated_panda():
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 def test_the_mission_runs_over_the_sdk_standins():
-    from hardware.real.sim_standins import SimulatedNaoBody, robot_over_standins
-    from hardware.real.standins import NaoqiStandin
+    from bearchair.hardware.real.sim_standins import SimulatedNaoBody, robot_over_standins
+    from bearchair.hardware.real.standins import NaoqiStandin
 
     with (
         SimWorld(SimConfig(seed=1)) as world,

@@ -10,18 +10,18 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from core.arena import DEFAULT_ARENA
-from core.errors import RunRecordError
-from executive.inspect_run import RecordedRun
-from executive.record import RunRecorder
-from executive.render import render_text
-from executive.runner import MissionRunner, summarise
-from hardware.fakes import FakeJudge, fake_robot
-from skills.perception.errors import RegistrationError
-from skills.results import AccessibilityResult, SeatReachability
-from skills.scripted import ScriptedSkills, default_results
-from skills.toolbox import SkillNotReady
-from trees.mission import STAGES, create_tree
+from bearchair.core.arena import DEFAULT_ARENA
+from bearchair.core.errors import RunRecordError
+from bearchair.executive.inspect_run import RecordedRun
+from bearchair.executive.record import RunRecorder
+from bearchair.executive.render import render_text
+from bearchair.executive.runner import MissionRunner, summarise
+from bearchair.hardware.fakes import FakeJudge, fake_robot
+from bearchair.skills.perception.errors import RegistrationError
+from bearchair.skills.results import AccessibilityResult, SeatReachability
+from bearchair.skills.scripted import ScriptedSkills, default_results
+from bearchair.skills.toolbox import SkillNotReady
+from bearchair.trees.mission import STAGES, create_tree
 
 DEFAULTS = default_results()
 ACCESSIBLE = DEFAULTS["check_accessibility"]

@@ -11,7 +11,7 @@ command at test time), reads qi's first message, the ``authenticate`` call that 
 the client authenticator's data, lets the connection through only when ``auth_user``
 and ``auth_token`` are the cell's credentials (the keys NAOqi 2.9's authentication
 provider reads; libqi prefixes the authenticator's ``user``/``token`` with ``auth_``),
-and then relays the session both ways. What this proves: :func:`hardware.real.nao.connect`
+and then relays the session both ways. What this proves: :func:`bearchair.hardware.real.nao.connect`
 speaks TLS on ``tcps://``, sends the credentials inside it, and the NAOqi calls of the
 backend then travel through that TLS connection. What it cannot: that a real NAOqi 2.9
 accepts them (its reply to ``authenticate`` is relayed from the stand-in, which accepts
@@ -34,8 +34,8 @@ from typing import Any
 
 import pytest
 
-from core.errors import BackendUnavailable
-from core.se2 import SE2Pose
+from bearchair.core.errors import BackendUnavailable
+from bearchair.core.se2 import SE2Pose
 
 pytest.importorskip("qi")
 
@@ -178,7 +178,7 @@ def certificate(tmp_path_factory) -> tuple[Path, Path]:
 
 @pytest.fixture
 def nao_over_tls(certificate):
-    from hardware.real.standins import NaoqiStandin
+    from bearchair.hardware.real.standins import NaoqiStandin
 
     with NaoqiStandin(time_scale=20.0) as standin:
         front = _TlsFront(standin.url, *certificate)
@@ -189,7 +189,7 @@ def nao_over_tls(certificate):
 
 
 def test_tcps_with_credentials_reaches_the_nao_through_tls(nao_over_tls):
-    from hardware.real.nao import NaoHumanoid, connect
+    from bearchair.hardware.real.nao import NaoHumanoid, connect
 
     standin, front = nao_over_tls
     session = connect(front.url, USER, PASSWORD, timeout_s=5.0)
@@ -208,7 +208,7 @@ def test_tcps_with_credentials_reaches_the_nao_through_tls(nao_over_tls):
 
 
 def test_tcps_with_a_wrong_password_or_none_is_refused_in_one_line(nao_over_tls):
-    from hardware.real.nao import connect
+    from bearchair.hardware.real.nao import connect
 
     standin, front = nao_over_tls
     for user, password in ((USER, "wrong"), (None, None)):
@@ -222,7 +222,7 @@ def test_tcps_with_a_wrong_password_or_none_is_refused_in_one_line(nao_over_tls)
 
 
 def test_plain_tcp_to_the_tls_port_is_refused(nao_over_tls):
-    from hardware.real.nao import connect
+    from bearchair.hardware.real.nao import connect
 
     _, front = nao_over_tls
     with pytest.raises(BackendUnavailable, match="cannot reach the NAO"):
@@ -233,7 +233,7 @@ def test_plain_tcp_to_the_tls_port_is_refused(nao_over_tls):
 def test_check_hardware_with_a_tcps_cell_file(nao_over_tls, tmp_path, capsys):
     import numpy as np
 
-    from executive.cli import main
+    from bearchair.executive.cli import main
 
     _, front = nao_over_tls
     cell = tmp_path / "cell.json"

@@ -9,13 +9,13 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
-from core.arena import HUMANOID_TAG
-from core.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
-from core.meshes import box_chair_mesh
-from hardware.fakes import FakeClock
-from hardware.interfaces import RGBDFrame
-from hardware.sim.camera import carmine_intrinsics
-from skills.perception import (
+from bearchair.core.arena import HUMANOID_TAG
+from bearchair.core.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
+from bearchair.core.meshes import box_chair_mesh
+from bearchair.hardware.fakes import FakeClock
+from bearchair.hardware.interfaces import RGBDFrame
+from bearchair.hardware.sim.camera import carmine_intrinsics
+from bearchair.skills.perception import (
     PerceptionError,
     ReconstructionConfig,
     RegistrationError,
@@ -24,8 +24,8 @@ from skills.perception import (
     register_chair,
     wait_until_chair_still,
 )
-from skills.perception.synthetic import SyntheticArm, SyntheticScene
-from skills.perception.views import HOME_CONFIGURATION, SCAN_CONFIGURATIONS, look_at
+from bearchair.skills.perception.synthetic import SyntheticArm, SyntheticScene
+from bearchair.skills.perception.views import HOME_CONFIGURATION, SCAN_CONFIGURATIONS, look_at
 from tests.test_perception_views import frames_of
 
 T_WORLD_CHAIR = yaw_transform(0.6, np.array([0.58, 0.08, 0.0]))

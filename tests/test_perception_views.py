@@ -11,11 +11,11 @@ import math
 import numpy as np
 import pytest
 
-from core.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
-from core.meshes import box_chair_mesh
-from skills.chairgen import generate_chair
-from skills.perception import PerceptionError, ReconstructionConfig, reconstruct_chair
-from skills.perception.clearance import (
+from bearchair.core.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
+from bearchair.core.meshes import box_chair_mesh
+from bearchair.skills.chairgen import generate_chair
+from bearchair.skills.perception import PerceptionError, ReconstructionConfig, reconstruct_chair
+from bearchair.skills.perception.clearance import (
     MIN_SCAN_VIEWS,
     ArmClearance,
     ChairExtent,
@@ -23,15 +23,15 @@ from skills.perception.clearance import (
     chair_extent,
     plan_views,
 )
-from skills.perception.registration import (
+from bearchair.skills.perception.registration import (
     RegistrationConfig,
     is_visible_peak,
     register_chair,
     visible_fitness,
 )
-from skills.perception.scan import scan_chair
-from skills.perception.synthetic import SyntheticArm, SyntheticScene
-from skills.perception.views import (
+from bearchair.skills.perception.scan import scan_chair
+from bearchair.skills.perception.synthetic import SyntheticArm, SyntheticScene
+from bearchair.skills.perception.views import (
     CHAIR_VOLUME,
     HOME_CONFIGURATION,
     MAX_CHAIR_HEIGHT_M,

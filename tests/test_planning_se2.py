@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 import trimesh
 
-from core.arena import DEFAULT_ARENA, Arena, Box2D
-from core.geometry import SittingPose, yaw_transform
-from core.meshes import box_chair_mesh
-from core.se2 import SE2Pose
-from skills.planning import collision, preplan
-from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
-from skills.planning.preplan import SeatingCheck, reach_validator
-from skills.planning.se2 import AccessibilityError, check_accessibility, stepped_back
-from skills.planning.seat import (
+from bearchair.core.arena import DEFAULT_ARENA, Arena, Box2D
+from bearchair.core.geometry import SittingPose, yaw_transform
+from bearchair.core.meshes import box_chair_mesh
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning import collision, preplan
+from bearchair.skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
+from bearchair.skills.planning.preplan import SeatingCheck, reach_validator
+from bearchair.skills.planning.se2 import AccessibilityError, check_accessibility, stepped_back
+from bearchair.skills.planning.seat import (
     BEAR_EDGE_MARGIN_M,
     SEAT_DROP_TOLERANCE_M,
     STEP_M,
@@ -24,9 +24,9 @@ from skills.planning.seat import (
     seat_support_heights,
     slide_on_seat,
 )
-from skills.planning.stance import check_seat_reachable, choose_stance, goal_on_ray
-from skills.planning.wholebody import InfeasibleSeating
-from skills.planning.wholebody.reach_model import reach_model
+from bearchair.skills.planning.stance import check_seat_reachable, choose_stance, goal_on_ray
+from bearchair.skills.planning.wholebody import InfeasibleSeating
+from bearchair.skills.planning.wholebody.reach_model import reach_model
 
 PELVIS_ABOVE_SEAT_M = 0.05
 START = DEFAULT_ARENA.humanoid_start
@@ -350,7 +350,7 @@ def test_nao_too_close_for_the_carried_bear_steps_back_along_the_ray() -> None:
 
 
 def test_accessible_sitting_yaws_leave_room_to_stand_inside_the_arena() -> None:
-    from core.arena import (
+    from bearchair.core.arena import (
         ACCESSIBLE_TOLERANCE_RAD,
         STANDING_MARGIN_M,
         STANDING_ROOM_M,
@@ -428,8 +428,8 @@ def test_a_sitting_point_over_a_lost_seat_top_stays_where_it_was_imagined() -> N
 
 
 def test_a_ray_turned_about_p_is_searched_when_the_imagined_one_fails() -> None:
-    from core.geometry import wrap_angle
-    from skills.planning.stance import MAX_PREPLANS, PREPLANS_PER_TURN, TURNS_RAD
+    from bearchair.core.geometry import wrap_angle
+    from bearchair.skills.planning.stance import MAX_PREPLANS, PREPLANS_PER_TURN, TURNS_RAD
 
     chair_mesh, sitting_pose = _placed_chair(0.6, 0.1, 30.0)
     checker = NaoCollisionChecker(DEFAULT_ARENA, chair_solid_boxes(chair_mesh))
@@ -459,7 +459,7 @@ def test_a_ray_turned_about_p_is_searched_when_the_imagined_one_fails() -> None:
 
 
 def test_p_off_the_middle_between_armrests_is_centred_for_the_hands() -> None:
-    from skills.planning.stance import centred_between_rails, planner_seat_top
+    from bearchair.skills.planning.stance import centred_between_rails, planner_seat_top
 
     # Armrest panels 0.15 m over the seat (above the hands), inner faces 0.13 m either
     # side of the middle: the band of the hands (0.11 m, plus 1 cm) fits between them.

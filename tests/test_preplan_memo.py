@@ -7,11 +7,16 @@ import math
 
 import numpy as np
 
-from core.geometry import SittingPose, make_transform, rot_z
-from core.meshes import box_chair_mesh
-from core.se2 import SE2Pose
-from skills.planning.preplan import PREPLANS, PreplanMemo, SeatingCheck, wholebody_validator
-from skills.planning.stance import goal_on_ray
+from bearchair.core.geometry import SittingPose, make_transform, rot_z
+from bearchair.core.meshes import box_chair_mesh
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning.preplan import (
+    PREPLANS,
+    PreplanMemo,
+    SeatingCheck,
+    wholebody_validator,
+)
+from bearchair.skills.planning.stance import goal_on_ray
 
 SITTING_POSE = SittingPose(np.array([0.0, 0.0, 0.29]), 0.0)
 

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from core.geometry import SittingPose
-from core.meshes import box_chair_mesh
-from core.se2 import SE2Pose
-from skills.planning.wholebody import InfeasibleSeating, preplan_approach
-from skills.planning.wholebody.reach_model import (
+from bearchair.core.geometry import SittingPose
+from bearchair.core.meshes import box_chair_mesh
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning.wholebody import InfeasibleSeating, preplan_approach
+from bearchair.skills.planning.wholebody.reach_model import (
     ReachModel,
     raised_carry_height_m,
     reach_model,

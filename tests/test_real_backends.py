@@ -1,6 +1,6 @@
 """The real-robot backends against the SDK stand-ins (no robot needed).
 
-The NAO tests talk to :class:`hardware.real.standins.NaoqiStandin` over real ``qi``
+The NAO tests talk to :class:`bearchair.hardware.real.standins.NaoqiStandin` over real ``qi``
 networking (skipped without the ``nao`` extra): a wrong method name or argument type
 raises there as on the robot. The arm and camera run against fakes built from
 panda-py's and openni's signatures, checked against the installed SDKs when present.
@@ -16,19 +16,19 @@ import time
 import numpy as np
 import pytest
 
-from core.errors import BackendUnavailable
-from core.se2 import SE2Pose
-from hardware.interfaces import Humanoid, ScanningArm, Speaker
-from hardware.real import EmergencyStopped, import_sdk
-from hardware.real.camera import CarmineCamera
-from hardware.real.panda import JOINT_LIMITS_LOWER_RAD, ArmFault, PandaArm, into_walls
-from hardware.real.standins import (
+from bearchair.core.errors import BackendUnavailable
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import Humanoid, ScanningArm, Speaker
+from bearchair.hardware.real import EmergencyStopped, import_sdk
+from bearchair.hardware.real.camera import CarmineCamera
+from bearchair.hardware.real.panda import JOINT_LIMITS_LOWER_RAD, ArmFault, PandaArm, into_walls
+from bearchair.hardware.real.standins import (
     FRANKA_HAND_F_T_EE,
     FakeOpenNI2,
     FakePanda,
     panda_flange_pose,
 )
-from skills.perception.views import SCAN_CONFIGURATIONS
+from bearchair.skills.perception.views import SCAN_CONFIGURATIONS
 
 
 def test_missing_sdk_names_the_extra_to_install():
@@ -52,7 +52,7 @@ def _eventually(condition, timeout_s: float = 3.0) -> bool:
 @pytest.fixture
 def naoqi():
     pytest.importorskip("qi")
-    from hardware.real.standins import NaoqiStandin
+    from bearchair.hardware.real.standins import NaoqiStandin
 
     with NaoqiStandin(time_scale=4.0) as standin:
         yield standin
@@ -60,7 +60,7 @@ def naoqi():
 
 @pytest.fixture
 def nao(naoqi):
-    from hardware.real.nao import NaoHumanoid, connect
+    from bearchair.hardware.real.nao import NaoHumanoid, connect
 
     session = connect(naoqi.url)
     yield NaoHumanoid(session, odom_origin=SE2Pose(1.9, 0.0, math.pi))
@@ -168,7 +168,7 @@ def test_emergency_stop_ends_every_nao_motion(naoqi, nao, motion):
 
 
 def test_speech_goes_through_text_to_speech(naoqi):
-    from hardware.real.nao import NaoSpeaker, connect
+    from bearchair.hardware.real.nao import NaoSpeaker, connect
 
     session = connect(naoqi.url)
     speaker = NaoSpeaker(session)
@@ -178,7 +178,7 @@ def test_speech_goes_through_text_to_speech(naoqi):
 
 
 def test_the_standin_refuses_what_naoqi_would(naoqi):
-    from hardware.real.nao import connect
+    from bearchair.hardware.real.nao import connect
 
     session = connect(naoqi.url)
     motion = session.service("ALMotion")
@@ -192,7 +192,7 @@ def test_the_standin_refuses_what_naoqi_would(naoqi):
 
 def test_unreachable_nao_fails_fast_with_its_url():
     pytest.importorskip("qi")
-    from hardware.real.nao import connect
+    from bearchair.hardware.real.nao import connect
 
     started = time.monotonic()
     with pytest.raises(BackendUnavailable, match=r"tcp://127\.0\.0\.1:9"):
@@ -349,8 +349,8 @@ def test_fake_openni_matches_the_installed_binding():
 
 
 def test_realsense_aligns_depth_to_colour_in_metres():
-    from hardware.real.camera import RealSenseCamera
-    from hardware.real.standins import FakeRealSense
+    from bearchair.hardware.real.camera import RealSenseCamera
+    from bearchair.hardware.real.standins import FakeRealSense
 
     rs = FakeRealSense(depth_scale_m=0.0001)  # a D405-like 0.1 mm unit
     camera = RealSenseCamera(rs)

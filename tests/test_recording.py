@@ -16,23 +16,23 @@ import cv2
 import numpy as np
 import pytest
 
-from behaviours import keys
-from core.arena import DEFAULT_ARENA
-from core.geometry import SittingPose, yaw_transform
-from core.meshes import box_chair_mesh
-from core.se2 import SE2Pose
-from executive import cli
-from executive.record import RunRecorder, load_ticks
-from executive.runner import MissionRunner, summarise
-from hardware.fakes import FakeJudge, fake_robot
-from hardware.interfaces import SeatingJudgement
-from skills.results import AccessibilityResult
-from skills.scripted import ScriptedSkills, default_results
-from trees.mission import create_tree
+from bearchair.behaviours import keys
+from bearchair.core.arena import DEFAULT_ARENA
+from bearchair.core.geometry import SittingPose, yaw_transform
+from bearchair.core.meshes import box_chair_mesh
+from bearchair.core.se2 import SE2Pose
+from bearchair.executive import cli
+from bearchair.executive.record import RunRecorder, load_ticks
+from bearchair.executive.runner import MissionRunner, summarise
+from bearchair.hardware.fakes import FakeJudge, fake_robot
+from bearchair.hardware.interfaces import SeatingJudgement
+from bearchair.skills.results import AccessibilityResult
+from bearchair.skills.scripted import ScriptedSkills, default_results
+from bearchair.trees.mission import create_tree
 
 pytest.importorskip("rerun", reason="rerun-sdk (the [viewer] extra) is not installed")
 
-from executive.recording import (
+from bearchair.executive.recording import (
     RECORDING_FILE,
     STATUS_COLOURS,
     MissionRecording,
@@ -47,9 +47,9 @@ BEAR_AT = yaw_transform(0.3, np.array([0.6, 0.05, 0.3]))
 @pytest.fixture(scope="module")
 def box_chair_results():
     """The real scan (9 synthetic views) and imagination (24 drops) of the box chair."""
-    from skills.imagination import imagine_sitting
-    from skills.perception import scan_chair
-    from skills.perception.synthetic import SyntheticArm, SyntheticScene
+    from bearchair.skills.imagination import imagine_sitting
+    from bearchair.skills.perception import scan_chair
+    from bearchair.skills.perception.synthetic import SyntheticArm, SyntheticScene
 
     scene = SyntheticScene(seed=3)
     scene.add_mesh(box_chair_mesh(), T_WORLD_CHAIR)
@@ -351,11 +351,11 @@ def test_run_record_and_live_flags(tmp_path, monkeypatch, capsys):
 
 
 def test_trials_pass_record_to_each_worker(tmp_path, monkeypatch, capsys):
-    import executive.mission
-    from evaluation import worker
-    from evaluation.campaign import run_campaign
-    from evaluation.protocol import ChairEntry, expand_protocol
-    from evaluation.store import TrialStore
+    import bearchair.executive.mission
+    from bearchair.evaluation import worker
+    from bearchair.evaluation.campaign import run_campaign
+    from bearchair.evaluation.protocol import ChairEntry, expand_protocol
+    from bearchair.evaluation.store import TrialStore
 
     class Backend:
         def run(self, jobs, record):
@@ -370,7 +370,9 @@ def test_trials_pass_record_to_each_worker(tmp_path, monkeypatch, capsys):
     # The worker turns it into the run's configuration.
     configs = []
     monkeypatch.setattr(
-        executive.mission, "run_in_simulation", lambda config, **_: configs.append(config) or {}
+        bearchair.executive.mission,
+        "run_in_simulation",
+        lambda config, **_: configs.append(config) or {},
     )
     for record in (True, False):
         payload = {**backend.payloads[0], "record": record, "out_dir": str(tmp_path / "w")}
@@ -380,7 +382,7 @@ def test_trials_pass_record_to_each_worker(tmp_path, monkeypatch, capsys):
 
 
 def test_view_explains_a_missing_recording_and_builds_the_viewer_command(tmp_path, capsys):
-    from executive.cmd_view import viewer_command
+    from bearchair.executive.cmd_view import viewer_command
 
     assert cli.main(["view", str(tmp_path)]) == 2
     assert "bearchair run --record" in capsys.readouterr().err
@@ -406,7 +408,7 @@ def test_view_web_serves_a_recording(recorded):
         [
             sys.executable,
             "-m",
-            "executive.cli",
+            "bearchair.executive.cli",
             "view",
             str(recorded[0]),
             "--web",

@@ -7,7 +7,7 @@ import threading
 import numpy as np
 import pytest
 
-from hardware.sim.camera import CARMINE_INTRINSICS, CarmineNoise, opengl_matrices
+from bearchair.hardware.sim.camera import CARMINE_INTRINSICS, CarmineNoise, opengl_matrices
 
 
 def test_depth_noise_grows_with_the_square_of_distance_and_pixels_go_missing():
@@ -56,7 +56,7 @@ def test_projection_reproduces_the_pinhole_model():
 
 
 def test_world_is_usable_from_two_threads():
-    from hardware.sim.world import SimConfig, SimWorld
+    from bearchair.hardware.sim.world import SimConfig, SimWorld
 
     with SimWorld(SimConfig(seed=2)) as world:
         frames = []
@@ -75,7 +75,7 @@ def test_world_is_usable_from_two_threads():
 
 
 def test_helper_understands_only_rotation_instructions():
-    from hardware.sim.helper import parse_instruction
+    from bearchair.hardware.sim.helper import parse_instruction
 
     heard = parse_instruction(
         "Please rotate the chair about the vertical axis clockwise for 60 degrees"

@@ -9,12 +9,19 @@ import cv2
 import numpy as np
 import pytest
 
-from core.arena import DEFAULT_ARENA, HUMANOID_TAG
-from core.geometry import transform_points, wrap_angle, yaw_of
-from core.se2 import SE2Pose
-from hardware.interfaces import Clock, Helper, Humanoid, ScanningArm, SeatingJudge, Speaker
-from hardware.sim.camera import CARMINE_INTRINSICS, T_HAND_CAMERA
-from hardware.sim.world import SimConfig, SimWorld
+from bearchair.core.arena import DEFAULT_ARENA, HUMANOID_TAG
+from bearchair.core.geometry import transform_points, wrap_angle, yaw_of
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import (
+    Clock,
+    Helper,
+    Humanoid,
+    ScanningArm,
+    SeatingJudge,
+    Speaker,
+)
+from bearchair.hardware.sim.camera import CARMINE_INTRINSICS, T_HAND_CAMERA
+from bearchair.hardware.sim.world import SimConfig, SimWorld
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 
@@ -44,7 +51,7 @@ def test_world_builds_with_the_box_chair_and_protocols(world):
 
 
 def test_a_window_of_the_image_is_the_full_frame_cropped_and_tracks_the_tag():
-    from skills.perception.tags import locate_humanoid
+    from bearchair.skills.perception.tags import locate_humanoid
 
     with SimWorld(SimConfig(seed=3, camera_noise=False)) as quiet:
         full = quiet.panda.capture()
@@ -140,8 +147,8 @@ def _detect_tag(rgb: np.ndarray):
 
 
 def test_aruco_tag_on_the_head_is_detected_from_above(world):
-    from hardware.sim.camera import render_view
-    from hardware.sim.panda import look_at
+    from bearchair.hardware.sim.camera import render_view
+    from bearchair.hardware.sim.panda import look_at
 
     T_world_tag = world.nao.T_world_link("aruco_tag")
     assert T_world_tag[2, 3] == pytest.approx(HUMANOID_TAG.height_m, abs=0.005)
@@ -298,7 +305,7 @@ def test_judge_rejects_a_bear_on_the_floor_and_accepts_one_on_the_seat():
         # Put the bear by hand on the box chair's seat (0.24 m), facing the sitting direction.
         T_world_chair = world.T_world_chair_true()
         seat = T_world_chair @ np.array([-0.03, 0.0, 0.245, 1.0])
-        from core.geometry import make_transform, rot_z
+        from bearchair.core.geometry import make_transform, rot_z
 
         world.bear.set_T_world_bear(make_transform(rot_z(world.sitting_yaw_true()), seat[:3]))
         verdict = world.judge.judge(world.sitting_yaw_true(), settle_s=2.0)
@@ -366,7 +373,7 @@ def test_test_built_box_chair_mesh_file_loads(tmp_path):
 
 
 def test_missing_chair_file_is_one_clear_error(tmp_path):
-    from core.meshes import MeshLoadError
+    from bearchair.core.meshes import MeshLoadError
 
     with pytest.raises(MeshLoadError, match="no such file"):
         SimWorld(SimConfig(chair_path=tmp_path / "absent.obj"))
@@ -414,9 +421,9 @@ def test_every_calibration_mesh_loads_into_the_world():
 def test_simulated_run_records_the_ground_truth(tmp_path):
     import json
 
-    from executive.config import RunConfig
-    from executive.mission import run_in_simulation
-    from skills.scripted import ScriptedSkills
+    from bearchair.executive.config import RunConfig
+    from bearchair.executive.mission import run_in_simulation
+    from bearchair.skills.scripted import ScriptedSkills
 
     summary = run_in_simulation(
         RunConfig(seed=0, out_dir=tmp_path, mute=True, timeout_s=120.0), skills=ScriptedSkills()
@@ -432,8 +439,8 @@ def test_simulated_run_records_the_ground_truth(tmp_path):
 
 
 def test_the_chair_collides_as_its_own_surface_not_as_convex_pieces(tmp_path):
-    from core.geometry import make_transform, rot_z
-    from core.meshes import box_chair_mesh
+    from bearchair.core.geometry import make_transform, rot_z
+    from bearchair.core.meshes import box_chair_mesh
 
     # An armchair whose armrest panels stand 12 cm above the seat: convex pieces of the
     # seat and its sides would bridge them and hold the bear at the armrests' height.
@@ -468,8 +475,8 @@ def test_the_nao_reaching_into_the_chair_is_recorded(world):
 def test_a_bear_reclining_against_a_reclined_back_is_seated(tmp_path):
     import trimesh
 
-    from core.geometry import make_transform, rot_z
-    from hardware.sim.judge import MAX_RECLINE_DEG, MAX_TILT_DEG, _leans_back
+    from bearchair.core.geometry import make_transform, rot_z
+    from bearchair.hardware.sim.judge import MAX_RECLINE_DEG, MAX_TILT_DEG, _leans_back
 
     # A garden chair: seat top 0.24 m, its backrest reclined 38 deg from vertical.
     seat = trimesh.creation.box(extents=(0.28, 0.32, 0.03)).apply_translation((0, 0, 0.225))

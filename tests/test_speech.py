@@ -10,15 +10,15 @@ import types
 
 import pytest
 
-from hardware import speech
-from hardware.interfaces import Speaker
-from hardware.speech import TextToSpeech
+from bearchair.hardware import speech
+from bearchair.hardware.interfaces import Speaker
+from bearchair.hardware.speech import TextToSpeech
 
 SENTENCE = "Please rotate the chair about the vertical axis clockwise for 90 degrees"
 
 
 def test_muted_voice_logs_text_with_one_warning(caplog: pytest.LogCaptureFixture) -> None:
-    caplog.set_level(logging.INFO, logger="hardware.speech")
+    caplog.set_level(logging.INFO, logger="bearchair.hardware.speech")
     voice = TextToSpeech(mute=True)
     assert isinstance(voice, Speaker)
     voice.say(SENTENCE)

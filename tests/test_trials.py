@@ -17,20 +17,20 @@ import numpy as np
 import pytest
 import trimesh
 
-from evaluation.backends import LocalBackend
-from evaluation.campaign import run_campaign
-from evaluation.pictures import copy_trial_scenes, render_chair_pictures
-from evaluation.progress import Progress, format_duration
-from evaluation.protocol import (
+from bearchair.evaluation.backends import LocalBackend
+from bearchair.evaluation.campaign import run_campaign
+from bearchair.evaluation.pictures import copy_trial_scenes, render_chair_pictures
+from bearchair.evaluation.progress import Progress, format_duration
+from bearchair.evaluation.protocol import (
     ChairEntry,
     ChairSetError,
     discover_chairs,
     expand_protocol,
     trial_seed,
 )
-from evaluation.report import compute_table, failure_kind, format_table, markdown_report
-from evaluation.store import TrialStore, record_from_error, record_from_summary
-from executive import cli
+from bearchair.evaluation.report import compute_table, failure_kind, format_table, markdown_report
+from bearchair.evaluation.store import TrialStore, record_from_error, record_from_summary
+from bearchair.executive import cli
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -334,7 +334,7 @@ def test_ctrl_c_on_the_cli_keeps_finished_trials_and_says_how_to_resume(
     folder = write_chairs(tmp_path / "chairs", ["a.obj", "b.obj"])
     out = tmp_path / "out"
     command = [
-        sys.executable, "-m", "executive.cli", "trials", "--chairs", str(folder),
+        sys.executable, "-m", "bearchair.executive.cli", "trials", "--chairs", str(folder),
         "--out", str(out), "--seed", "9", "--worker-cmd", " ".join(fake_worker),
     ]  # fmt: skip
     env = {**os.environ, "FAKE_SLEEP_S": "0.4"}
@@ -613,8 +613,8 @@ def test_ray_backend_runs_the_same_trials_with_the_same_records(tmp_path, fake_w
 
 
 def test_the_real_worker_reports_an_unusable_chair_as_an_error(tmp_path, capsys):
-    from evaluation import worker
-    from evaluation.worker_process import RESULT_MARKER
+    from bearchair.evaluation import worker
+    from bearchair.evaluation.worker_process import RESULT_MARKER
 
     payload = {
         "chair_path": str(tmp_path / "missing.obj"),
@@ -636,7 +636,7 @@ def test_the_real_worker_reports_an_unusable_chair_as_an_error(tmp_path, capsys)
 def test_an_interrupted_run_worker_kills_its_trial_process(tmp_path, fake_worker, monkeypatch):
     import threading
 
-    from evaluation.worker_process import run_worker
+    from bearchair.evaluation.worker_process import run_worker
 
     monkeypatch.setenv("FAKE_SLEEP_S", "30")
     spec = expand_protocol(entries(["a.obj"], tmp_path), "paper", 0)[0]
@@ -716,7 +716,7 @@ def test_each_trials_imagination_gets_the_cores_the_other_trials_leave(
 ):
     import argparse
 
-    from evaluation import cli as trials_cli
+    from bearchair.evaluation import cli as trials_cli
 
     monkeypatch.setattr(trials_cli.os, "cpu_count", lambda: cores)
     args = argparse.Namespace(backend=backend, workers=workers)
@@ -724,7 +724,7 @@ def test_each_trials_imagination_gets_the_cores_the_other_trials_leave(
 
 
 def test_the_imagination_workers_reach_the_trials_payload_and_the_skills(tmp_path):
-    from skills.default_skills import DefaultSkills
+    from bearchair.skills.default_skills import DefaultSkills
 
     spec = expand_protocol([ChairEntry(tmp_path / "a.obj", "chair", 90.0)], "paper", 0)[0]
     assert spec.to_payload(tmp_path, 60.0, imagination_workers=1)["imagination_workers"] == 1

@@ -11,16 +11,16 @@ import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from core.geometry import SittingPose
-from core.meshes import box_chair_mesh
-from core.nao_carrying import (
+from bearchair.core.geometry import SittingPose
+from bearchair.core.meshes import box_chair_mesh
+from bearchair.core.nao_carrying import (
     BEAR_COM_AHEAD_M,
     BEAR_COM_HEIGHT_M,
     BEAR_SEAT_BELOW_HANDS_M,
     BEAR_SEAT_CLEARANCE_M,
 )
-from core.se2 import SE2Pose
-from skills.planning.wholebody import (
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning.wholebody import (
     RAISED_POSTURE,
     STANCE,
     STANDING_POSTURE,
@@ -34,21 +34,21 @@ from skills.planning.wholebody import (
     preplan_seating,
     release_and_stand,
 )
-from skills.planning.wholebody.chair_profile import (
+from bearchair.skills.planning.wholebody.chair_profile import (
     BAND_HALF_WIDTH_M,
     HANDS_ABOVE_SEAT_M,
     RAIL_CLEARANCE_M,
     largest_horizontal_surface_height,
 )
-from skills.planning.wholebody.goal import goal_posture_candidates
-from skills.planning.wholebody.nao_model import (
+from bearchair.skills.planning.wholebody.goal import goal_posture_candidates
+from bearchair.skills.planning.wholebody.nao_model import (
     DRIVEN_JOINTS,
     joint_values,
     link_transforms,
     parse_urdf,
     planar_nao,
 )
-from skills.planning.wholebody.optimisation import (
+from bearchair.skills.planning.wholebody.optimisation import (
     BEAR_DEPTH_M,
     BEAR_HEIGHT_M,
     BEAR_LEAN_BACK_RAD,
@@ -63,9 +63,9 @@ from skills.planning.wholebody.optimisation import (
     released_bear,
     seating_problems,
 )
-from skills.planning.wholebody.posture_check import exact_posture_violation
-from skills.planning.wholebody.scene import seating_scene
-from skills.planning.wholebody.trajectory import PLANNING_VELOCITY_RADPS, solve_trajectory
+from bearchair.skills.planning.wholebody.posture_check import exact_posture_violation
+from bearchair.skills.planning.wholebody.scene import seating_scene
+from bearchair.skills.planning.wholebody.trajectory import PLANNING_VELOCITY_RADPS, solve_trajectory
 
 SEAT_HEIGHT_M = 0.24
 # The box chair faces +x; g sits 2 cm above the seat, 2 cm in front of the seat's middle.
@@ -264,12 +264,12 @@ def test_a_urdf_joint_without_its_parent_is_refused(tmp_path):
 
 
 def test_carrying_posture_matches_the_simulator():
-    nao_sim = pytest.importorskip("hardware.sim.nao")
+    nao_sim = pytest.importorskip("bearchair.hardware.sim.nao")
     assert nao_sim.HOLDING_POSTURE_RAD.items() >= CARRYING_POSTURE_RAD.items()
 
 
 def test_the_bear_the_planner_sees_is_the_simulated_bear():
-    bear = pytest.importorskip("hardware.sim.bear")
+    bear = pytest.importorskip("bearchair.hardware.sim.bear")
     com = bear.bear_centre_of_mass()
     assert com[0] == pytest.approx(BEAR_COM_AHEAD_M, abs=5e-4)
     assert com[2] == pytest.approx(BEAR_COM_HEIGHT_M, abs=2e-3)
@@ -566,7 +566,7 @@ def test_a_trajectory_is_solved_on_coarse_knots_when_they_hold_between_knots(cha
 
 
 def test_a_centre_of_mass_off_the_feet_where_it_stopped_slides_p_closer(monkeypatch) -> None:
-    from skills.planning.wholebody import seating
+    from bearchair.skills.planning.wholebody import seating
 
     deep_chair = box_chair_mesh(seat_height_m=SEAT_HEIGHT_M, seat_depth_m=0.40)
     tried: list[float] = []
@@ -590,7 +590,7 @@ def test_a_centre_of_mass_off_the_feet_where_it_stopped_slides_p_closer(monkeypa
 
 
 def test_the_problems_build_in_the_background_and_the_fine_trajectory_on_first_use() -> None:
-    from skills.planning.wholebody import optimisation
+    from bearchair.skills.planning.wholebody import optimisation
 
     builder = optimisation.start_building_problems()
     builder.join(timeout=60.0)

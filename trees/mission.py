@@ -32,13 +32,18 @@ from __future__ import annotations
 
 import py_trees
 
-from behaviours import keys
-from behaviours.accessibility import CheckAccessibility, CheckSeatReachable
-from behaviours.assistance import GiveUp, InstructHelper, MeasureChairRotation, WaitUntilChairStill
-from behaviours.imagine import ImagineSitting
-from behaviours.scan import ScanChair
-from behaviours.seat import ReleaseAndStand, SeatBear
-from behaviours.walk import WalkToChair
+from bearchair.behaviours import keys
+from bearchair.behaviours.accessibility import CheckAccessibility, CheckSeatReachable
+from bearchair.behaviours.assistance import (
+    GiveUp,
+    InstructHelper,
+    MeasureChairRotation,
+    WaitUntilChairStill,
+)
+from bearchair.behaviours.imagine import ImagineSitting
+from bearchair.behaviours.scan import ScanChair
+from bearchair.behaviours.seat import ReleaseAndStand, SeatBear
+from bearchair.behaviours.walk import WalkToChair
 
 STAGES = (
     "ScanChair",

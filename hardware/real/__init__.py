@@ -1,11 +1,11 @@
 """Backends for the real robots, through their SDKs.
 
-* :mod:`hardware.real.nao`: the NAO through NAOqi (``qi``): walking, joint
+* :mod:`bearchair.hardware.real.nao`: the NAO through NAOqi (``qi``): walking, joint
   trajectories, hands, speech.
-* :mod:`hardware.real.panda`: the Franka Panda through ``panda_py``.
-* :mod:`hardware.real.camera`: the PrimeSense Carmine through OpenNI2 (``openni``).
-* :mod:`hardware.real.robots`: all of them from a checked cell file.
-* :mod:`hardware.real.standins`: SDK stand-ins for tests and ``check-hardware`` dry runs.
+* :mod:`bearchair.hardware.real.panda`: the Franka Panda through ``panda_py``.
+* :mod:`bearchair.hardware.real.camera`: the PrimeSense Carmine through OpenNI2 (``openni``).
+* :mod:`bearchair.hardware.real.robots`: all of them from a checked cell file.
+* :mod:`bearchair.hardware.real.standins`: SDK stand-ins for tests and ``check-hardware`` dry runs.
 
 The SDKs are imported only when a backend is built, so the rest of the project installs
 and tests without them; a missing SDK raises :class:`BackendUnavailable` saying what to
@@ -17,7 +17,7 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-from core.errors import BackendError, BackendUnavailable
+from bearchair.core.errors import BackendError, BackendUnavailable
 
 
 class EmergencyStopped(BackendError, RuntimeError):

@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from core.errors import BackendUnavailable
-from hardware.interfaces import CameraIntrinsics
-from hardware.real import import_sdk
+from bearchair.core.errors import BackendUnavailable
+from bearchair.hardware.interfaces import CameraIntrinsics
+from bearchair.hardware.real import import_sdk
 
 # The Carmine 1.09's factory depth intrinsics at 640x480 (replace with a calibration).
 CARMINE_INTRINSICS = CameraIntrinsics(640, 480, 570.3, 570.3, 319.5, 239.5)

@@ -35,10 +35,10 @@ from typing import Any
 
 import numpy as np
 
-from core.errors import BackendUnavailable
-from core.nao_carrying import CARRYING_POSTURE_RAD
-from core.se2 import SE2Pose
-from hardware.real import EmergencyStopped, import_sdk
+from bearchair.core.errors import BackendUnavailable
+from bearchair.core.nao_carrying import CARRYING_POSTURE_RAD
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.real import EmergencyStopped, import_sdk
 
 log = logging.getLogger(__name__)
 
@@ -112,11 +112,11 @@ class _CredentialsFactory:
 
 
 class NaoHumanoid:
-    """:class:`hardware.interfaces.Humanoid` on a real NAO.
+    """:class:`bearchair.hardware.interfaces.Humanoid` on a real NAO.
 
     Args:
         session: a connected qi session (tests pass one connected to
-            :mod:`hardware.real.standins`).
+            :mod:`bearchair.hardware.real.standins`).
         odom_origin: the world pose where the NAO stands now (the cell file's start
             pose): :meth:`pose` is this composed with the odometry since the first reading.
     """
@@ -276,7 +276,7 @@ class NaoHumanoid:
 
 
 class NaoSpeaker:
-    """:class:`hardware.interfaces.Speaker` through the NAO's own voice (ALTextToSpeech.say)."""
+    """:class:`bearchair.hardware.interfaces.Speaker` through the NAO's own voice (ALTextToSpeech.say)."""
 
     def __init__(self, session: Any) -> None:
         self._tts = session.service("ALTextToSpeech")
@@ -286,7 +286,7 @@ class NaoSpeaker:
 
 
 class WallClock:
-    """:class:`hardware.interfaces.Clock` on real robots: real time."""
+    """:class:`bearchair.hardware.interfaces.Clock` on real robots: real time."""
 
     def __init__(self) -> None:
         self._start = time.monotonic()

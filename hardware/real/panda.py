@@ -29,10 +29,10 @@ from typing import Any
 
 import numpy as np
 
-from core.errors import BackendError, BackendUnavailable
-from hardware.interfaces import RGBDFrame
-from hardware.real import EmergencyStopped, import_sdk
-from hardware.real.camera import CARMINE_INTRINSICS, CarmineCamera
+from bearchair.core.errors import BackendError, BackendUnavailable
+from bearchair.hardware.interfaces import RGBDFrame
+from bearchair.hardware.real import EmergencyStopped, import_sdk
+from bearchair.hardware.real.camera import CARMINE_INTRINSICS, CarmineCamera
 
 __all__ = ["CARMINE_INTRINSICS", "ArmFault", "CarmineCamera", "PandaArm"]
 
@@ -90,10 +90,10 @@ STOP_POLL_S = 0.005
 
 
 class PandaArm:
-    """:class:`hardware.interfaces.ScanningArm` on a real Panda.
+    """:class:`bearchair.hardware.interfaces.ScanningArm` on a real Panda.
 
     Args:
-        robot: a ``panda_py.Panda`` (tests pass :class:`hardware.real.standins.FakePanda`).
+        robot: a ``panda_py.Panda`` (tests pass :class:`bearchair.hardware.real.standins.FakePanda`).
         camera: the wrist camera (``read() -> (rgb, depth_m)`` and ``intrinsics``).
         T_world_base: the arm base in the world frame.
         T_flange_camera: the hand-eye calibration (camera optical frame in the flange frame).
@@ -134,7 +134,7 @@ class PandaArm:
         except Exception as error:
             raise BackendUnavailable(f"cannot reach the Panda at {host}: {error}") from error
         if camera == "realsense":
-            from hardware.real.camera import RealSenseCamera
+            from bearchair.hardware.real.camera import RealSenseCamera
 
             wrist: Any = RealSenseCamera()
         else:

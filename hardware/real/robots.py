@@ -8,16 +8,16 @@ from __future__ import annotations
 
 from typing import Any
 
-from hardware.interfaces import Robot
-from hardware.real.nao import NaoHumanoid, NaoSpeaker, WallClock, connect
-from hardware.real.panda import PandaArm
-from hardware.real.standins import STANDIN_HOST, FakeOpenNI2, FakePanda
+from bearchair.hardware.interfaces import Robot
+from bearchair.hardware.real.nao import NaoHumanoid, NaoSpeaker, WallClock, connect
+from bearchair.hardware.real.panda import PandaArm
+from bearchair.hardware.real.standins import STANDIN_HOST, FakeOpenNI2, FakePanda
 
 
 def connect_panda(config: Any) -> PandaArm:
     """The arm and its camera (``panda_host`` "standin": the SDK stand-ins)."""
     if config.panda_host == STANDIN_HOST:
-        from hardware.real.camera import CarmineCamera
+        from bearchair.hardware.real.camera import CarmineCamera
 
         camera = CarmineCamera(FakeOpenNI2(), library_dir=config.openni_library_dir)
         panda = FakePanda(STANDIN_HOST)
@@ -40,7 +40,7 @@ def connect_panda(config: Any) -> PandaArm:
 
 
 def connect_robots(config: Any) -> Robot:
-    """Connects the NAO and the Panda of an :class:`executive.cell_config.CellConfig`.
+    """Connects the NAO and the Panda of an :class:`bearchair.executive.cell_config.CellConfig`.
 
     Raises:
         BackendUnavailable: an SDK or a robot is missing (the message names which).

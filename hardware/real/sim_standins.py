@@ -5,8 +5,8 @@
 :class:`SimulatedPanda` is a :class:`~hardware.real.standins.FakePanda` whose joints are
 the simulated Panda's; :func:`simulated_carmine` renders the wrist camera for
 :class:`~hardware.real.standins.FakeOpenNI2`. :func:`robot_over_standins` puts the real
-backends (:mod:`hardware.real.nao`, :mod:`hardware.real.panda`,
-:mod:`hardware.real.camera`) on top, so the mission runs through qi networking, panda-py's
+backends (:mod:`bearchair.hardware.real.nao`, :mod:`bearchair.hardware.real.panda`,
+:mod:`bearchair.hardware.real.camera`) on top, so the mission runs through qi networking, panda-py's
 call shapes and OpenNI's frames, with the simulation's clock, helper and judge.
 """
 
@@ -18,10 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from core.geometry import make_transform, rot_z
-from core.se2 import SE2Pose
-from hardware.interfaces import Robot
-from hardware.real.standins import (
+from bearchair.core.geometry import make_transform, rot_z
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import Robot
+from bearchair.hardware.real.standins import (
     FRANKA_HAND_F_T_EE,
     FakeOpenNI2,
     FakePanda,
@@ -37,7 +37,7 @@ class SimulatedNaoBody:
     """The simulated NAO behind the NAOqi stand-in's services.
 
     Args:
-        world: a :class:`hardware.sim.world.SimWorld`.
+        world: a :class:`bearchair.hardware.sim.world.SimWorld`.
         boot_odometry: what NAOqi's odometry reads at the start (not zero, as after a boot).
     """
 
@@ -122,7 +122,7 @@ class SimulatedPanda(FakePanda):
         try:
             self._sim.move_to(target, timeout_s=30.0)
         except (RuntimeError, TimeoutError) as error:
-            from hardware.real.standins import ControlException
+            from bearchair.hardware.real.standins import ControlException
 
             self._last_error = ControlException(f"libfranka: Move command aborted: {error}")
             return False
@@ -130,7 +130,7 @@ class SimulatedPanda(FakePanda):
 
 
 def _t_hand_camera() -> np.ndarray:
-    from hardware.sim.camera import T_HAND_CAMERA
+    from bearchair.hardware.sim.camera import T_HAND_CAMERA
 
     return T_HAND_CAMERA
 
@@ -158,9 +158,9 @@ def robot_over_standins(world: Any, standin: NaoqiStandin) -> tuple[Robot, Any]:
     Returns:
         (the robot, the qi session: close it when done).
     """
-    from hardware.real.camera import CarmineCamera
-    from hardware.real.nao import NaoHumanoid, NaoSpeaker, connect
-    from hardware.real.panda import PandaArm
+    from bearchair.hardware.real.camera import CarmineCamera
+    from bearchair.hardware.real.nao import NaoHumanoid, NaoSpeaker, connect
+    from bearchair.hardware.real.panda import PandaArm
 
     session = connect(standin.url)
     start = world.nao.pose()

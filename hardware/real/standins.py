@@ -33,7 +33,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from hardware.real import import_sdk
+from bearchair.hardware.real import import_sdk
 
 STANDIN_HOST = "standin"
 """The ``panda_host`` that selects :class:`FakePanda` and :class:`FakeOpenNI2`."""
@@ -130,7 +130,7 @@ class NaoqiStandin:
         time_scale: robot seconds per wall second for the default body.
         boot_odometry: NAOqi's odometry reading when the stand-in starts [x, y, theta].
         body: what the services move (:class:`KinematicNao` by default;
-            :class:`hardware.real.sim_standins.SimulatedNaoBody` puts the simulated NAO
+            :class:`bearchair.hardware.real.sim_standins.SimulatedNaoBody` puts the simulated NAO
             behind them).
     """
 
@@ -291,7 +291,7 @@ def _motion_walk_methods(qi: Any, owner: NaoqiStandin) -> type:
         def moveTo(self, x: float, y: float, theta: float) -> None:
             # Blocking on the robot; the backend calls it with _async=True. The stand-in
             # walks the displacement in WALK_HORIZON_S, replacing any walk.
-            from hardware.real.nao import WALK_HORIZON_S
+            from bearchair.hardware.real.nao import WALK_HORIZON_S
 
             if not self.awake:
                 owner.record("ALMotion", "moveTo", x, y, theta)
@@ -739,7 +739,7 @@ class _Stream:
 
 
 class FakeOpenNI2:
-    """The ``openni.openni2`` module as :class:`hardware.real.camera.CarmineCamera` uses it.
+    """The ``openni.openni2`` module as :class:`bearchair.hardware.real.camera.CarmineCamera` uses it.
 
     Args:
         render: ``(width, height) -> (rgb uint8 HxWx3, depth uint16 mm HxW)``; default a
@@ -853,7 +853,7 @@ class _RealSenseProfile:
 
 
 class FakeRealSense:
-    """The ``pyrealsense2`` calls :class:`hardware.real.camera.RealSenseCamera` makes.
+    """The ``pyrealsense2`` calls :class:`bearchair.hardware.real.camera.RealSenseCamera` makes.
 
     A D435-like camera: depth in units of :attr:`depth_scale_m`, colour intrinsics as
     given; frames from ``render`` (default a grey wall 1 m away); ``devices=0`` makes

@@ -1,4 +1,4 @@
-"""Figures of the simulated world: ``python -m hardware.sim [--out DIR] [--seed N]``.
+"""Figures of the simulated world: ``python -m bearchair.hardware.sim [--out DIR] [--seed N]``.
 
 Prints build, physics and capture timings, depth accuracy against the true chair, and
 from how far the arm camera (looking from the ready configuration) detects the tag on
@@ -17,10 +17,10 @@ from typing import cast
 import cv2
 import numpy as np
 
-from core.arena import HUMANOID_TAG
-from core.geometry import transform_points
-from hardware.interfaces import RGBDFrame
-from hardware.sim.world import SimConfig, SimWorld
+from bearchair.core.arena import HUMANOID_TAG
+from bearchair.core.geometry import transform_points
+from bearchair.hardware.interfaces import RGBDFrame
+from bearchair.hardware.sim.world import SimConfig, SimWorld
 
 
 def _tag_seen(world: SimWorld) -> bool:

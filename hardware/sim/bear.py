@@ -14,13 +14,13 @@ from typing import NamedTuple
 import numpy as np
 import pybullet
 
-from hardware.sim.bullet import (
+from bearchair.hardware.sim.bullet import (
     LockedBullet,
     T_world_base_link,
     matrix_to_pose,
     reset_base_link,
 )
-from hardware.sim.clock import SimClock
+from bearchair.hardware.sim.clock import SimClock
 
 BEAR_MASS_KG = 0.2
 HOLD_FORCE_N = 60.0

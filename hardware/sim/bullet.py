@@ -22,7 +22,7 @@ import numpy as np
 import pybullet
 from pybullet_utils import bullet_client
 
-from core.meshes import cache_dir
+from bearchair.core.meshes import cache_dir
 
 
 def sim_cache_dir() -> Path:

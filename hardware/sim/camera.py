@@ -1,8 +1,8 @@
 """The wrist depth camera: a PrimeSense Carmine 1.09 rendered by pybullet's TinyRenderer.
 
 The one description of the simulated Carmine (field of view, intrinsics, mount, range,
-noise model), used by the simulated Panda (:mod:`hardware.sim.panda`) and by the
-synthetic scenes the perception tests render (:mod:`skills.perception.synthetic`).
+noise model), used by the simulated Panda (:mod:`bearchair.hardware.sim.panda`) and by the
+synthetic scenes the perception tests render (:mod:`bearchair.skills.perception.synthetic`).
 Rendering works in DIRECT mode (no GUI, no OpenGL context). The OpenGL z-buffer is
 turned into metric depth along the optical axis, then a Carmine-like noise model is
 applied (see :class:`CarmineNoise`), or only the sensor's range limits
@@ -19,9 +19,9 @@ import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
-from core.geometry import make_transform
-from hardware.interfaces import CameraIntrinsics
-from hardware.sim.bullet import LockedBullet
+from bearchair.core.geometry import make_transform
+from bearchair.hardware.interfaces import CameraIntrinsics
+from bearchair.hardware.sim.bullet import LockedBullet
 
 CARMINE_HFOV_DEG = 58.0
 """Horizontal field of view of the Carmine 1.09's depth camera (datasheet: 57.5 deg)."""

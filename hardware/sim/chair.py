@@ -2,7 +2,7 @@
 
 The chair frame is the mesh's own frame shifted so that the centre of its x-y bounding
 box is the origin and its lowest point is z = 0. The helper turns the chair about this
-frame's z axis (kinematically: :mod:`hardware.sim.helper` sets its pose every step).
+frame's z axis (kinematically: :mod:`bearchair.hardware.sim.helper` sets its pose every step).
 
 Why static: pybullet collides with a concave triangle mesh exactly only when the body is
 static. A dynamic chair needs convex pieces, and V-HACD's pieces of open, thin chair
@@ -12,7 +12,7 @@ tipped off), and hulls around seat fronts caught the carried bear that the plann
 working from the scan of the true surface, kept clear. What a static
 chair cannot do is slide when pushed: nothing dynamic that touches it (the 0.2 kg bear)
 could push a 2 kg chair far, and the NAO is kinematic in this world, so contacts between
-the NAO and the chair are recorded (:mod:`hardware.sim.contacts`) instead of moving it.
+the NAO and the chair are recorded (:mod:`bearchair.hardware.sim.contacts`) instead of moving it.
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ import numpy as np
 import pybullet
 import trimesh
 
-from core.meshes import mesh_digest
-from hardware.sim.bullet import (
+from bearchair.core.meshes import mesh_digest
+from bearchair.hardware.sim.bullet import (
     LockedBullet,
     T_world_base_link,
     reset_base_link,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
-from hardware.sim.bullet import LockedBullet, StepProcess
+from bearchair.hardware.sim.bullet import LockedBullet, StepProcess
 
 PHYSICS_RATE_HZ = 240.0
 
@@ -36,7 +36,7 @@ class WorldTimers:
 
 
 class SimClock:
-    """Implements :class:`hardware.interfaces.Clock` on the simulation.
+    """Implements :class:`bearchair.hardware.interfaces.Clock` on the simulation.
 
     ``now()`` is simulated seconds since the world was built. ``sleep(s)`` advances the
     physics by ``round(s * 240)`` steps of 1/240 s; before each step, every registered

@@ -1,6 +1,6 @@
 """How deep the NAO went into the chair: contacts that neither body feels in this world.
 
-The NAO's joints are kinematic and the chair is static (:mod:`hardware.sim.chair`), so
+The NAO's joints are kinematic and the chair is static (:mod:`bearchair.hardware.sim.chair`), so
 a NAO that walks or reaches into the chair passes through it instead of pushing it. The
 monitor runs before every physics step and keeps the deepest NAO-chair contact, so a run
 that ought to have bumped the chair says so in its ground truth.
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from hardware.sim.bullet import LockedBullet
+from bearchair.hardware.sim.bullet import LockedBullet
 
 
 class ChairTouch(NamedTuple):

@@ -9,10 +9,10 @@ from typing import Literal, NamedTuple
 
 import numpy as np
 
-from core.geometry import make_transform, rot_z
-from hardware.interfaces import Speaker
-from hardware.sim.chair import SimChair
-from hardware.sim.clock import SimClock
+from bearchair.core.geometry import make_transform, rot_z
+from bearchair.hardware.interfaces import Speaker
+from bearchair.hardware.sim.chair import SimChair
+from bearchair.hardware.sim.clock import SimClock
 
 log = logging.getLogger(__name__)
 
@@ -70,7 +70,7 @@ class HelperAction(NamedTuple):
 
 
 class SimHelper:
-    """Implements :class:`hardware.interfaces.Helper`: turns the chair over simulated time.
+    """Implements :class:`bearchair.hardware.interfaces.Helper`: turns the chair over simulated time.
 
     Modes:
         obeys: turns by the requested angle plus an error uniform in ±10 deg, and shifts
@@ -168,7 +168,7 @@ class SimHelper:
 
 
 class SimSpeaker:
-    """Implements :class:`hardware.interfaces.Speaker`: logs, speaks (if a voice is given) and
+    """Implements :class:`bearchair.hardware.interfaces.Speaker`: logs, speaks (if a voice is given) and
     lets the helper hear the sentence.
 
     Attributes:

@@ -7,11 +7,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from core.geometry import wrap_angle
-from hardware.interfaces import SeatingJudgement
-from hardware.sim.bear import SimBear
-from hardware.sim.bullet import LockedBullet
-from hardware.sim.clock import SimClock
+from bearchair.core.geometry import wrap_angle
+from bearchair.hardware.interfaces import SeatingJudgement
+from bearchair.hardware.sim.bear import SimBear
+from bearchair.hardware.sim.bullet import LockedBullet
+from bearchair.hardware.sim.clock import SimClock
 
 MAX_TILT_DEG = 30.0
 MAX_RECLINE_DEG = 45.0
@@ -26,7 +26,7 @@ MAX_FACING_ERROR_DEG = 45.0
 
 
 class SimJudge:
-    """Implements :class:`hardware.interfaces.SeatingJudge` from contacts and the bear's pose.
+    """Implements :class:`bearchair.hardware.interfaces.SeatingJudge` from contacts and the bear's pose.
 
     After ``settle_s`` of simulated time:
         * on_seat: the bear touches the chair and does not touch the floor;

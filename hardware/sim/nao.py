@@ -19,18 +19,18 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pybullet
 
-from core.geometry import make_transform, rot_z, wrap_angle
-from core.nao_carrying import CARRYING_POSTURE_RAD
-from core.se2 import SE2Pose
-from hardware.sim.bullet import (
+from bearchair.core.geometry import make_transform, rot_z, wrap_angle
+from bearchair.core.nao_carrying import CARRYING_POSTURE_RAD
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.sim.bullet import (
     LockedBullet,
     T_world_link,
     joint_index_by_name,
     link_index_by_name,
     reset_base_link,
 )
-from hardware.sim.clock import SimClock
-from hardware.sim.nao_urdf import SOLE_TO_TORSO_M, TAG_LINK
+from bearchair.hardware.sim.clock import SimClock
+from bearchair.hardware.sim.nao_urdf import SOLE_TO_TORSO_M, TAG_LINK
 
 log = logging.getLogger(__name__)
 
@@ -42,7 +42,7 @@ TURN_SCALE_SIGMA = 0.03
 YAW_DRIFT_SIGMA_RADPS = 0.01
 
 HOLDING_POSTURE_RAD: dict[str, float] = {**CARRYING_POSTURE_RAD, "LHand": 0.0, "RHand": 0.0}
-"""Standing straight, carrying the bear (:mod:`core.nao_carrying`), the hands closed."""
+"""Standing straight, carrying the bear (:mod:`bearchair.core.nao_carrying`), the hands closed."""
 
 
 class _Trajectory:
@@ -68,7 +68,7 @@ class _Trajectory:
 
 
 class SimNao:
-    """Implements :class:`hardware.interfaces.Humanoid` for the generated NAO model.
+    """Implements :class:`bearchair.hardware.interfaces.Humanoid` for the generated NAO model.
 
     Planar pose: the feet frame, midway between the soles on the floor, x forward.
     Odometry (:meth:`pose`) integrates the lagged, clipped command; the true motion
@@ -285,7 +285,7 @@ class SimNao:
         Stops walking and any trajectory; the true pose and the odometry both become
         ``pose`` (the feet frame: on the floor midway between the soles, x forward). The
         joint angles are kept. A held bear must be moved with it (see
-        :meth:`hardware.sim.world.SimWorld.place_nao`).
+        :meth:`bearchair.hardware.sim.world.SimWorld.place_nao`).
         """
         values = np.array([pose.x, pose.y, pose.theta], dtype=float)
         if not np.all(np.isfinite(values)):

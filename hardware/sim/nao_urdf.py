@@ -19,7 +19,7 @@ from typing import NamedTuple
 
 import qibullet
 
-from hardware.sim.bullet import cached_asset
+from bearchair.hardware.sim.bullet import cached_asset
 
 QIBULLET_NAO_URDF = Path(os.path.dirname(qibullet.__file__)) / "robot_data" / "nao.urdf"
 

@@ -1,4 +1,4 @@
-"""The Franka Panda with its wrist depth camera, as a :class:`hardware.interfaces.ScanningArm`."""
+"""The Franka Panda with its wrist depth camera, as a :class:`bearchair.hardware.interfaces.ScanningArm`."""
 
 from __future__ import annotations
 
@@ -11,10 +11,15 @@ import numpy as np
 import pybullet
 import pybullet_data
 
-from core.geometry import make_transform
-from hardware.interfaces import CameraIntrinsics, RGBDFrame
-from hardware.sim.bullet import LockedBullet, T_world_link, cached_asset, link_index_by_name
-from hardware.sim.camera import (
+from bearchair.core.geometry import make_transform
+from bearchair.hardware.interfaces import CameraIntrinsics, RGBDFrame
+from bearchair.hardware.sim.bullet import (
+    LockedBullet,
+    T_world_link,
+    cached_asset,
+    link_index_by_name,
+)
+from bearchair.hardware.sim.camera import (
     CARMINE_INTRINSICS,
     T_HAND_CAMERA,
     CarmineNoise,
@@ -22,7 +27,7 @@ from hardware.sim.camera import (
     carmine_images,
     render_view,
 )
-from hardware.sim.clock import SimClock
+from bearchair.hardware.sim.clock import SimClock
 
 PANDA_URDF = Path(pybullet_data.getDataPath()) / "franka_panda" / "panda.urdf"
 _PANDA_MESHES = PANDA_URDF.parent / "meshes"

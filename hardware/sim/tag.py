@@ -8,8 +8,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from core.arena import TagSpec
-from hardware.sim.bullet import sim_cache_dir
+from bearchair.core.arena import TagSpec
+from bearchair.hardware.sim.bullet import sim_cache_dir
 
 QUIET_MODULES = 1
 """White quiet border around the black square, in modules."""

@@ -4,7 +4,7 @@ A pybullet scene (DIRECT by default, GUI on request) with the floor, the plannin
 arena's walls and obstacles, a Franka Panda with a wrist Carmine camera, a chair from
 any mesh, a NAO carrying a teddy bear with an ArUco tag on its head, and a helper who
 turns the chair when told. Every device implements a protocol of
-:mod:`hardware.interfaces`; :attr:`SimWorld.robot` bundles them for the executive.
+:mod:`bearchair.hardware.interfaces`; :attr:`SimWorld.robot` bundles them for the executive.
 Everything random is drawn from generators spawned from ``SimConfig.seed``.
 """
 
@@ -23,24 +23,24 @@ import pybullet_data
 import trimesh
 from PIL import Image
 
-from core.arena import DEFAULT_ARENA, HUMANOID_TAG, Arena, accessible_sitting_yaws
-from core.geometry import make_transform, rot_z, wrap_angle, yaw_of
-from core.meshes import box_chair_mesh, load_mesh
-from core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, PALM_IN_WRIST_M
-from core.se2 import SE2Pose
-from hardware.interfaces import CameraIntrinsics, Robot, Speaker
-from hardware.sim.bear import SimBear
-from hardware.sim.bullet import LockedBullet, matrix_to_pose, pose_to_matrix
-from hardware.sim.camera import render_view
-from hardware.sim.chair import SimChair
-from hardware.sim.clock import SimClock
-from hardware.sim.contacts import ChairTouchMonitor
-from hardware.sim.helper import SimHelper, SimSpeaker
-from hardware.sim.judge import SimJudge
-from hardware.sim.nao import SimNao
-from hardware.sim.nao_urdf import nao_urdf
-from hardware.sim.panda import SimPanda
-from hardware.sim.tag import tag_assets
+from bearchair.core.arena import DEFAULT_ARENA, HUMANOID_TAG, Arena, accessible_sitting_yaws
+from bearchair.core.geometry import make_transform, rot_z, wrap_angle, yaw_of
+from bearchair.core.meshes import box_chair_mesh, load_mesh
+from bearchair.core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, PALM_IN_WRIST_M
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import CameraIntrinsics, Robot, Speaker
+from bearchair.hardware.sim.bear import SimBear
+from bearchair.hardware.sim.bullet import LockedBullet, matrix_to_pose, pose_to_matrix
+from bearchair.hardware.sim.camera import render_view
+from bearchair.hardware.sim.chair import SimChair
+from bearchair.hardware.sim.clock import SimClock
+from bearchair.hardware.sim.contacts import ChairTouchMonitor
+from bearchair.hardware.sim.helper import SimHelper, SimSpeaker
+from bearchair.hardware.sim.judge import SimJudge
+from bearchair.hardware.sim.nao import SimNao
+from bearchair.hardware.sim.nao_urdf import nao_urdf
+from bearchair.hardware.sim.panda import SimPanda
+from bearchair.hardware.sim.tag import tag_assets
 
 log = logging.getLogger(__name__)
 
@@ -404,4 +404,4 @@ class SimWorld:
 
 
 _PALM = make_transform(np.eye(3), np.asarray(PALM_IN_WRIST_M))
-"""The palm centre in the NAO's wrist link frames (:mod:`core.nao_carrying`)."""
+"""The palm centre in the NAO's wrist link frames (:mod:`bearchair.core.nao_carrying`)."""

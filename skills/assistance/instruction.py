@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import math
 
-from core.geometry import SittingPose, wrap_angle
-from core.se2 import SE2Pose
-from skills.results import Instruction
+from bearchair.core.geometry import SittingPose, wrap_angle
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.results import Instruction
 
 INSTRUCTION_TEMPLATE = (
     "Please rotate the chair about the vertical axis {direction} for {angle} degrees"
@@ -64,7 +64,7 @@ def compose_instruction(
         sitting_pose: g = (p, γ) in the world frame, as measured now.
         humanoid_pose: the NAO's current pose in the world frame.
         rotation_rad: the rotation to ask for instead (counterclockwise positive), as
-            :func:`skills.assistance.rotation.choose_rotation` chose it.
+            :func:`bearchair.skills.assistance.rotation.choose_rotation` chose it.
 
     Returns:
         The instruction; ``angle_deg`` is 0 when the chair already faces the NAO to within

@@ -1,7 +1,7 @@
 """Which rotation to ask the helper for: toward the NAO, or the smallest that plans.
 
 The paper asks for the rotation that points the chair's sitting direction at the NAO
-(:func:`skills.assistance.instruction.rotation_toward`). Where the chair stands, walls
+(:func:`bearchair.skills.assistance.instruction.rotation_toward`). Where the chair stands, walls
 or obstacles can leave that orientation inaccessible too (the chair already faces the
 NAO, and the room in front of it is too narrow for the NAO to stand in): asking for it
 then is asking for nothing. So the rotations the helper can be told (multiples of 30
@@ -18,11 +18,15 @@ from collections.abc import Callable
 import numpy as np
 import trimesh
 
-from core.arena import Arena
-from core.geometry import SittingPose, wrap_angle, yaw_transform
-from core.se2 import SE2Pose
-from skills.assistance.instruction import ANGLE_STEP_DEG, instructed_rotation, rotation_toward
-from skills.results import AccessibilityResult, RotationChoice
+from bearchair.core.arena import Arena
+from bearchair.core.geometry import SittingPose, wrap_angle, yaw_transform
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.assistance.instruction import (
+    ANGLE_STEP_DEG,
+    instructed_rotation,
+    rotation_toward,
+)
+from bearchair.skills.results import AccessibilityResult, RotationChoice
 
 AccessibilityCheck = Callable[..., AccessibilityResult]
 
@@ -67,10 +71,10 @@ def choose_rotation(
         humanoid_pose: where the NAO stands.
         arena: the workspace.
         seed: the accessibility check's seed.
-        check: the accessibility check (default ``skills.planning.se2.check_accessibility``).
+        check: the accessibility check (default ``bearchair.skills.planning.se2.check_accessibility``).
     """
     if check is None:
-        from skills.planning.se2 import check_accessibility
+        from bearchair.skills.planning.se2 import check_accessibility
 
         check = check_accessibility
     toward = rotation_toward(sitting_pose, (humanoid_pose.x, humanoid_pose.y))

@@ -27,12 +27,12 @@ import threading
 from collections.abc import Callable
 from typing import NamedTuple
 
-from core.errors import SkillError
-from core.geometry import wrap_angle
-from core.se2 import SE2Pose
-from hardware.interfaces import Clock, Humanoid
-from skills.control.pid import PID
-from skills.results import WalkResult
+from bearchair.core.errors import SkillError
+from bearchair.core.geometry import wrap_angle
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import Clock, Humanoid
+from bearchair.skills.control.pid import PID
+from bearchair.skills.results import WalkResult
 
 logger = logging.getLogger(__name__)
 

@@ -1,7 +1,7 @@
 """Sitting imagination: find how to sit on an unseen chair by physical simulation.
 
 Public entry point: :func:`imagine_sitting` (the ``imagine_sitting`` skill of
-``skills.toolbox``). See ``imagine.py`` for the procedure, ``agent.py`` for the
+``bearchair.skills.toolbox``). See ``imagine.py`` for the procedure, ``agent.py`` for the
 generated child-sized agent, ``chair.py`` for g_obb and the chair's preparation,
 ``simulation.py`` for the drops and ``sam.py`` for the sitting affordance model.
 
@@ -16,7 +16,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from skills.imagination.imagine import (
+    from bearchair.skills.imagination.imagine import (
         ImaginationDetails,
         imagine_sitting,
         imagine_sitting_details,
@@ -39,5 +39,5 @@ __all__ = [
 
 def __getattr__(name: str) -> Any:
     if name in __all__:
-        return getattr(importlib.import_module("skills.imagination.imagine"), name)
+        return getattr(importlib.import_module("bearchair.skills.imagination.imagine"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -158,7 +158,7 @@ def agent_urdf_text() -> str:
 def agent_urdf_path() -> Path:
     """Writes the agent URDF into the cache directory (once per version) and returns it."""
     # Imported here: the drop workers import this module and need no mesh library.
-    from core.meshes import cache_dir
+    from bearchair.core.meshes import cache_dir
 
     path = cache_dir() / "agent" / f"sitting_agent_{AGENT_VERSION}.urdf"
     text = agent_urdf_text()

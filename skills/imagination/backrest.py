@@ -49,8 +49,8 @@ from typing import Any, NamedTuple, cast
 import numpy as np
 import trimesh
 
-from core.geometry import SittingPose, wrap_angle
-from skills.planning.seat import seat_support_heights
+from bearchair.core.geometry import SittingPose, wrap_angle
+from bearchair.skills.planning.seat import seat_support_heights
 
 ABOVE_SEAT_M = 0.06
 """Surface counts as rising above the seat this far over the seat top (metres): above a

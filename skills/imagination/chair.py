@@ -22,10 +22,10 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
-from core.errors import SkillError
-from core.geometry import make_transform, rot_z, yaw_of
-from core.memo import BoundedMemo
-from core.meshes import (
+from bearchair.core.errors import SkillError
+from bearchair.core.geometry import make_transform, rot_z, yaw_of
+from bearchair.core.memo import BoundedMemo
+from bearchair.core.meshes import (
     cache_dir,
     mesh_digest,
     read_cached_arrays,
@@ -169,7 +169,7 @@ def horizontal_area_m2(prepared: PreparedChair, low_m: float, high_m: float) -> 
 
 
 def _to_cache(prepared: PreparedChair) -> dict[str, np.ndarray]:
-    """The cache entry's arrays (npz, no pickle: see ``core.meshes.read_cached_arrays``)."""
+    """The cache entry's arrays (npz, no pickle: see ``bearchair.core.meshes.read_cached_arrays``)."""
     arrays = {name: np.asarray(value) for name, value in prepared._asdict().items()}
     arrays["pieces"] = np.stack([np.asarray(piece, dtype=float) for piece in prepared.pieces])
     return arrays

@@ -3,14 +3,14 @@
 The paper's procedure ("Sitting Imagination"):
 
 1. Prepare the chair: g_obb (yaw-only OBB alignment and horizontal centring), the solid
-   under its surface as boxes, mass properties (``skills.imagination.chair``).
+   under its surface as boxes, mass properties (``bearchair.skills.imagination.chair``).
 2. For each rotation α_i = iπ/4 (i = 0..7) drop the agent in its pre-sitting posture,
    facing +x, with the pelvis 15 cm above the OBB, at the OBB centre and at ±L_sit
    along x; if at most one correct sitting was found, drop again at ±2 L_sit and
    ±3 L_sit: 24 or 56 drops. Rotating the chair by α_i under an agent facing +x is the
    same as turning the agent by −α_i over the fixed chair (gravity is along z), which
    is what is simulated, so every drop is measured directly in the chair frame.
-3. Score every drop with the sitting affordance model (``skills.imagination.sam``).
+3. Score every drop with the sitting affordance model (``bearchair.skills.imagination.sam``).
 4. The best rotation α* has the most correct sittings, ties going to the lowest mean
    J + L. With weights w = 1 / (J + L) over its correct sittings,
 
@@ -42,7 +42,7 @@ The paper's procedure ("Sitting Imagination"):
    height at least as large as the pelvis's footprint (a table's top is too high).
 
 7. Beyond the paper, the direction checked against the chair's shape: the backrest's
-   direction (``skills.imagination.backrest``: from the centroid of what rises above
+   direction (``bearchair.skills.imagination.backrest``: from the centroid of what rises above
    the seat to the seat's centroid) replaces the imagined one when the two disagree by
    more than 30 degrees (a vote one rotation off on a round seat).
 
@@ -65,18 +65,23 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
-from core.geometry import SittingPose, transform_points, wrap_angle
-from skills.imagination import DEFAULT_WORKERS
-from skills.imagination.agent import LINKS, agent_urdf_path
-from skills.imagination.backrest import check_direction
-from skills.imagination.chair import (
+from bearchair.core.geometry import SittingPose, transform_points, wrap_angle
+from bearchair.skills.imagination import DEFAULT_WORKERS
+from bearchair.skills.imagination.agent import LINKS, agent_urdf_path
+from bearchair.skills.imagination.backrest import check_direction
+from bearchair.skills.imagination.chair import (
     ChairPreparationError,
     PreparedChair,
     horizontal_area_m2,
     prepare_chair,
 )
-from skills.imagination.sam import DEFAULT_THRESHOLDS, SamThresholds, failed_criteria, score_drop
-from skills.imagination.simulation import (
+from bearchair.skills.imagination.sam import (
+    DEFAULT_THRESHOLDS,
+    SamThresholds,
+    failed_criteria,
+    score_drop,
+)
+from bearchair.skills.imagination.simulation import (
     ChairBody,
     DropSpec,
     RawDrop,
@@ -87,7 +92,7 @@ from skills.imagination.simulation import (
     run_task,
     worker_initializer,
 )
-from skills.results import DropOutcome, ImaginationResult, RotationVote
+from bearchair.skills.results import DropOutcome, ImaginationResult, RotationVote
 
 _Runner = Callable[
     [list[TaskSpec], threading.Event | None], tuple[list[list[RawDrop]], float, bool]

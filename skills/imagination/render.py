@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from core.errors import RenderError
-from core.geometry import SittingPose, rot_z
-from skills.imagination.agent import JOINTS
+from bearchair.core.errors import RenderError
+from bearchair.core.geometry import SittingPose, rot_z
+from bearchair.skills.imagination.agent import JOINTS
 
 _MAX_FACES = 6000
 

@@ -6,7 +6,7 @@ its own copy of the chair, spaced apart so they never interact, and one
 from the world) as soon as its agent is at rest, or as soon as it cannot end as a
 correct sitting any more (the pelvis is below the lowest sitting height, or off the
 chair). Only raw measurements come back; the sitting affordance model scores them
-(``skills.imagination.sam``), so thresholds can be tuned without simulating again.
+(``bearchair.skills.imagination.sam``), so thresholds can be tuned without simulating again.
 
 A task is computed the same way in whichever process runs it, starting from
 ``resetSimulation``: the result of a seed does not depend on the number of workers.
@@ -28,9 +28,9 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from core.geometry import yaw_of
-from core.streams import silenced_fds
-from skills.imagination.agent import (
+from bearchair.core.geometry import yaw_of
+from bearchair.core.streams import silenced_fds
+from bearchair.skills.imagination.agent import (
     BALANCE_FULL_TILT_RAD,
     BALANCE_TORQUE_MAX_NM,
     JOINTS,
@@ -39,7 +39,7 @@ from skills.imagination.agent import (
 )
 
 if TYPE_CHECKING:
-    from skills.imagination.chair import PreparedChair
+    from bearchair.skills.imagination.chair import PreparedChair
 
 
 class SimulationSettings(NamedTuple):

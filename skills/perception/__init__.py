@@ -1,19 +1,19 @@
 """Perception: scan and reconstruct the chair, track its rotation, track the humanoid's tag.
 
-Everything works on :class:`hardware.interfaces.RGBDFrame` from any camera backend; the
-functions taking a :class:`hardware.interfaces.ScanningArm` move it and capture.
+Everything works on :class:`bearchair.hardware.interfaces.RGBDFrame` from any camera backend; the
+functions taking a :class:`bearchair.hardware.interfaces.ScanningArm` move it and capture.
 """
 
-from skills.perception.errors import PerceptionError, RegistrationError
-from skills.perception.motion import wait_until_chair_still
-from skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
-from skills.perception.registration import (
+from bearchair.skills.perception.errors import PerceptionError, RegistrationError
+from bearchair.skills.perception.motion import wait_until_chair_still
+from bearchair.skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
+from bearchair.skills.perception.registration import (
     RegistrationConfig,
     measure_chair_rotation,
     register_chair,
 )
-from skills.perception.scan import ScanCancelled, scan_chair
-from skills.perception.tags import estimate_tag_pose, locate_humanoid
+from bearchair.skills.perception.scan import ScanCancelled, scan_chair
+from bearchair.skills.perception.tags import estimate_tag_pose, locate_humanoid
 
 __all__ = [
     "PerceptionError",

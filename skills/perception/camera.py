@@ -1,4 +1,4 @@
-"""Pinhole camera geometry on :class:`hardware.interfaces.RGBDFrame` and frame checks.
+"""Pinhole camera geometry on :class:`bearchair.hardware.interfaces.RGBDFrame` and frame checks.
 
 Camera frames follow OpenCV: x right, y down, z forward; depth is along z in metres.
 """
@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from hardware.interfaces import RGBDFrame
-from skills.perception.errors import PerceptionError
+from bearchair.hardware.interfaces import RGBDFrame
+from bearchair.skills.perception.errors import PerceptionError
 
 MIN_VALID_PIXELS = 500
 """A frame with fewer usable depth pixels than this is rejected as bad."""

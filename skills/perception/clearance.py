@@ -3,7 +3,7 @@
 The scan configurations were chosen offline against a chair volume of a fixed size;
 a larger or taller chair can stand where a view, or the motion into it, passes. Before
 the scan the arm looks down from HOME (high above the chair area) and bounds what it
-sees above the floor inside :func:`skills.perception.views.chair_volume` (the chair
+sees above the floor inside :func:`bearchair.skills.perception.views.chair_volume` (the chair
 area widened by the largest chair's reach, up to the tallest chair): that box, grown
 by a margin for parts the high view cannot see, is the chair's possible extent. Each
 view is then checked by forward kinematics (pybullet closest points between the
@@ -30,10 +30,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from hardware.interfaces import RGBDFrame, ScanningArm
-from skills.perception.camera import clean_depth, depth_to_world
-from skills.perception.errors import PerceptionError
-from skills.perception.views import (
+from bearchair.hardware.interfaces import RGBDFrame, ScanningArm
+from bearchair.skills.perception.camera import clean_depth, depth_to_world
+from bearchair.skills.perception.errors import PerceptionError
+from bearchair.skills.perception.views import (
     CHAIR_VOLUME,
     HOME_CONFIGURATION,
     VIEW_CLEARANCE_M,
@@ -107,12 +107,12 @@ def chair_extent(
 class ArmClearance:
     """Distances between the Panda's links and a box, by forward kinematics in pybullet.
 
-    The arm's base stands at the world origin (as in :data:`core.arena.DEFAULT_ARENA`).
+    The arm's base stands at the world origin (as in :data:`bearchair.core.arena.DEFAULT_ARENA`).
     Owns a DIRECT pybullet client: call :meth:`close` (or use ``with``).
     """
 
     def __init__(self) -> None:
-        from skills.perception.synthetic import PandaKinematics
+        from bearchair.skills.perception.synthetic import PandaKinematics
 
         self._kinematics = PandaKinematics()
         self._box: int | None = None
@@ -308,7 +308,7 @@ def capture_views(
     cancelled: type[Exception] = PerceptionError,
 ) -> tuple[list[RGBDFrame], list[str], dict[str, float]]:
     """Frames from ``views`` (from and back to HOME), each checked against the chair's
-    extent as seen from HOME first (``skills.perception.clearance``).
+    extent as seen from HOME first (``bearchair.skills.perception.clearance``).
 
     Returns:
         (frames, notes on views skipped or replaced, wall time: ``motion``, ``capture``

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from core.errors import SkillError
+from bearchair.core.errors import SkillError
 
 
 class PerceptionError(SkillError, RuntimeError):

@@ -2,7 +2,7 @@
 
 Eye-in-hand: the camera rides on the Panda's flange and looks at a board lying still in
 the cell. For every view ``i`` the arm gives ``T_base_flange_i`` (libfranka's
-``O_T_EE @ inv(F_T_EE)``, as :class:`hardware.real.panda.PandaArm` computes it) and the
+``O_T_EE @ inv(F_T_EE)``, as :class:`bearchair.hardware.real.panda.PandaArm` computes it) and the
 camera sees the board at ``T_camera_board_i`` (:func:`detect_board`). The board does
 not move, so for every view
 
@@ -57,8 +57,8 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from hardware.interfaces import CameraIntrinsics
-from skills.perception.errors import BoardNotSeenError, HandEyeError
+from bearchair.hardware.interfaces import CameraIntrinsics
+from bearchair.skills.perception.errors import BoardNotSeenError, HandEyeError
 
 MIN_VIEWS = 3
 """Fewest (T_base_flange, T_camera_board) pairs solved: two motions about different axes
@@ -81,7 +81,7 @@ intrinsics are wrong, the board is bent, or a corner was misdetected."""
 MAX_SPREAD_MM = 8.0
 """Acceptance (``bearchair calibrate-hand-eye``): the board's position over the views
 must agree within this (largest deviation from the mean): one TSDF voxel of the chair
-reconstruction (:class:`skills.perception.reconstruction.ReconstructionConfig`, 8 mm)."""
+reconstruction (:class:`bearchair.skills.perception.reconstruction.ReconstructionConfig`, 8 mm)."""
 
 MAX_SPREAD_DEG = 1.0
 """Acceptance: the board's orientation over the views agrees within this (largest

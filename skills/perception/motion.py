@@ -6,9 +6,9 @@ import threading
 
 import numpy as np
 
-from hardware.interfaces import Clock, RGBDFrame, ScanningArm
-from skills.perception.camera import clean_depth, depth_to_world, validate_frame
-from skills.perception.views import CHAIR_VOLUME, STILL_CHECK_CONFIGURATION
+from bearchair.hardware.interfaces import Clock, RGBDFrame, ScanningArm
+from bearchair.skills.perception.camera import clean_depth, depth_to_world, validate_frame
+from bearchair.skills.perception.views import CHAIR_VOLUME, STILL_CHECK_CONFIGURATION
 
 
 def chair_volume_mask(frame: RGBDFrame, margin_m: float = 0.02) -> np.ndarray:

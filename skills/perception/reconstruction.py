@@ -27,13 +27,13 @@ import open3d as o3d
 import trimesh
 from scipy import ndimage
 
-from core.arena import DEFAULT_ARENA, Box2D
-from hardware.interfaces import RGBDFrame
-from skills.perception.camera import clean_depth, depth_to_world, validate_frame
-from skills.perception.determinism import one_open3d_thread
-from skills.perception.errors import PerceptionError
-from skills.perception.views import MAX_CHAIR_HEIGHT_M, MAX_CHAIR_REACH_M
-from skills.results import ChairScan
+from bearchair.core.arena import DEFAULT_ARENA, Box2D
+from bearchair.hardware.interfaces import RGBDFrame
+from bearchair.skills.perception.camera import clean_depth, depth_to_world, validate_frame
+from bearchair.skills.perception.determinism import one_open3d_thread
+from bearchair.skills.perception.errors import PerceptionError
+from bearchair.skills.perception.views import MAX_CHAIR_HEIGHT_M, MAX_CHAIR_REACH_M
+from bearchair.skills.results import ChairScan
 
 
 @dataclass(frozen=True)

@@ -33,14 +33,14 @@ from typing import NamedTuple
 import numpy as np
 import open3d as o3d
 
-from core.geometry import rot_z, transform_points, wrap_angle, yaw_of, yaw_transform
-from hardware.interfaces import RGBDFrame, ScanningArm
-from skills.perception.clearance import capture_views
-from skills.perception.determinism import one_open3d_thread
-from skills.perception.errors import PerceptionError, RegistrationError
-from skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
-from skills.perception.views import SCAN_CONFIGURATIONS, TRACKING_VIEWS
-from skills.results import ChairRotation
+from bearchair.core.geometry import rot_z, transform_points, wrap_angle, yaw_of, yaw_transform
+from bearchair.hardware.interfaces import RGBDFrame, ScanningArm
+from bearchair.skills.perception.clearance import capture_views
+from bearchair.skills.perception.determinism import one_open3d_thread
+from bearchair.skills.perception.errors import PerceptionError, RegistrationError
+from bearchair.skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
+from bearchair.skills.perception.views import SCAN_CONFIGURATIONS, TRACKING_VIEWS
+from bearchair.skills.results import ChairRotation
 
 
 @dataclass(frozen=True)
@@ -510,7 +510,7 @@ def _capture(
     arm: ScanningArm, views: tuple[int, ...], cancel: threading.Event | None
 ) -> list[RGBDFrame]:
     """Frames from the scan configurations ``views``, visited from and back to HOME, each
-    checked against the chair's extent first (``skills.perception.clearance``)."""
+    checked against the chair's extent first (``bearchair.skills.perception.clearance``)."""
     frames, _, _ = capture_views(
         arm, tuple(SCAN_CONFIGURATIONS[i] for i in views), cancel, PerceptionError
     )

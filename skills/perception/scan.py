@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import threading
 
-from core.errors import Cancelled
-from hardware.interfaces import ScanningArm
-from skills.perception.clearance import MIN_SCAN_VIEWS, capture_views
-from skills.perception.errors import PerceptionError
-from skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
-from skills.perception.views import SCAN_CONFIGURATIONS
-from skills.results import ChairScan
+from bearchair.core.errors import Cancelled
+from bearchair.hardware.interfaces import ScanningArm
+from bearchair.skills.perception.clearance import MIN_SCAN_VIEWS, capture_views
+from bearchair.skills.perception.errors import PerceptionError
+from bearchair.skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
+from bearchair.skills.perception.views import SCAN_CONFIGURATIONS
+from bearchair.skills.results import ChairScan
 
 
 class ScanCancelled(Cancelled, PerceptionError):
@@ -28,7 +28,7 @@ def scan_chair(
 
     The arm goes HOME and looks at the chair area from there; views whose motion would
     pass within 3 cm of the chair it sees are visited through HOME, replaced by a view
-    higher up, or skipped (``skills.perception.clearance``); then through the views in
+    higher up, or skipped (``bearchair.skills.perception.clearance``); then through the views in
     order, and back HOME.
 
     Args:

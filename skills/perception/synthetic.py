@@ -2,10 +2,10 @@
 
 A minimal, physics-free pybullet scene (DIRECT client, TinyRenderer) holding meshes,
 a floor, ArUco tags and ChArUco calibration boards, seen by the simulated Carmine of
-:mod:`hardware.sim.camera` (the same intrinsics, rendering and noise model as the
+:mod:`bearchair.hardware.sim.camera` (the same intrinsics, rendering and noise model as the
 mission's wrist camera); and :class:`SyntheticArm`, a
-:class:`hardware.interfaces.ScanningArm` whose camera pose comes from the Panda's forward
-kinematics. The mission uses ``hardware.sim``; this module exists so the perception
+:class:`bearchair.hardware.interfaces.ScanningArm` whose camera pose comes from the Panda's forward
+kinematics. The mission uses ``bearchair.hardware.sim``; this module exists so the perception
 algorithms can be tested on their own. :func:`board_view` draws a calibration board by
 its homography alone (no pybullet).
 """
@@ -24,9 +24,9 @@ import pybullet_data
 import trimesh
 from pybullet_utils.bullet_client import BulletClient
 
-from core.arena import TagSpec
-from hardware.interfaces import CameraIntrinsics, RGBDFrame
-from hardware.sim.camera import (
+from bearchair.core.arena import TagSpec
+from bearchair.hardware.interfaces import CameraIntrinsics, RGBDFrame
+from bearchair.hardware.sim.camera import (
     CARMINE_INTRINSICS,
     T_HAND_CAMERA,
     CarmineNoise,
@@ -35,7 +35,7 @@ from hardware.sim.camera import (
 )
 
 if TYPE_CHECKING:
-    from skills.perception.hand_eye import BoardSpec
+    from bearchair.skills.perception.hand_eye import BoardSpec
 
 
 class SyntheticScene:
@@ -119,11 +119,11 @@ class SyntheticScene:
     def add_board(self, board: BoardSpec, T_world_board: np.ndarray) -> int:
         """Adds a printed ChArUco board (white margin of half a square) at ``T_world_board``.
 
-        The body's frame is the board's (:mod:`skills.perception.hand_eye`): origin at the
+        The body's frame is the board's (:mod:`bearchair.skills.perception.hand_eye`): origin at the
         outer top-left chessboard corner, x along its rows, y down its columns, z into the
         board; the printed face looks along -z.
         """
-        from skills.perception.hand_eye import board_image
+        from bearchair.skills.perception.hand_eye import board_image
 
         pixels_per_square = 60
         image = board_image(board, pixels_per_square=pixels_per_square, margin_squares=0.5)
@@ -231,7 +231,7 @@ class PandaKinematics:
 
 
 class SyntheticArm:
-    """A :class:`hardware.interfaces.ScanningArm` that teleports and renders a scene.
+    """A :class:`bearchair.hardware.interfaces.ScanningArm` that teleports and renders a scene.
 
     Motions are instantaneous; a clock, if given, advances by ``seconds_per_move``.
     """
@@ -276,12 +276,12 @@ def board_view(
 ) -> np.ndarray:
     """A camera's (H, W, 3) uint8 picture of a printed board at ``T_camera_board``.
 
-    The printed board (:func:`skills.perception.hand_eye.board_image`) is mapped by the
+    The printed board (:func:`bearchair.skills.perception.hand_eye.board_image`) is mapped by the
     plane's homography ``K [r1 r2 t]`` at twice the resolution and averaged down 2 x 2
     (so edges are anti-aliased as a lens and sensor would), on a grey background, with
     Gaussian grey noise. Exact pinhole geometry, no distortion, no lighting.
     """
-    from skills.perception.hand_eye import board_image
+    from bearchair.skills.perception.hand_eye import board_image
 
     pixels_per_square = 120
     margin_px = pixels_per_square // 2

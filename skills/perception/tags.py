@@ -22,11 +22,11 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
-from core.arena import HUMANOID_TAG, TagSpec
-from core.geometry import yaw_of
-from core.se2 import SE2Pose
-from hardware.interfaces import RGBDFrame, ScanningArm
-from skills.perception.views import HOME_CONFIGURATION, OVERVIEW_CONFIGURATION
+from bearchair.core.arena import HUMANOID_TAG, TagSpec
+from bearchair.core.geometry import yaw_of
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import RGBDFrame, ScanningArm
+from bearchair.skills.perception.views import HOME_CONFIGURATION, OVERVIEW_CONFIGURATION
 
 MAX_TILT_DEG = 35.0
 """A fitted tag tilted more than this from horizontal is a bad fit, not the head tag."""
@@ -174,7 +174,7 @@ def _tag_pose_and_corners(
 WINDOW_MARGIN_PX = 40
 """How far around the tag's last sighting the next tag frame reaches, at least (pixels).
 
-Between two tag frames of the walk (0.3 s, :class:`skills.control.walk.WalkGains`) the
+Between two tag frames of the walk (0.3 s, :class:`bearchair.skills.control.walk.WalkGains`) the
 NAO moves at most 3 cm and turns at most 0.15 rad: 29 px at the near end of the arena
 (0.6 m from the camera, fx = 577 px), less farther away. The margin is also at least the
 tag's own size in the image. A tag not found in its window is looked for in a full frame.

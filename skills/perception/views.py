@@ -8,7 +8,7 @@ and checked by forward kinematics the optical axis (within 3 degrees), the eye (
 chair volume of that time (the chair area widened by 0.25 m, 0.58 m high). A larger
 chair can reach into some of them: before every scan the views are checked again
 against the chair's extent as seen from HOME, inside :data:`CHAIR_VOLUME`, and routed,
-replaced or skipped (``skills.perception.clearance``). The camera pose of every capture
+replaced or skipped (``bearchair.skills.perception.clearance``). The camera pose of every capture
 still comes from the arm's own forward kinematics (``RGBDFrame.T_world_camera``), so a
 different hand-eye extrinsic only shifts the views by a few centimetres.
 """
@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.arena import DEFAULT_ARENA, Arena
+from bearchair.core.arena import DEFAULT_ARENA, Arena
 
 MAX_CHAIR_REACH_M = 0.45
 """How far (metres) any part of a chair reaches horizontally from its centre, whatever
@@ -33,7 +33,7 @@ stand 0.45-0.62 m overall."""
 VIEW_CLEARANCE_M = 0.03
 """A scan view, and the straight joint-space motion into it, keeps the arm's links this
 far (metres) from the chair's possible extent; closer, the view is replaced or skipped
-(``skills.perception.clearance``)."""
+(``bearchair.skills.perception.clearance``)."""
 
 
 def chair_volume(

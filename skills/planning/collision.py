@@ -26,10 +26,10 @@ import fcl
 import numpy as np
 import trimesh
 
-from core.arena import Arena, Box2D
-from core.geometry import rot_z
-from core.meshes import solid_below_surface_boxes
-from core.se2 import SE2Pose
+from bearchair.core.arena import Arena, Box2D
+from bearchair.core.geometry import rot_z
+from bearchair.core.meshes import solid_below_surface_boxes
+from bearchair.core.se2 import SE2Pose
 
 NAO_SEMI_AXES_M = (0.165, 0.14, 0.29)
 """Semi-axes (forward, lateral, vertical) of the NAO's enclosing ellipsoid, metres."""
@@ -68,7 +68,7 @@ def chair_solid_boxes(chair_mesh: trimesh.Trimesh) -> list[np.ndarray]:
 
     The NAO's ellipsoid reaches the floor, so the space under a seat is as closed to it
     as the seat itself; a scanned chair is an open surface with no inside, which only a
-    solid can stand for. :func:`core.meshes.solid_below_surface_boxes` fills each
+    solid can stand for. :func:`bearchair.core.meshes.solid_below_surface_boxes` fills each
     :data:`CHAIR_CELL_M` column from its highest surface point to the floor and merges
     the columns into a few boxes (tens to a few hundred on a chair, in about 0.1 s),
     with no decomposition to run or cache.

@@ -1,7 +1,7 @@
 """The seating pre-plan: can the NAO seat the bear at g from a prospective s_goal?
 
-The stance search (:mod:`skills.planning.stance`) and the accessibility check
-(:mod:`skills.planning.se2`) ask a seating validator about candidate stances. Two are
+The stance search (:mod:`bearchair.skills.planning.stance`) and the accessibility check
+(:mod:`bearchair.skills.planning.se2`) ask a seating validator about candidate stances. Two are
 here: the whole-body pre-plan (:func:`wholebody_validator`, the default, its answers
 memoised in :data:`PREPLANS`) and the faster reach model alone (:func:`reach_validator`).
 """
@@ -16,12 +16,12 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
-from core.geometry import SittingPose
-from core.memo import BoundedMemo
-from core.se2 import SE2Pose
-from skills.planning.wholebody import STANCE, InfeasibleSeating, preplan_approach
-from skills.planning.wholebody.chair_profile import ChairProfileError, fit_chair_profile
-from skills.planning.wholebody.reach_model import reach_model
+from bearchair.core.geometry import SittingPose
+from bearchair.core.memo import BoundedMemo
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning.wholebody import STANCE, InfeasibleSeating, preplan_approach
+from bearchair.skills.planning.wholebody.chair_profile import ChairProfileError, fit_chair_profile
+from bearchair.skills.planning.wholebody.reach_model import reach_model
 
 
 class SeatingCheck(NamedTuple):
@@ -50,7 +50,7 @@ def reach_validator(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
 ) -> SeatingCheck:
     """A fast validity check without the pre-plan: the reach model
-    (:mod:`skills.planning.wholebody.reach_model`) places the bear at g from s_goal, the
+    (:mod:`bearchair.skills.planning.wholebody.reach_model`) places the bear at g from s_goal, the
     chair's profile seen from there (seat front, seat top) as the whole-body planner
     sees it, and the front of the feet clear of the chair."""
     T_nao_world = np.linalg.inv(se2_goal.as_transform())
@@ -112,7 +112,7 @@ PREPLANS = PreplanMemo()
 def wholebody_validator(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose
 ) -> SeatingCheck:
-    """The whole-body pre-plan (:func:`skills.planning.wholebody.preplan_approach`) as a
+    """The whole-body pre-plan (:func:`bearchair.skills.planning.wholebody.preplan_approach`) as a
     seating validator, answered from :data:`PREPLANS` when it was asked before."""
     key = PREPLANS.key(chair_mesh, sitting_pose, se2_goal)
     answer = PREPLANS.get(key)

@@ -4,9 +4,9 @@ The paper, section "System Pipeline": the SE(2) goal s_goal faces opposite the s
 direction γ on the horizontal ray from p along γ, clear of the chair; p moves along the
 ray toward the NAO as far as its workspace needs; the seat motion is pre-planned at
 s_goal to check it is valid; then OMPL's RRTConnect plans an SE(2) path from the
-humanoid to s_goal within the arena, checked with FCL (:mod:`skills.planning.collision`).
+humanoid to s_goal within the arena, checked with FCL (:mod:`bearchair.skills.planning.collision`).
 
-Stance and sitting point are chosen together by :mod:`skills.planning.stance` (reach
+Stance and sitting point are chosen together by :mod:`bearchair.skills.planning.stance` (reach
 model, then the pre-plan). The walking NAO is an ellipsoid that covers the carried
 bear; a stance nearer the chair than the ellipsoid allows (a footrest or a base that
 sticks out under the seat) is reached by walking to the first pose on the ray where the
@@ -31,14 +31,14 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
-from core.arena import Arena
-from core.errors import SkillError
-from core.geometry import SittingPose, wrap_angle
-from core.se2 import SE2Pose
-from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
-from skills.planning.preplan import SeatingValidator, wholebody_validator
-from skills.planning.stance import StanceChoice, choose_stance
-from skills.results import AccessibilityResult
+from bearchair.core.arena import Arena
+from bearchair.core.errors import SkillError
+from bearchair.core.geometry import SittingPose, wrap_angle
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
+from bearchair.skills.planning.preplan import SeatingValidator, wholebody_validator
+from bearchair.skills.planning.stance import StanceChoice, choose_stance
+from bearchair.skills.results import AccessibilityResult
 
 __all__ = [
     "AccessibilityError",
@@ -215,7 +215,7 @@ def check_accessibility(
         arena: walls and fixed obstacles.
         seed: OMPL's random seed.
         seating_validator: checks seating from s_goal; default: the whole-body pre-plan
-            (:func:`skills.planning.preplan.wholebody_validator`).
+            (:func:`bearchair.skills.planning.preplan.wholebody_validator`).
         check_budget: RRTConnect gives up after this many state validity checks.
 
     Returns:

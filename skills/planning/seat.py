@@ -19,8 +19,8 @@ import numpy as np
 import trimesh
 from scipy import ndimage
 
-from core.geometry import SittingPose
-from core.nao_carrying import (
+from bearchair.core.geometry import SittingPose
+from bearchair.core.nao_carrying import (
     BEAR_COM_AHEAD_M,
     BEAR_COM_HEIGHT_M,
     BEAR_TORSO_DEPTH_M,

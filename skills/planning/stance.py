@@ -5,7 +5,7 @@ direction γ, pushes it out of collision, and moves p along the ray toward the r
 to the robot workspace constraint". Here the two are searched together: candidate
 sitting points p(s) slide from the imagined p toward the NAO over the seat's supported
 region, candidate stances stand at t from the imagined p along the same ray, and a pair
-is taken when the reach model (:mod:`skills.planning.wholebody.reach_model`) places the
+is taken when the reach model (:mod:`bearchair.skills.planning.wholebody.reach_model`) places the
 bear there, preferring p closest to the imagined one and then the nearest stance. The
 whole-body pre-plan (the seating validator) confirms the pair; when it refuses, the next
 pair is tried. With u = (cos γ, sin γ) and p₀ the imagined sitting point:
@@ -20,7 +20,7 @@ where h(s) is the seat's height under p(s), f₀ how far the chair's front (anyt
 below the seat in the band the NAO's body sweeps) lies ahead of p₀ along u.
 
 Only sitting points where the seat holds the bear are candidates
-(:mod:`skills.planning.seat`). Stances where the walking NAO's ellipsoid clears the chair
+(:mod:`bearchair.skills.planning.seat`). Stances where the walking NAO's ellipsoid clears the chair
 come first; then nearer ones, down to the front of its feet at the chair's front, which
 it reaches by stepping straight in from the first clear one (the pre-plan checks its
 feet, shins, body and the carried bear against the chair).
@@ -44,13 +44,13 @@ from typing import NamedTuple, cast
 import numpy as np
 import trimesh
 
-from core.arena import Arena, Box2D
-from core.geometry import SittingPose, wrap_angle
-from core.se2 import SE2Pose
-from skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
-from skills.planning.preplan import SeatingCheck, SeatingValidator, wholebody_validator
-from skills.planning.seat import STEP_M, SeatRay, seat_ray
-from skills.planning.wholebody.chair_profile import (
+from bearchair.core.arena import Arena, Box2D
+from bearchair.core.geometry import SittingPose, wrap_angle
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
+from bearchair.skills.planning.preplan import SeatingCheck, SeatingValidator, wholebody_validator
+from bearchair.skills.planning.seat import STEP_M, SeatRay, seat_ray
+from bearchair.skills.planning.wholebody.chair_profile import (
     BAND_HALF_WIDTH_M,
     BEAR_LANE_HALF_WIDTH_M,
     RAIL_CLEARANCE_M,
@@ -58,9 +58,9 @@ from skills.planning.wholebody.chair_profile import (
     fit_chair_profile,
     stands_above_seat,
 )
-from skills.planning.wholebody.optimisation import BEAR_CHAIR_MARGIN_M, BEAR_DEPTH_M
-from skills.planning.wholebody.reach_model import ReachModel, reach_model
-from skills.results import SeatReachability
+from bearchair.skills.planning.wholebody.optimisation import BEAR_CHAIR_MARGIN_M, BEAR_DEPTH_M
+from bearchair.skills.planning.wholebody.reach_model import ReachModel, reach_model
+from bearchair.skills.results import SeatReachability
 
 STANCE_SEARCH_M = 0.08
 """Stances are tried up to this far (metres) beyond the first collision-free one: a

@@ -15,16 +15,20 @@ Infeasible plans raise :class:`InfeasibleSeating` (a ``ValueError``) naming the 
 constraint.
 """
 
-from skills.planning.wholebody.execution import (
+from bearchair.skills.planning.wholebody.execution import (
     SeatingCancelled,
     execute_seating,
     raise_bear,
     release_and_stand,
 )
-from skills.planning.wholebody.infeasible import STANCE, InfeasibleSeating
-from skills.planning.wholebody.postures import RAISED_POSTURE, REST_POSTURE, STANDING_POSTURE
-from skills.planning.wholebody.raising import plan_raise
-from skills.planning.wholebody.seating import (
+from bearchair.skills.planning.wholebody.infeasible import STANCE, InfeasibleSeating
+from bearchair.skills.planning.wholebody.postures import (
+    RAISED_POSTURE,
+    REST_POSTURE,
+    STANDING_POSTURE,
+)
+from bearchair.skills.planning.wholebody.raising import plan_raise
+from bearchair.skills.planning.wholebody.seating import (
     plan_seating,
     plan_seating_where_standing,
     preplan_approach,

@@ -30,9 +30,9 @@ from typing import NamedTuple, cast
 import numpy as np
 import trimesh
 
-from core.errors import SkillError
-from core.geometry import transform_points
-from core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, BEAR_SEAT_CLEARANCE_M
+from bearchair.core.errors import SkillError
+from bearchair.core.geometry import transform_points
+from bearchair.core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, BEAR_SEAT_CLEARANCE_M
 
 BAND_HALF_WIDTH_M = 0.11
 """Half-width of the lateral band the planar motion sweeps (the hands' centres at

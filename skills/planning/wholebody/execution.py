@@ -1,4 +1,4 @@
-"""Playing the seating motions on a :class:`hardware.interfaces.Humanoid`: the raise, the
+"""Playing the seating motions on a :class:`bearchair.hardware.interfaces.Humanoid`: the raise, the
 seating motion, the release and the stand-up (the only part of the whole-body planner
 that moves the robot)."""
 
@@ -9,13 +9,13 @@ import threading
 import numpy as np
 import trimesh
 
-from core.errors import Cancelled
-from core.geometry import SittingPose
-from core.se2 import SE2Pose
-from hardware.interfaces import Humanoid
-from skills.planning.wholebody.nao_model import DRIVEN_JOINTS
-from skills.planning.wholebody.raising import plan_raise
-from skills.results import SeatingPlan
+from bearchair.core.errors import Cancelled
+from bearchair.core.geometry import SittingPose
+from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import Humanoid
+from bearchair.skills.planning.wholebody.nao_model import DRIVEN_JOINTS
+from bearchair.skills.planning.wholebody.raising import plan_raise
+from bearchair.skills.results import SeatingPlan
 
 
 class SeatingCancelled(Cancelled, RuntimeError):

@@ -6,14 +6,17 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from skills.planning.wholebody.infeasible import InfeasibleSeating
-from skills.planning.wholebody.optimisation import (
+from bearchair.skills.planning.wholebody.infeasible import InfeasibleSeating
+from bearchair.skills.planning.wholebody.optimisation import (
     BEAR_TILT_GOAL_RAD,
     PLACEMENT_TOLERANCE_M,
     SeatingProblems,
 )
-from skills.planning.wholebody.posture_check import CHECK_TOLERANCE, exact_posture_violation
-from skills.planning.wholebody.scene import SeatingScene
+from bearchair.skills.planning.wholebody.posture_check import (
+    CHECK_TOLERANCE,
+    exact_posture_violation,
+)
+from bearchair.skills.planning.wholebody.scene import SeatingScene
 
 DIAGNOSIS_TOLERANCE = 0.005
 """The others' worst violation under which an infeasible goal is blamed on the bear's

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from core.errors import SkillError
+from bearchair.core.errors import SkillError
 
 STANCE = "stance"
 """The constraint group of an s_goal too close to the chair (feet, or the carried bear,

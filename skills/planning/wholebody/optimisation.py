@@ -33,14 +33,14 @@ import casadi as ca
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from core.nao_carrying import (
+from bearchair.core.nao_carrying import (
     BEAR_COM_HEIGHT_M,
     BEAR_SEAT_BELOW_HANDS_M,
     CARRYING_POSTURE_RAD,
     PALM_IN_WRIST_M,
     PLACEMENT_TOLERANCE_M,
 )
-from skills.planning.wholebody.nao_model import PlanarNao, link_transforms, planar_nao
+from bearchair.skills.planning.wholebody.nao_model import PlanarNao, link_transforms, planar_nao
 
 # The bear (0.25 m tall, 0.2 kg, its frame at its seat point: the bottom centre of its
 # torso) is held rigidly between the palms in the pose it had when handed over: upright,

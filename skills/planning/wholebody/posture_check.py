@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from skills.planning.wholebody.chair_profile import ChairProfile
-from skills.planning.wholebody.optimisation import (
+from bearchair.skills.planning.wholebody.chair_profile import ChairProfile
+from bearchair.skills.planning.wholebody.optimisation import (
     ARM_POINTS,
     LEG_TORSO_HEAD_POINTS,
     NO_RELEASED_BEAR,

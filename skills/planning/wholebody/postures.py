@@ -7,7 +7,7 @@ import numpy as np
 
 STANDING_POSTURE = np.array([0.0, 0.0, 0.0, 0.9208, 1.3629])
 """q = (ankle, knee, hip, shoulder, elbow) that starts the seating motion: standing
-straight, the palms where the carrying posture (:data:`core.nao_carrying.CARRYING_POSTURE_RAD`)
+straight, the palms where the carrying posture (:data:`bearchair.core.nao_carrying.CARRYING_POSTURE_RAD`)
 has them (within 3 mm and 2 deg, checked by a test), so the bear barely moves when the
 arms switch to the planar posture during the lead-in."""
 RAISED_POSTURE = np.array([0.0, 0.0, 0.0, 0.0, 0.41])

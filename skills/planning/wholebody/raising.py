@@ -6,14 +6,14 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from core.geometry import SittingPose
-from core.se2 import SE2Pose
-from skills.planning.wholebody.infeasible import STANCE, InfeasibleSeating
-from skills.planning.wholebody.nao_model import to_joint_positions
-from skills.planning.wholebody.optimisation import seating_problems
-from skills.planning.wholebody.postures import RAISED_POSTURE, STANDING_POSTURE
-from skills.planning.wholebody.scene import seating_scene
-from skills.planning.wholebody.trajectory import LEAD_IN_S, solve_trajectory
+from bearchair.core.geometry import SittingPose
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning.wholebody.infeasible import STANCE, InfeasibleSeating
+from bearchair.skills.planning.wholebody.nao_model import to_joint_positions
+from bearchair.skills.planning.wholebody.optimisation import seating_problems
+from bearchair.skills.planning.wholebody.postures import RAISED_POSTURE, STANDING_POSTURE
+from bearchair.skills.planning.wholebody.scene import seating_scene
+from bearchair.skills.planning.wholebody.trajectory import LEAD_IN_S, solve_trajectory
 
 RAISE_STEP_M = 0.02
 """The raising pose steps back from s_goal in these steps until the raise is clear..."""

@@ -19,7 +19,7 @@ point), and whether a seat is reachable from any stance at all
 guesses of IPOPT and re-checked with the exact (non-smoothed) constraints; a cell with
 no feasible posture holds NaN.
 
-The grid is computed once (``python -m skills.planning.wholebody.reach_model`` writes
+The grid is computed once (``python -m bearchair.skills.planning.wholebody.reach_model`` writes
 ``reach_table.json`` beside this module, about a minute on the 2-core machine) and
 shipped; a test recomputes cells and compares. Figures of the shipped table (seat
 fronts at least 0.20 m ahead, the bear let go 1 cm over the seat): the NAO places the bear
@@ -38,9 +38,9 @@ from typing import NamedTuple
 import casadi as ca
 import numpy as np
 
-from core.nao_carrying import BEAR_SEAT_CLEARANCE_M
-from skills.planning.wholebody.chair_profile import ChairProfile
-from skills.planning.wholebody.optimisation import (
+from bearchair.core.nao_carrying import BEAR_SEAT_CLEARANCE_M
+from bearchair.skills.planning.wholebody.chair_profile import ChairProfile
+from bearchair.skills.planning.wholebody.optimisation import (
     BEAR_CHAIR_MARGIN_M,
     BEAR_TILT_GOAL_RAD,
     NO_RELEASED_BEAR,
@@ -48,8 +48,11 @@ from skills.planning.wholebody.optimisation import (
     _ipopt_options,
     seating_problems,
 )
-from skills.planning.wholebody.posture_check import CHECK_TOLERANCE, exact_posture_violation
-from skills.planning.wholebody.postures import RAISED_POSTURE
+from bearchair.skills.planning.wholebody.posture_check import (
+    CHECK_TOLERANCE,
+    exact_posture_violation,
+)
+from bearchair.skills.planning.wholebody.postures import RAISED_POSTURE
 
 TABLE_PATH = Path(__file__).with_name("reach_table.json")
 SEAT_HEIGHTS_M = np.round(np.arange(0.10, 0.501, 0.01), 3)

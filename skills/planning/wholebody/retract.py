@@ -10,12 +10,15 @@ from collections.abc import Iterator
 import numpy as np
 from scipy.optimize import least_squares
 
-from skills.planning.wholebody.chair_profile import ChairProfile
-from skills.planning.wholebody.infeasible import InfeasibleSeating
-from skills.planning.wholebody.optimisation import SeatingProblems, released_bear
-from skills.planning.wholebody.posture_check import CHECK_TOLERANCE, exact_posture_violation
-from skills.planning.wholebody.postures import REST_POSTURE
-from skills.planning.wholebody.trajectory import solve_trajectory
+from bearchair.skills.planning.wholebody.chair_profile import ChairProfile
+from bearchair.skills.planning.wholebody.infeasible import InfeasibleSeating
+from bearchair.skills.planning.wholebody.optimisation import SeatingProblems, released_bear
+from bearchair.skills.planning.wholebody.posture_check import (
+    CHECK_TOLERANCE,
+    exact_posture_violation,
+)
+from bearchair.skills.planning.wholebody.postures import REST_POSTURE
+from bearchair.skills.planning.wholebody.trajectory import solve_trajectory
 
 RETRACT_LEAD_IN_S = 0.3
 """Time of the retract's first knot (q_goal, where the robot already is)."""

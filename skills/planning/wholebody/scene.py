@@ -9,15 +9,15 @@ from typing import NamedTuple
 import numpy as np
 import trimesh
 
-from core.geometry import SittingPose, transform_points, wrap_angle
-from core.nao_carrying import BEAR_SEAT_CLEARANCE_M
-from core.se2 import SE2Pose
-from skills.planning.wholebody.chair_profile import (
+from bearchair.core.geometry import SittingPose, transform_points, wrap_angle
+from bearchair.core.nao_carrying import BEAR_SEAT_CLEARANCE_M
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning.wholebody.chair_profile import (
     ChairProfile,
     ChairProfileError,
     fit_chair_profile,
 )
-from skills.planning.wholebody.infeasible import InfeasibleSeating
+from bearchair.skills.planning.wholebody.infeasible import InfeasibleSeating
 
 LATERAL_TOLERANCE_M = 0.05
 """How far g may lie beside the NAO's sagittal plane (the planar motion cannot reach it)."""

@@ -30,25 +30,28 @@ import time
 import numpy as np
 import trimesh
 
-from core.geometry import SittingPose
-from core.se2 import SE2Pose
-from skills.planning.seat import slide_on_seat
-from skills.planning.wholebody.chair_profile import ChairProfile
-from skills.planning.wholebody.goal import goal_posture_candidates
-from skills.planning.wholebody.infeasible import STANCE, InfeasibleSeating
-from skills.planning.wholebody.nao_model import DRIVEN_JOINTS, to_joint_positions
-from skills.planning.wholebody.optimisation import (
+from bearchair.core.geometry import SittingPose
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning.seat import slide_on_seat
+from bearchair.skills.planning.wholebody.chair_profile import ChairProfile
+from bearchair.skills.planning.wholebody.goal import goal_posture_candidates
+from bearchair.skills.planning.wholebody.infeasible import STANCE, InfeasibleSeating
+from bearchair.skills.planning.wholebody.nao_model import DRIVEN_JOINTS, to_joint_positions
+from bearchair.skills.planning.wholebody.optimisation import (
     BEAR_TILT_MOTION_RAD,
     SeatingProblems,
     seating_problems,
 )
-from skills.planning.wholebody.posture_check import CHECK_TOLERANCE, exact_posture_violation
-from skills.planning.wholebody.postures import RAISED_POSTURE, STANDING_POSTURE
-from skills.planning.wholebody.raising import raising_pose
-from skills.planning.wholebody.retract import RETRACT_LEAD_IN_S, plan_retract
-from skills.planning.wholebody.scene import SeatingScene, seating_scene
-from skills.planning.wholebody.trajectory import LEAD_IN_S, solve_trajectory
-from skills.results import SeatingPlan
+from bearchair.skills.planning.wholebody.posture_check import (
+    CHECK_TOLERANCE,
+    exact_posture_violation,
+)
+from bearchair.skills.planning.wholebody.postures import RAISED_POSTURE, STANDING_POSTURE
+from bearchair.skills.planning.wholebody.raising import raising_pose
+from bearchair.skills.planning.wholebody.retract import RETRACT_LEAD_IN_S, plan_retract
+from bearchair.skills.planning.wholebody.scene import SeatingScene, seating_scene
+from bearchair.skills.planning.wholebody.trajectory import LEAD_IN_S, solve_trajectory
+from bearchair.skills.results import SeatingPlan
 
 TOE_POINT_XZ = np.array([0.10, 0.02])
 """The front of the feet in the NAO frame (metres), checked against the chair."""
@@ -191,7 +194,7 @@ def plan_seating_where_standing(
     The walk stops within 5 mm of s_goal, and the stance search accepts a pre-plan at
     s_goal with less reach to spare than that (it goes to the reach model's limit). Then
     p slides toward the NAO along the seat, up to 3 cm, over supported seat only
-    (:func:`skills.planning.seat.slide_on_seat`, which keeps it off the seat's edge):
+    (:func:`bearchair.skills.planning.seat.slide_on_seat`, which keeps it off the seat's edge):
     when the bear is out of reach, or the NAO would lean its centre of mass off its feet
     to put it there (both say the bear is a little too far).
 

@@ -8,15 +8,18 @@ from typing import NamedTuple
 
 import numpy as np
 
-from skills.planning.wholebody.chair_profile import ChairProfile
-from skills.planning.wholebody.infeasible import InfeasibleSeating
-from skills.planning.wholebody.optimisation import (
+from bearchair.skills.planning.wholebody.chair_profile import ChairProfile
+from bearchair.skills.planning.wholebody.infeasible import InfeasibleSeating
+from bearchair.skills.planning.wholebody.optimisation import (
     BEAR_TILT_MOTION_RAD,
     COARSE_KNOTS,
     NO_RELEASED_BEAR,
     SeatingProblems,
 )
-from skills.planning.wholebody.posture_check import CHECK_TOLERANCE, exact_posture_violation
+from bearchair.skills.planning.wholebody.posture_check import (
+    CHECK_TOLERANCE,
+    exact_posture_violation,
+)
 
 LEAD_IN_S = 1.0
 """Time of the seating motion's first knot: the robot moves from whatever posture it
