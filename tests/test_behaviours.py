@@ -209,7 +209,7 @@ def test_instruct_helper_speaks_and_counts():
     leaf.stop(Status.INVALID)
     tick_until_done(leaf)
     sentence = DEFAULTS["compose_instruction"].sentence
-    assert robot.speaker.said == [sentence, sentence]
+    assert robot.speaker.spoken == [sentence, sentence]
     assert py_trees.blackboard.Blackboard.get(keys.ROTATIONS) == 2
     assert py_trees.blackboard.Blackboard.get(keys.INSTRUCTIONS) == [sentence, sentence]
 
@@ -223,7 +223,7 @@ def test_instruct_helper_asks_for_nothing_when_no_rotation_helps():
     leaf.setup(skills=skills, robot=robot)
     assert tick_until_done(leaf)[-1] == Status.FAILURE
     assert leaf.feedback_message == reason
-    assert robot.speaker.said == [] and not skills.calls["compose_instruction"]
+    assert robot.speaker.spoken == [] and not skills.calls["compose_instruction"]
     _, kwargs = skills.calls["choose_rotation"][0]
     assert kwargs == {"seed": 7}
 
