@@ -9,7 +9,7 @@ import os
 import signal
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
@@ -221,13 +221,14 @@ def _open_world(sim_config: SimConfig) -> SimWorld:
 
 def run_on_robots(
     config: RunConfig,
-    cell_file: Path,
+    cell_file: Path | Mapping[str, Any],
     skills: MissionSkills | None = None,
     on_tick: Callable[[MissionRunner], None] | None = None,
     confirm: Callable[[str], bool] | None = None,
     tree: TreeFactory | None = None,
 ) -> dict[str, Any]:
-    """Runs the mission on the real NAO and Panda described by ``cell_file``.
+    """Runs the mission on the real NAO and Panda described by ``cell_file`` (a cell
+    file, or its fields: a configuration's ``[robots.cell]``).
 
     ``tree`` is the tree factory (None: the mission's ``create_tree``), called with
     ``config.tree_options`` before any robot is connected.
@@ -241,11 +242,14 @@ def run_on_robots(
             said no.
     """
     from bearchair.core.errors import BackendUnavailable
-    from bearchair.executive.cell_config import load_cell_config
+    from bearchair.executive.cell_config import load_cell_config, parse_cell_config
     from bearchair.hardware.real import sdk_versions
     from bearchair.hardware.real.robots import activate, connect_robots
 
-    cell = load_cell_config(cell_file, config.arena)
+    if isinstance(cell_file, Mapping):
+        cell = parse_cell_config(dict(cell_file), config.arena)
+    else:
+        cell = load_cell_config(cell_file, config.arena)
     root = build_tree(tree or create_tree, config.tree_options, config.tree_spec)
     robot = connect_robots(cell)
     if confirm is not None and not confirm("The NAO and the Panda will move now. Go on? [y/N] "):
@@ -269,7 +273,7 @@ def run_on_robots(
         "seed": config.seed,
         "backend": "real",
         "tree": config.tree_spec,
-        "cell_file": str(cell_file),
+        "cell_file": "inline ([robots.cell])" if isinstance(cell_file, Mapping) else str(cell_file),
         "sdk_versions": sdk_versions(),
         "started_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
