@@ -297,7 +297,6 @@ def _run_tree(
         if skills is None:
             # Imported only when a mission runs: it imports every skill (about 2 s).
             from bearchair.skills.default_skills import DefaultSkills
-
             from bearchair.skills.plugins import apply_skill_plugins
 
             defaults = DefaultSkills(

@@ -16,7 +16,6 @@ skills). The testing kit (``bearchair.testing``) exports it.
 from __future__ import annotations
 
 import difflib
-import inspect
 import threading
 import time
 from collections import defaultdict
@@ -24,7 +23,6 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-
 import trimesh
 
 from bearchair.core.arena import Arena

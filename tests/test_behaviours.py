@@ -35,6 +35,7 @@ from bearchair.skills.results import (
 )
 from bearchair.skills.scripted import ScriptedSkills, default_results
 from bearchair.skills.toolbox import SkillNotReady
+from bearchair.testing import tick_until_done, write_blackboard
 
 DEFAULTS = default_results()
 
@@ -69,7 +70,6 @@ LEAVES = [
 
 def fill_blackboard() -> None:
     """Everything a leaf may read, as earlier stages would have left it."""
-    writer = py_trees.blackboard.Client(name="test")
     values = {
         keys.SEED: 7,
         keys.ARENA: DEFAULT_ARENA,
@@ -79,20 +79,7 @@ def fill_blackboard() -> None:
         keys.ACCESSIBILITY: DEFAULTS["check_accessibility"],
         keys.SEATING_PLAN: DEFAULTS["plan_seating"],
     }
-    for key, value in values.items():
-        writer.register_key(key=key, access=py_trees.common.Access.WRITE)
-        writer.set(key, value)
-
-
-def tick_until_done(leaf: py_trees.behaviour.Behaviour, max_ticks: int = 400) -> list[Status]:
-    statuses = []
-    for _ in range(max_ticks):
-        leaf.tick_once()
-        statuses.append(leaf.status)
-        if leaf.status != Status.RUNNING:
-            return statuses
-        time.sleep(0.005)
-    raise AssertionError(f"{leaf.name} still RUNNING after {max_ticks} ticks")
+    write_blackboard(values)
 
 
 def make(leaf_class, skills, judge=None):
