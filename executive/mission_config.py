@@ -46,7 +46,8 @@ from bearchair.trees.options import TreeOptions
 
 
 class _Section(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # strict: TOML has types, so "no" is no boolean and "900" no number (an int is a float).
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
 
 class TreeSection(_Section):
@@ -72,7 +73,9 @@ class RunSection(_Section):
     """``[run]``: what the simulated world holds, and the seed."""
 
     seed: int = Field(0, ge=0, le=MAX_SEED, description="seeds everything random")
-    chair: Path | None = Field(None, description="chair mesh; none: the built-in box chair")
+    chair: Path | None = Field(
+        None, strict=False, description="chair mesh; none: the built-in box chair"
+    )
     placement: Literal["accessible", "inaccessible"] = "accessible"
     helper: Literal["obeys", "disobeys", "ignores"] = "obeys"
     gui: bool = Field(False, description="watch in the pybullet GUI")
@@ -177,7 +180,8 @@ class ArenaSection(_Section):
         if not self.arena().contains(self.humanoid_start_x_m, self.humanoid_start_y_m):
             raise ValueError(
                 f"humanoid_start_x_m, humanoid_start_y_m: ({self.humanoid_start_x_m:g}, "
-                f"{self.humanoid_start_y_m:g}) m is outside the arena"
+                f"{self.humanoid_start_y_m:g}) m is outside the arena x [{self.x_min_m:g}, "
+                f"{self.x_max_m:g}], y [{self.y_min_m:g}, {self.y_max_m:g}] m"
             )
         return self
 
@@ -207,7 +211,7 @@ class SkillsSection(_Section):
 class RobotsSection(_Section):
     """``[robots]``: run on real robots; the cell file, or the cell inline (not both)."""
 
-    cell_file: Path | None = Field(None, description="a cell file (JSON/YAML)")
+    cell_file: Path | None = Field(None, strict=False, description="a cell file (JSON/YAML)")
     cell: dict[str, Any] | None = Field(
         None, description="the cell file's fields (executive/cell_config.py), inline"
     )
@@ -226,7 +230,9 @@ class RobotsSection(_Section):
 class OutputsSection(_Section):
     """``[outputs]``: where the run record goes and what it holds."""
 
-    out_dir: Path | None = Field(None, description="run folder; none: runs/<time>-seed<N>")
+    out_dir: Path | None = Field(
+        None, strict=False, description="run folder; none: runs/<time>-seed<N>"
+    )
     overwrite: bool = Field(False, description="replace a run record already in out_dir")
     record: bool = Field(False, description="write a Rerun recording, mission.rrd")
     live: str | None = Field(None, description="stream to a Rerun viewer: spawn, web or a URL")
@@ -237,7 +243,7 @@ class MissionConfig(_Section):
     """A whole mission configuration (see the module docstring)."""
 
     model_config = ConfigDict(
-        extra="forbid", frozen=True, title="bearchair mission configuration"
+        extra="forbid", frozen=True, strict=True, title="bearchair mission configuration"
     )
 
     tree: TreeSection = TreeSection()
@@ -368,7 +374,11 @@ def _nearest(location: tuple[Any, ...]) -> str:
     for part in location[:-1]:
         field = model.model_fields.get(str(part)) if model else None
         annotation = field.annotation if field else None
-        model = annotation if isinstance(annotation, type) and issubclass(annotation, BaseModel) else None
+        model = (
+            annotation
+            if isinstance(annotation, type) and issubclass(annotation, BaseModel)
+            else None
+        )
     if model is None:
         return ""
     near = difflib.get_close_matches(str(location[-1]), list(model.model_fields), n=1, cutoff=0.5)
