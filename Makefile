@@ -30,11 +30,15 @@ system:
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing; \
 	fi
 
-$(STAMP): pyproject.toml
+# The example plug-in (its own distribution) is installed too: make test runs its tests.
+PLUGIN := examples/bearchair-example-plugin
+
+$(STAMP): pyproject.toml $(PLUGIN)/pyproject.toml
 	$(MAKE) system
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e ".[test,robots,trials,voice]"
+	$(BIN)/python -m pip install -q -e $(PLUGIN)
 	touch $(STAMP)
 
 install: $(STAMP)
