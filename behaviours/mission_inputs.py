@@ -44,7 +44,9 @@ def set_mission_inputs(*, seed: int, arena: Arena = DEFAULT_ARENA) -> py_trees.b
     if isinstance(seed, bool) or not isinstance(seed, int):
         raise TypeError(f"seed: an int is needed, got {seed!r}")
     if not isinstance(arena, Arena):
-        raise TypeError(f"arena: a bearchair.core.arena.Arena is needed, got {type(arena).__name__}")
+        raise TypeError(
+            f"arena: a bearchair.core.arena.Arena is needed, got {type(arena).__name__}"
+        )
     writer = py_trees.blackboard.Client(name=WRITER_NAME)
     for key, value in zip(keys.SET_BY_EXECUTIVE, (seed, arena), strict=True):
         writer.register_key(key=key, access=py_trees.common.Access.WRITE)

@@ -296,7 +296,7 @@ def _tree(args: argparse.Namespace) -> int:
             args.out or Path(f"mission.{args.format}"), "--out", (f".{args.format}",)
         )
     root = build_tree(factory, mission.tree.options(), mission.tree.factory)
-    if args.format in TEXT_FORMATS:
+    if args.out is None:
         print(render_text(root, args.format, args.blackboard))
     else:
         print(render_graph(root, args.format, args.out, args.blackboard))

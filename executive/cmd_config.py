@@ -42,7 +42,10 @@ STORE_TRUE = frozenset({"gui", "mute", "overwrite", "snapshots"})
 def add_config_arguments(parser: argparse.ArgumentParser) -> None:
     """``--config FILE``, ``--tree SPEC`` and ``--set KEY=VALUE`` (repeatable)."""
     parser.add_argument(
-        "--config", type=Path, metavar="FILE", help="a mission configuration (TOML); flags override it"
+        "--config",
+        type=Path,
+        metavar="FILE",
+        help="a mission configuration (TOML); flags override it",
     )
     parser.add_argument(
         "--tree",

@@ -91,7 +91,8 @@ def _jsonable(value: Any) -> Any:
     if isinstance(value, Path):
         return str(value)
     if isinstance(value, tuple) and hasattr(value, "_asdict"):  # Arena, Box2D, SE2Pose
-        return {key: _jsonable(item) for key, item in value._asdict().items()}
+        named: Any = value
+        return {key: _jsonable(item) for key, item in named._asdict().items()}
     if isinstance(value, tuple | list):
         return [_jsonable(item) for item in value]
     return value

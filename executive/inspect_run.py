@@ -91,7 +91,9 @@ class RecordedRun:
                     f"({recorded.get('type')}) in the record, {node['path']} ({node['type']}) built"
                 )
         if len(self.shape) != len(built):
-            return f"not the one {spec} builds: {len(self.shape)} nodes recorded, {len(built)} built"
+            return (
+                f"not the one {spec} builds: {len(self.shape)} nodes recorded, {len(built)} built"
+            )
         return f"the one {spec} builds ({len(built)} nodes)"
 
     def _tree_options(self) -> Any:

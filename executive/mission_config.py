@@ -54,15 +54,18 @@ class TreeSection(_Section):
     """``[tree]``: which tree runs (``--tree``) and how it is composed."""
 
     factory: str = Field(
-        "mission",
+        default="mission",
         min_length=1,
         description="a tree name (mission, or a bearchair.trees entry point), "
         "module:factory, or a BehaviorTree.CPP .xml file",
     )
-    assistance: bool = Field(True, description="ask the helper to turn an inaccessible chair")
-    max_rotations: int = Field(3, ge=1, le=12, description="rotations asked for at most")
+    assistance: bool = Field(
+        default=True, description="ask the helper to turn an inaccessible chair"
+    )
+    max_rotations: int = Field(default=3, ge=1, le=12, description="rotations asked for at most")
     rescan_fallback: bool = Field(
-        True, description="scan and imagine a turned chair anew when ICP cannot measure the turn"
+        default=True,
+        description="scan and imagine a turned chair anew when ICP cannot measure the turn",
     )
 
     def options(self) -> TreeOptions:
@@ -72,33 +75,33 @@ class TreeSection(_Section):
 class RunSection(_Section):
     """``[run]``: what the simulated world holds, and the seed."""
 
-    seed: int = Field(0, ge=0, le=MAX_SEED, description="seeds everything random")
+    seed: int = Field(default=0, ge=0, le=MAX_SEED, description="seeds everything random")
     chair: Path | None = Field(
-        None, strict=False, description="chair mesh; none: the built-in box chair"
+        default=None, strict=False, description="chair mesh; none: the built-in box chair"
     )
     placement: Literal["accessible", "inaccessible"] = "accessible"
     helper: Literal["obeys", "disobeys", "ignores"] = "obeys"
-    gui: bool = Field(False, description="watch in the pybullet GUI")
-    mute: bool = Field(False, description="print instructions instead of speaking them")
+    gui: bool = Field(default=False, description="watch in the pybullet GUI")
+    mute: bool = Field(default=False, description="print instructions instead of speaking them")
 
 
 class TimeoutsSection(_Section):
     """``[timeouts]``: wall-time limits (seconds)."""
 
-    mission_s: float = Field(900.0, gt=0.0, le=86400.0, description="the whole mission")
-    tick_period_s: float = Field(0.05, gt=0.0, le=1.0, description="between two ticks")
+    mission_s: float = Field(default=900.0, gt=0.0, le=86400.0, description="the whole mission")
+    tick_period_s: float = Field(default=0.05, gt=0.0, le=1.0, description="between two ticks")
 
 
 class ScanSection(_Section):
     """``[scan]``: the chair scan."""
 
     views: list[int] | None = Field(
-        None,
+        default=None,
         description=f"indices (0-{SCAN_VIEW_COUNT - 1}) of the scan configurations to visit, "
         f"in order, at least {MIN_SCAN_VIEWS}; none: all {SCAN_VIEW_COUNT}",
     )
     voxel_size_m: float | None = Field(
-        None, ge=0.002, le=0.03, description="TSDF voxel edge; none: 8 mm"
+        default=None, ge=0.002, le=0.03, description="TSDF voxel edge; none: 8 mm"
     )
 
     @model_validator(mode="after")
@@ -118,12 +121,14 @@ class ScanSection(_Section):
 class ImaginationSection(_Section):
     """``[imagination]``: the simulated drops of the child-sized agent."""
 
-    workers: int = Field(DEFAULT_WORKERS, ge=1, le=64, description="processes the drops run in")
+    workers: int = Field(
+        default=DEFAULT_WORKERS, ge=1, le=64, description="processes the drops run in"
+    )
     max_drop_time_s: float | None = Field(
-        None, ge=0.5, le=20.0, description="simulated seconds before a drop is stopped"
+        default=None, ge=0.5, le=20.0, description="simulated seconds before a drop is stopped"
     )
     drop_clearance_m: float | None = Field(
-        None, ge=0.02, le=0.5, description="drop height above the chair's box; none: 15 cm"
+        default=None, ge=0.02, le=0.5, description="drop height above the chair's box; none: 15 cm"
     )
 
 
@@ -134,7 +139,7 @@ class BoxSection(_Section):
     x_max_m: float
     y_min_m: float
     y_max_m: float
-    height_m: float = Field(1.0, gt=0.0, le=3.0)
+    height_m: float = Field(default=1.0, gt=0.0, le=3.0)
 
     @model_validator(mode="after")
     def _ordered(self) -> BoxSection:
@@ -159,18 +164,18 @@ _A = DEFAULT_ARENA
 class ArenaSection(_Section):
     """``[arena]``: where the humanoid may walk, the chair area, obstacles (metres, degrees)."""
 
-    x_min_m: float = Field(_A.x_min, ge=-10.0, le=10.0)
-    x_max_m: float = Field(_A.x_max, ge=-10.0, le=10.0)
-    y_min_m: float = Field(_A.y_min, ge=-10.0, le=10.0)
-    y_max_m: float = Field(_A.y_max, ge=-10.0, le=10.0)
+    x_min_m: float = Field(default=_A.x_min, ge=-10.0, le=10.0)
+    x_max_m: float = Field(default=_A.x_max, ge=-10.0, le=10.0)
+    y_min_m: float = Field(default=_A.y_min, ge=-10.0, le=10.0)
+    y_max_m: float = Field(default=_A.y_max, ge=-10.0, le=10.0)
     chair_area: BoxSection = BoxSection.of(_A.chair_area)
-    arm_base_x_m: float = Field(_A.arm_base_xy[0], ge=-10.0, le=10.0)
-    arm_base_y_m: float = Field(_A.arm_base_xy[1], ge=-10.0, le=10.0)
+    arm_base_x_m: float = Field(default=_A.arm_base_xy[0], ge=-10.0, le=10.0)
+    arm_base_y_m: float = Field(default=_A.arm_base_xy[1], ge=-10.0, le=10.0)
     obstacles: list[BoxSection] = [BoxSection.of(box) for box in _A.obstacles]
-    humanoid_start_x_m: float = Field(_A.humanoid_start.x, ge=-10.0, le=10.0)
-    humanoid_start_y_m: float = Field(_A.humanoid_start.y, ge=-10.0, le=10.0)
+    humanoid_start_x_m: float = Field(default=_A.humanoid_start.x, ge=-10.0, le=10.0)
+    humanoid_start_y_m: float = Field(default=_A.humanoid_start.y, ge=-10.0, le=10.0)
     humanoid_start_yaw_deg: float = Field(
-        math.degrees(_A.humanoid_start.theta), ge=-180.0, le=180.0
+        default=math.degrees(_A.humanoid_start.theta), ge=-180.0, le=180.0
     )
 
     @model_validator(mode="after")
@@ -211,9 +216,11 @@ class SkillsSection(_Section):
 class RobotsSection(_Section):
     """``[robots]``: run on real robots; the cell file, or the cell inline (not both)."""
 
-    cell_file: Path | None = Field(None, strict=False, description="a cell file (JSON/YAML)")
+    cell_file: Path | None = Field(
+        default=None, strict=False, description="a cell file (JSON/YAML)"
+    )
     cell: dict[str, Any] | None = Field(
-        None, description="the cell file's fields (executive/cell_config.py), inline"
+        default=None, description="the cell file's fields (executive/cell_config.py), inline"
     )
 
     @model_validator(mode="after")
@@ -231,12 +238,14 @@ class OutputsSection(_Section):
     """``[outputs]``: where the run record goes and what it holds."""
 
     out_dir: Path | None = Field(
-        None, strict=False, description="run folder; none: runs/<time>-seed<N>"
+        default=None, strict=False, description="run folder; none: runs/<time>-seed<N>"
     )
-    overwrite: bool = Field(False, description="replace a run record already in out_dir")
-    record: bool = Field(False, description="write a Rerun recording, mission.rrd")
-    live: str | None = Field(None, description="stream to a Rerun viewer: spawn, web or a URL")
-    snapshots: bool = Field(False, description="a picture whenever a stage ends")
+    overwrite: bool = Field(default=False, description="replace a run record already in out_dir")
+    record: bool = Field(default=False, description="write a Rerun recording, mission.rrd")
+    live: str | None = Field(
+        default=None, description="stream to a Rerun viewer: spawn, web or a URL"
+    )
+    snapshots: bool = Field(default=False, description="a picture whenever a stage ends")
 
 
 class MissionConfig(_Section):
@@ -307,7 +316,7 @@ def load_mission_config(path: Path) -> MissionConfig:
     except OSError as error:
         raise ConfigError(f"{path}: cannot read the configuration ({error.strerror})") from error
     except UnicodeError as error:
-        raise ConfigError(f"{path}: not text (UTF-8): {error.reason}") from error
+        raise ConfigError(f"{path}: not text (UTF-8): {error}") from error
     except tomllib.TOMLDecodeError as error:
         raise ConfigError(f"{path}: not valid TOML ({error})") from error
     _resolve_paths(raw, path.parent)

@@ -88,7 +88,9 @@ def _import_factory(spec: str) -> TreeFactory:
     try:
         target: object = importlib.import_module(module_name)
     except Exception as error:  # ModuleNotFoundError, or the module's own error
-        raise PluginError(f"--tree {spec}: cannot import {module_name}: {one_line(error)}") from error
+        raise PluginError(
+            f"--tree {spec}: cannot import {module_name}: {one_line(error)}"
+        ) from error
     for part in attribute.split("."):
         if not hasattr(target, part):
             raise PluginError(f"--tree {spec}: {module_name} has no attribute {attribute}")

@@ -59,7 +59,9 @@ def check_overrides(overrides: object, origin: str) -> Mapping[str, Callable[...
     """
     skills = protocol_members(MissionSkills)
     if not isinstance(overrides, Mapping) or not overrides:
-        raise PluginError(f"{origin}: skill overrides must be a non-empty mapping of name to function")
+        raise PluginError(
+            f"{origin}: skill overrides must be a non-empty mapping of name to function"
+        )
     for name, function in overrides.items():
         if name not in skills:
             raise PluginError(f"{origin}: {name!r} is not a skill of MissionSkills")
@@ -119,6 +121,8 @@ def apply_skill_plugins(base: MissionSkills, names: Sequence[str]) -> MissionSki
         try:
             made = found()
         except Exception as error:
-            raise PluginError(f"{origin}: making the skill set failed: {one_line(error)}") from error
+            raise PluginError(
+                f"{origin}: making the skill set failed: {one_line(error)}"
+            ) from error
         skills = check_skill_set(made, origin)
     return skills

@@ -42,4 +42,5 @@ def test_an_inaccessible_chair_fails_the_variant_without_asking(
     root = set_up(create_tree_without_assistance(TreeOptions()), skills, fake_robot)
     assert tick_until_done(root, max_ticks=2000)[-1] == Status.FAILURE
     assert not skills.calls["choose_rotation"] and not fake_robot.speaker.spoken
-    assert root.tip().name == "MakeChairAccessible"
+    tip = root.tip()
+    assert tip is not None and tip.name == "MakeChairAccessible"
