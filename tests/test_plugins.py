@@ -247,3 +247,33 @@ def test_the_options_reach_the_tree_through_build_tree():
     assert [node.name for node in root.iterate() if "rotations" in node.name] == [
         "Up to 5 rotations"
     ]
+
+
+# --- trials ---------------------------------------------------------------------------
+
+
+def test_trials_refuse_a_bad_tree_before_any_trial(tmp_path, capsys):
+    assert cli.main(["trials", "--chairs", str(tmp_path), "--tree", "no-such-tree"]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "no tree named 'no-such-tree'" in line
+
+
+def test_each_trial_payload_names_the_campaign_tree(tmp_path):
+    from bearchair.evaluation.campaign import _jobs
+    from bearchair.evaluation.protocol import ChairEntry, expand_protocol
+
+    specs = expand_protocol([ChairEntry(tmp_path / "a.obj", "chair", 90.0)], "paper", 1)
+    mission = _jobs(specs[:1], tmp_path, 60.0, False, 1)
+    variant = _jobs(specs[:1], tmp_path, 60.0, False, 1, tree="example-no-assistance")
+    assert "tree" not in mission[0][1]  # the shipped tree's payload is unchanged
+    assert variant[0][1]["tree"] == "example-no-assistance"
+
+
+def test_inspect_says_whether_the_record_is_of_the_tree_a_spec_builds(tmp_path, capsys):
+    from tests.test_mission_tree import run
+
+    run(ScriptedSkills(), out_dir=tmp_path)
+    assert cli.main(["inspect", str(tmp_path), "--tree", "mission"]) == 0
+    assert "tree: the one mission builds (20 nodes)" in capsys.readouterr().out
+    assert cli.main(["inspect", str(tmp_path), "--tree", "example-no-assistance"]) == 0
+    assert "tree: not the one example-no-assistance builds" in capsys.readouterr().out
