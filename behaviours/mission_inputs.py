@@ -5,6 +5,7 @@ the run's seed and the arena. ``bearchair``'s executive writes them with
 :func:`set_mission_inputs`; so does any other host, before its first tick::
 
     import py_trees
+
     from bearchair.behaviours.mission_inputs import set_mission_inputs
     from bearchair.trees.mission import create_tree
 
@@ -17,6 +18,8 @@ the run's seed and the arena. ``bearchair``'s executive writes them with
 """
 
 from __future__ import annotations
+
+import numbers
 
 import py_trees
 
@@ -38,15 +41,11 @@ def set_mission_inputs(*, seed: int, arena: Arena = DEFAULT_ARENA) -> py_trees.b
         The writing client (keep it to change an input between runs).
 
     Raises:
-        TypeError: ``seed`` is not an int or ``arena`` not an Arena (a mistake the leaves
-            would only meet ticks later).
+        TypeError: ``seed`` is not a whole number (a mistake the leaves would only meet
+            ticks later, in a skill's random generator).
     """
-    if isinstance(seed, bool) or not isinstance(seed, int):
-        raise TypeError(f"seed: an int is needed, got {seed!r}")
-    if not isinstance(arena, Arena):
-        raise TypeError(
-            f"arena: a bearchair.core.arena.Arena is needed, got {type(arena).__name__}"
-        )
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
+        raise TypeError(f"seed: a whole number is needed, got {seed!r}")
     writer = py_trees.blackboard.Client(name=WRITER_NAME)
     for key, value in zip(keys.SET_BY_EXECUTIVE, (seed, arena), strict=True):
         writer.register_key(key=key, access=py_trees.common.Access.WRITE)

@@ -227,8 +227,8 @@ def parse_cell_config(
 
 
 def _check_fields(raw: Any) -> None:
-    """Raises CellConfigError unless ``raw`` is an object of known fields holding every
-    required one (a legacy field gets its own message, a misspelt one a suggestion)."""
+    """Raises CellConfigError unless ``raw`` is an object of known fields (a legacy field
+    gets its own message, a misspelt one a suggestion)."""
     if not isinstance(raw, dict):
         raise CellConfigError(
             f"the cell file must be an object of fields, got {type(raw).__name__}"

@@ -36,7 +36,11 @@ from bearchair.executive import (
     cmd_view,
 )
 from bearchair.executive.cli_types import positive_seconds, seed_value
-from bearchair.executive.cmd_config import add_config_arguments, mission_from_args
+from bearchair.executive.cmd_config import (
+    add_config_arguments,
+    check_run_inputs,
+    mission_from_args,
+)
 from bearchair.executive.interrupts import exit_status, handling_signals, received, signal_name
 from bearchair.executive.operator import ask_operator
 
@@ -166,8 +170,10 @@ def _run(args: argparse.Namespace) -> int:
     from bearchair.executive.outputs import default_run_dir, prepare_run_dir
 
     # Every input and the output place are checked before anything runs.
-    mission, factory = _checked_mission(args)
+    mission = mission_from_args(args)
+    factory = check_run_inputs(mission)
     outputs = mission.outputs
+    check_recording_arguments("bearchair run", argparse.Namespace(**outputs.model_dump()))
     if outputs.out_dir is not None:
         out_dir = prepare_run_dir(outputs.out_dir, overwrite=outputs.overwrite)
     else:
@@ -190,31 +196,6 @@ def _run(args: argparse.Namespace) -> int:
     if summary.get("interrupted"):
         return exit_status()
     return EXIT_SUCCESS if summary["outcome"] == "success" else EXIT_MISSION_FAILED
-
-
-def _checked_mission(args: argparse.Namespace) -> tuple[Any, Any]:
-    """The run's configuration (``--config`` and the flags) and its tree factory, every
-    input checked: the chair or the cell file, the plug-ins, the recording."""
-    from bearchair.core.meshes import load_chair_mesh
-    from bearchair.executive.tree_source import load_tree_factory
-    from bearchair.skills.plugins import check_skill_plugins
-
-    mission = mission_from_args(args)
-    factory = load_tree_factory(mission.tree.factory)
-    check_skill_plugins(mission.skills.plugins)
-    check_recording_arguments(
-        "bearchair run",
-        argparse.Namespace(record=mission.outputs.record, live=mission.outputs.live),
-    )
-    cell_file = mission.robots.cell_file
-    if mission.robots.used:
-        if mission.run.chair is not None:
-            raise InputError("bearchair run: --chair is for the simulation; not with --robots")
-        if cell_file is not None and not cell_file.is_file():
-            raise InputError(f"bearchair run: --robots {cell_file}: no such file")
-    elif mission.run.chair is not None:
-        load_chair_mesh(mission.run.chair)
-    return mission, factory
 
 
 @contextlib.contextmanager

@@ -127,3 +127,27 @@ def parse_assignment(text: str) -> tuple[str, Any]:
         return key, tomllib.loads(f"value = {value.strip()}")["value"]
     except tomllib.TOMLDecodeError:
         return key, value.strip()
+
+
+def check_run_inputs(config: Any) -> Any:
+    """Checks what a run of ``config`` (a ``MissionConfig``) reads before it runs: the
+    tree, the skill plug-ins, the chair or the cell file; returns the tree factory.
+
+    Raises:
+        PluginError, InputError, MeshError: one line naming what is wrong.
+    """
+    from bearchair.core.meshes import load_chair_mesh
+    from bearchair.executive.tree_source import load_tree_factory
+    from bearchair.skills.plugins import check_skill_plugins
+
+    factory = load_tree_factory(config.tree.factory)
+    check_skill_plugins(config.skills.plugins)
+    cell_file = config.robots.cell_file
+    if config.robots.used:
+        if config.run.chair is not None:
+            raise InputError("bearchair run: --chair is for the simulation; not with --robots")
+        if cell_file is not None and not cell_file.is_file():
+            raise InputError(f"bearchair run: --robots {cell_file}: no such file")
+    elif config.run.chair is not None:
+        load_chair_mesh(config.run.chair)
+    return factory

@@ -295,16 +295,7 @@ def _run_tree(
     recording = None
     try:
         if skills is None:
-            # Imported only when a mission runs: it imports every skill (about 2 s).
-            from bearchair.skills.default_skills import DefaultSkills
-            from bearchair.skills.plugins import apply_skill_plugins
-
-            defaults = DefaultSkills(
-                imagination_workers=config.imagination_workers,
-                parameters=config.skill_parameters,
-            )
-            defaults.warm_up()
-            skills = apply_skill_plugins(defaults, config.skill_plugins)
+            skills = configured_skills(config)
         recording = open_recording(root, config.out_dir, record=config.record, live=config.live)
         if recording is not None:
             skills = recording.watch_skills(skills, robot.clock)
@@ -348,6 +339,24 @@ def _run_tree(
         recorder.close()
         if recording is not None:
             recording.close()
+
+
+def configured_skills(config: RunConfig) -> MissionSkills:
+    """The default skills with ``config``'s parameters, the skill plug-ins stacked over
+    them, warming up.
+
+    Raises:
+        PluginError: a skill plug-in is missing or does not satisfy the protocol.
+    """
+    # Imported only when a mission runs: it imports every skill (about 2 s).
+    from bearchair.skills.default_skills import DefaultSkills
+    from bearchair.skills.plugins import apply_skill_plugins
+
+    defaults = DefaultSkills(
+        imagination_workers=config.imagination_workers, parameters=config.skill_parameters
+    )
+    defaults.warm_up()
+    return apply_skill_plugins(defaults, config.skill_plugins)
 
 
 def summary_before_start(
