@@ -3,7 +3,7 @@
 ``bearchair config --schema`` prints the JSON Schema of a mission configuration (for an
 editor's completion and checks: Even Better TOML reads it); ``bearchair config --show
 [--config FILE] [--tree SPEC] [--set KEY=VALUE ...]`` prints the configuration a run
-would use, after the flags, as TOML-like JSON. This module also holds the flags that
+would use, after the flags, as JSON. This module also holds the flags that
 ``run`` and ``tree`` share with it (:func:`add_config_arguments`) and turns a command's
 flags into a configuration (:func:`mission_from_args`).
 """

@@ -294,8 +294,16 @@ class MissionConfig(_Section):
             ),
             skill_plugins=tuple(self.skills.plugins),
             tick_period_s=self.timeouts.tick_period_s,
-            resolved=resolved.model_dump(mode="json"),
+            resolved=_masked(resolved.model_dump(mode="json")),
         )
+
+
+def _masked(resolved: dict[str, Any]) -> dict[str, Any]:
+    """The configuration for the run record: an inline cell's password masked."""
+    cell = resolved.get("robots", {}).get("cell")
+    if isinstance(cell, dict) and cell.get("nao_password"):
+        cell["nao_password"] = "***"
+    return resolved
 
 
 def json_schema() -> dict[str, Any]:

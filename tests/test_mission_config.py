@@ -143,3 +143,12 @@ def test_the_run_record_holds_the_resolved_configuration(tmp_path):
     assert saved["tree"]["max_rotations"] == 2 and saved["outputs"]["out_dir"] == str(tmp_path)
     assert (tmp_path / CONFIG_FILE).is_file()
     assert parse_mission_config(saved).run_config(tmp_path).tree_options == config.tree_options
+
+
+def test_the_record_masks_an_inline_password(tmp_path):
+    from tests.test_cell_config import GOOD
+
+    cell = {**GOOD, "nao_url": "tcps://nao.local:9503", "nao_user": "nao", "nao_password": "pw"}
+    config = parse_mission_config({"robots": {"cell": cell}}).run_config(tmp_path)
+    assert config.resolved is not None
+    assert config.resolved["robots"]["cell"]["nao_password"] == "***"

@@ -277,3 +277,43 @@ def test_inspect_says_whether_the_record_is_of_the_tree_a_spec_builds(tmp_path, 
     assert "tree: the one mission builds (20 nodes)" in capsys.readouterr().out
     assert cli.main(["inspect", str(tmp_path), "--tree", "example-no-assistance"]) == 0
     assert "tree: not the one example-no-assistance builds" in capsys.readouterr().out
+
+
+def test_connect_robots_makes_the_plugin_devices_and_skips_the_nao(tmp_path, monkeypatch):
+    from bearchair.hardware.fakes import FakeHumanoid
+    from bearchair.hardware.real.robots import activate, connect_robots
+
+    class ActiveHumanoid(FakeHumanoid):
+        activated = 0
+
+        def activate(self) -> None:
+            self.activated += 1
+
+    real = plugins.entry_points
+    fake_entry_points(monkeypatch, "bearchair.backends", toy=lambda settings: ActiveHumanoid())
+    toy = plugins.entry_points
+    monkeypatch.setattr(
+        plugins,
+        "entry_points",
+        lambda group: (
+            {**real(group), **toy(group)} if group == "bearchair.backends" else real(group)
+        ),
+    )
+    said = tmp_path / "said.txt"
+    raw = {k: v for k, v in VALID_CELL.items() if k != "nao_url"}
+    cell = parse_cell_config(
+        {
+            **raw,
+            "panda_host": "standin",  # the SDK stand-ins: no Panda needed
+            "humanoid": {"backend": "toy"},
+            "speaker": {"backend": "example-log-speaker", "path": str(said)},
+        }
+    )
+    robot = connect_robots(cell)  # no nao_url: the NAO is never reached
+    try:
+        activate(robot)
+        robot.speaker.say("Hello.")
+        assert isinstance(robot.humanoid, ActiveHumanoid) and robot.humanoid.activated == 1
+        assert said.read_text() == "Hello.\n"
+    finally:
+        robot.close()
