@@ -26,20 +26,19 @@ from tests.test_cell_config import GOOD as VALID_CELL
 
 
 def fake_entry_points(monkeypatch, group: str, **objects) -> None:
-    """Entry points of ``group`` naming ``objects`` (this module's attributes)."""
+    """Entry points of ``group`` naming ``objects`` (made this module's attributes), beside
+    the installed ones."""
     real = plugins.entry_points
     for name, value in objects.items():
         globals()[f"_plugin_{name.replace('-', '_')}"] = value
 
     def entry_points(asked: str) -> dict[str, importlib.metadata.EntryPoint]:
-        if asked != group:
-            return real(asked)
-        return {
-            name: importlib.metadata.EntryPoint(
-                name, f"{__name__}:_plugin_{name.replace('-', '_')}", group
-            )
-            for name in objects
-        }
+        found = real(asked)
+        if asked == group:
+            for name in objects:
+                value = f"{__name__}:_plugin_{name.replace('-', '_')}"
+                found[name] = importlib.metadata.EntryPoint(name, value, group)
+        return found
 
     monkeypatch.setattr(plugins, "entry_points", entry_points)
 
@@ -289,16 +288,7 @@ def test_connect_robots_makes_the_plugin_devices_and_skips_the_nao(tmp_path, mon
         def activate(self) -> None:
             self.activated += 1
 
-    real = plugins.entry_points
     fake_entry_points(monkeypatch, "bearchair.backends", toy=lambda settings: ActiveHumanoid())
-    toy = plugins.entry_points
-    monkeypatch.setattr(
-        plugins,
-        "entry_points",
-        lambda group: (
-            {**real(group), **toy(group)} if group == "bearchair.backends" else real(group)
-        ),
-    )
     said = tmp_path / "said.txt"
     raw = {k: v for k, v in VALID_CELL.items() if k != "nao_url"}
     cell = parse_cell_config(
