@@ -80,10 +80,13 @@ class CellConfig:
     """A checked cell description (see the module docstring).
 
     Attributes:
-        nao_url: NAOqi endpoint, ``tcp://host:9559`` or ``tcps://host:9503`` (NAOqi >= 2.9).
-        panda_host: the Panda controller's address (FCI).
+        nao_url: NAOqi endpoint, ``tcp://host:9559`` or ``tcps://host:9503`` (NAOqi >= 2.9);
+            None when the humanoid and the speaker both come from plug-ins.
+        panda_host: the Panda controller's address (FCI); None when the arm comes from a
+            plug-in.
         T_world_base: 4x4 pose of the arm's base in the world (metres).
-        T_flange_camera: 4x4 camera optical frame in the Panda's flange frame (metres).
+        T_flange_camera: 4x4 camera optical frame in the Panda's flange frame (metres);
+            the identity when the arm comes from a plug-in (its backend calibrates its own).
         nao_start_x_m, nao_start_y_m, nao_start_yaw_rad: where the NAO stands at the
             start, in the world: odometry is counted from here.
         nao_user, nao_password: credentials for ``tcps://`` (None for ``tcp://``).

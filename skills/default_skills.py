@@ -49,10 +49,11 @@ class DefaultSkills:
         parameters = parameters or SkillParameters()
         self.imagination_workers = imagination_workers
         self.parameters = parameters
+        settings = _simulation_settings(parameters)
         self.imagine_sitting = functools.partial(
             imagination.imagine_sitting,
             workers=imagination_workers,
-            settings=_simulation_settings(parameters),
+            **({} if settings is None else {"settings": settings}),
         )
         if parameters.scan_views is not None or parameters.voxel_size_m is not None:
             self.scan_chair = functools.partial(

@@ -152,3 +152,19 @@ def test_the_record_masks_an_inline_password(tmp_path):
     config = parse_mission_config({"robots": {"cell": cell}}).run_config(tmp_path)
     assert config.resolved is not None
     assert config.resolved["robots"]["cell"]["nao_password"] == "***"
+
+
+def test_the_tuned_parameters_reach_the_default_skills(tmp_path):
+    from bearchair.skills.default_skills import DefaultSkills
+
+    raw = {
+        "scan": {"views": [0, 2, 4, 6, 8], "voxel_size_m": 0.01},
+        "imagination": {"workers": 1, "max_drop_time_s": 1.5, "drop_clearance_m": 0.1},
+    }
+    run = parse_mission_config(raw).run_config(tmp_path)
+    skills = DefaultSkills(run.imagination_workers, run.skill_parameters)
+    scan = skills.scan_chair.keywords  # pyright: ignore[reportFunctionMemberAccess]
+    assert scan["views"] == (0, 2, 4, 6, 8) and scan["config"].voxel_size_m == 0.01
+    settings = skills.imagine_sitting.keywords["settings"]
+    assert (settings.max_time_s, settings.drop_clearance_m) == (1.5, 0.1)
+    assert skills.imagine_sitting.keywords["workers"] == 1
