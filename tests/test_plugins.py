@@ -307,3 +307,23 @@ def test_connect_robots_makes_the_plugin_devices_and_skips_the_nao(tmp_path, mon
         assert said.read_text() == "Hello.\n"
     finally:
         robot.close()
+
+
+def test_the_trial_worker_runs_the_payload_tree(tmp_path, monkeypatch, capsys):
+    import json
+
+    from bearchair.evaluation import worker
+    from bearchair.executive import mission
+    from bearchair_example.trees import create_tree_without_assistance
+
+    ran = {}
+
+    def fake_run(config, on_tick=None, tree=None):
+        ran.update(spec=config.tree_spec, tree=tree)
+        return {"outcome": "success"}
+
+    monkeypatch.setattr(mission, "run_in_simulation", fake_run)
+    payload = {"out_dir": str(tmp_path), "placement": "accessible", "helper": "obeys"}
+    payload |= {"seed": 1, "timeout_s": 60, "tree": "example-no-assistance"}
+    assert worker.main([json.dumps(payload)]) == 0, capsys.readouterr().out
+    assert ran == {"spec": "example-no-assistance", "tree": create_tree_without_assistance}
