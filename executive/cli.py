@@ -105,11 +105,16 @@ def build_parser() -> argparse.ArgumentParser:
 
     tree = subparsers.add_parser("tree", help="render the mission tree")
     tree.add_argument(
-        "--format", choices=("ascii", "unicode", "dot", "svg", "png"), default="unicode"
+        "--format",
+        choices=("ascii", "unicode", "dot", "svg", "png", "btcpp"),
+        default="unicode",
+        help="btcpp: BehaviorTree.CPP v4 XML for Groot2 (docs/btcpp-groot2.md)",
     )
     tree.add_argument("--blackboard", action="store_true", help="show blackboard keys and users")
     tree.add_argument(
-        "--out", type=Path, help="output file for dot/svg/png (default: mission.<format>)"
+        "--out",
+        type=Path,
+        help="output file for dot/svg/png (default: mission.<format>) or btcpp (default: stdout)",
     )
     tree.set_defaults(func=_tree)
 
@@ -263,6 +268,10 @@ def _tree(args: argparse.Namespace) -> int:
     from bearchair.executive.render import TEXT_FORMATS, render_graph, render_text
     from bearchair.trees.mission import create_tree
 
+    if args.format == "btcpp":
+        from bearchair.executive.render import write_btcpp
+
+        return write_btcpp(create_tree(), args.out)
     if args.format in TEXT_FORMATS:
         if args.out is not None:
             raise InputError(
