@@ -101,6 +101,21 @@ def build_parser() -> argparse.ArgumentParser:
         help="run on the real NAO and Panda described by this file instead of the simulation",
     )
     run.add_argument("--yes", action="store_true", help="with --robots: start without asking")
+    run.add_argument(
+        "--groot2",
+        nargs="?",
+        const=1667,
+        type=int,
+        metavar="PORT",
+        help="publish the running tree to Groot2 on PORT and PORT+1 (default 1667; "
+        "docs/btcpp-groot2.md)",
+    )
+    run.add_argument(
+        "--groot2-bind",
+        metavar="ADDRESS",
+        help="the address Groot2's ports listen on (default 127.0.0.1; '*': every interface, "
+        "through BehaviorTree.CPP's own publisher)",
+    )
     run.set_defaults(func=_run)
 
     tree = subparsers.add_parser("tree", help="render the mission tree")
@@ -172,8 +187,11 @@ def _run(args: argparse.Namespace) -> int:
         snapshots=args.snapshots,
         record=args.record,
         live=args.live,
+        groot2_port=args.groot2,
+        groot2_bind=args.groot2_bind or "127.0.0.1",
     )
     check_recording_arguments("bearchair run", args)
+    check_groot2_arguments("bearchair run", args)
     # Every input and the output place are checked before anything runs.
     if args.robots is not None:
         if args.chair is not None:
@@ -261,6 +279,20 @@ def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
             f"{command}: --live takes no value, 'web', or a viewer URL "
             f"(rerun+http://HOST:9876/proxy), not {live!r}"
         )
+
+
+def check_groot2_arguments(command: str, args: argparse.Namespace) -> None:
+    """One line before any work when ``--groot2`` cannot be served."""
+    from bearchair.executive.groot2 import INSTALL_HINT, check_groot2_port, missing_modules
+
+    if args.groot2 is None:
+        if args.groot2_bind is not None:
+            raise InputError(f"{command}: --groot2-bind is for --groot2 [PORT]")
+        return
+    check_groot2_port(args.groot2)
+    missing = missing_modules()
+    if missing:
+        raise InputError(f"{command}: --groot2 needs {', '.join(missing)}: {INSTALL_HINT}")
 
 
 def _tree(args: argparse.Namespace) -> int:

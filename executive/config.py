@@ -37,6 +37,10 @@ class RunConfig:
         live: stream to a Rerun viewer while running: ``"spawn"``, ``"web"`` or a URL.
         imagination_workers: processes the imagination's drops run in (1: the run's own;
             the result is the same for any number).
+        groot2_port: publish the running tree to Groot2 on this port and the next
+            (``bearchair.executive.groot2``); None: not published.
+        groot2_bind: the address Groot2's ports listen on (``*``: BT.CPP's own publisher,
+            every interface).
     """
 
     chair_path: Path | None = None
@@ -52,6 +56,8 @@ class RunConfig:
     record: bool = False
     live: str | None = None
     imagination_workers: int = DEFAULT_WORKERS
+    groot2_port: int | None = None
+    groot2_bind: str = "127.0.0.1"
 
     def chair_name(self) -> str:
         return self.chair_path.name if self.chair_path else "box-chair (built in)"
