@@ -104,12 +104,24 @@ def xml_with_uids(xml: str) -> str:
     return ET.tostring(document, encoding="unicode")
 
 
+def without_leaf_ports(xml: str) -> str:
+    """The XML with the leaves' port attributes (remappings) dropped, for behaviortreepy:
+    its simple actions cannot declare ports, and BT.CPP refuses a port it was not told of.
+    The mirror only shows statuses, so it loses nothing."""
+    document = ET.fromstring(xml)
+    leaves = {model.get("ID") for model in document.iterfind("TreeNodesModel/*")}
+    for element in document.iterfind("BehaviorTree//*"):
+        if element.tag in leaves:
+            for attribute in [a for a in element.attrib if a != "name"]:
+                del element.attrib[attribute]
+    return ET.tostring(document, encoding="unicode")
+
+
 def check_with_btcpp(xml: str, leaf_names: set[str]) -> None:
     """BehaviorTree.CPP's parser (behaviortreepy) must build the tree Groot2 is sent.
 
     Raises:
-        InputError: it refuses the XML (a leaf's remapped port, which its simple actions
-            cannot declare, for one).
+        InputError: it refuses the XML.
     """
     import behaviortreepy as bt
 
@@ -327,13 +339,18 @@ class Groot2Monitor:
         xml = tree_to_btcpp_xml(root)
         self.root = root
         self.nodes = [node for _, node, _ in tree_nodes(root)]
-        check_with_btcpp(xml, {type(node).__name__ for node in self.nodes if not node.children})
+        check_with_btcpp(
+            without_leaf_ports(xml),
+            {type(node).__name__ for node in self.nodes if not node.children},
+        )
         self.address = f"tcp://{'127.0.0.1' if bind in ALL_INTERFACES else bind}:{port}"
         self._last = [0] * len(self.nodes)
         self._visits: _Visits | None = None
         self._ticks = -1
         if bind in ALL_INTERFACES:
-            self._mirror: BtcppMirror | None = BtcppMirror(xml, self.nodes, port)
+            self._mirror: BtcppMirror | None = BtcppMirror(
+                without_leaf_ports(xml), self.nodes, port
+            )
             self._server: LoopbackServer | None = None
         else:
             self._mirror = None

@@ -212,3 +212,24 @@ def test_groot2_sees_every_stage_of_a_simulated_mission_change(tmp_path: Path, p
         changes = history[by_name[stage]]
         assert len(changes) >= 2, f"{stage}: {changes}"
         assert changes[-1] == 2, f"{stage} ended in SUCCESS: {changes}"
+
+
+def test_a_remapped_port_is_shown_to_groot2_and_left_out_of_the_btcpp_mirror():
+    from bearchair.executive.btcpp import leaf_registry, tree_from_btcpp_xml
+
+    xml = (
+        '<root BTCPP_format="4"><BehaviorTree ID="T"><Sequence name="S">'
+        '<WalkToChair name="Walk" walk_result="{/walk/first}"/></Sequence></BehaviorTree></root>'
+    )
+    root = tree_from_btcpp_xml(xml, leaf_registry())
+    for bind in ("127.0.0.1", "*"):
+        port = free_port_pair()
+        monitor = Groot2Monitor(root, port, bind)
+        client = Groot2Client(f"tcp://127.0.0.1:{port}")
+        try:
+            (tree,) = client.request("T")
+            assert (b'walk_result="{/walk/first}"' in tree) == (bind == "127.0.0.1")
+            assert [name for _, _, name in client.tree()] == ["S", "Walk"]
+        finally:
+            client.close()
+            monitor.close()
