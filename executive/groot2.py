@@ -159,11 +159,13 @@ class LoopbackServer:
         self._context = zmq.Context()
         self._server = self._context.socket(zmq.REP)
         self._publisher = self._context.socket(zmq.PUB)
+        host = f"[{bind}]" if ":" in bind else bind  # an IPv6 address, e.g. ::1
         for socket in (self._server, self._publisher):
             socket.setsockopt(zmq.LINGER, 0)
+            socket.setsockopt(zmq.IPV6, ":" in bind)
         try:
-            self._server.bind(f"tcp://{bind}:{port}")
-            self._publisher.bind(f"tcp://{bind}:{port + 1}")
+            self._server.bind(f"tcp://{host}:{port}")
+            self._publisher.bind(f"tcp://{host}:{port + 1}")
         except zmq.ZMQError as error:
             self._context.destroy(linger=0)
             raise Groot2Unavailable(
@@ -343,7 +345,8 @@ class Groot2Monitor:
             without_leaf_ports(xml),
             {type(node).__name__ for node in self.nodes if not node.children},
         )
-        self.address = f"tcp://{'127.0.0.1' if bind in ALL_INTERFACES else bind}:{port}"
+        host = "127.0.0.1" if bind in ALL_INTERFACES else bind
+        self.address = f"tcp://{f'[{host}]' if ':' in host else host}:{port}"
         self._last = [0] * len(self.nodes)
         self._visits: _Visits | None = None
         self._ticks = -1

@@ -34,6 +34,7 @@ class Groot2Client:
         if self._socket is None:
             self._socket = self._context.socket(zmq.REQ)
             self._socket.setsockopt(zmq.LINGER, 0)
+            self._socket.setsockopt(zmq.IPV6, "[" in self.address)
             self._socket.connect(self.address)
         return self._socket
 

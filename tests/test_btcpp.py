@@ -268,6 +268,19 @@ def test_the_factory_of_a_file_makes_a_fresh_tree_each_call(tmp_path):
     assert shape(first) == shape(create_tree())
 
 
+def test_a_file_as_groot2_saves_it_loads():
+    """Groot2 writes an XML declaration, comments, and every port on every leaf."""
+    text = '<?xml version="1.0" encoding="UTF-8"?>\n' + MISSION_XML.replace(
+        "  <TreeNodesModel>",
+        "  <!-- Description of Node Models (used by Groot) -->\n  <TreeNodesModel>",
+    ).replace(
+        '<WalkToChair name="WalkToChair" />',
+        '<WalkToChair name="WalkToChair" accessibility_result="{/accessibility/result}" '
+        'walk_result="{=}" />',
+    )
+    assert tree_to_btcpp_xml(tree_from_btcpp_xml(text, leaf_registry())) == MISSION_XML
+
+
 def test_subtrees_are_inlined():
     xml = MISSION_XML.replace(
         '<WalkToChair name="WalkToChair" />', '<SubTree ID="Walk" />'

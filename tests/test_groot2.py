@@ -129,6 +129,17 @@ def test_the_loopback_server_refuses_breakpoints_and_answers_hook_dumps(port):
         assert client.statuses()  # still serving after an error
 
 
+def test_the_server_listens_on_an_ipv6_loopback_when_told(port):
+    monitor = Groot2Monitor(small_tree(), port, "::1")
+    client = Groot2Client(f"tcp://[::1]:{port}")
+    try:
+        assert monitor.address == f"tcp://[::1]:{port}"
+        assert client.tree()[0][2] == "Root"
+    finally:
+        client.close()
+        monitor.close()
+
+
 def test_a_port_in_use_is_one_line(port):
     with zmq.Context() as context, context.socket(zmq.REP) as taken:
         taken.bind(f"tcp://127.0.0.1:{port}")
