@@ -360,26 +360,34 @@ class Groot2Monitor:
             self._server = LoopbackServer(xml_with_uids(xml), len(self.nodes), port, bind)
 
     def __call__(self, runner: Any) -> None:
-        """The runner's post-tick hook (``bearchair.executive.runner.MissionRunner``)."""
+        """The runner's post-tick hook (``bearchair.executive.runner.MissionRunner``),
+        called after each tick and once more when the run has ended."""
         tree = getattr(runner, "tree", None)
+        visited: set[Any] = set()
+        new_tick = True
         if isinstance(tree, py_trees.trees.BehaviourTree):
-            if tree.count == self._ticks:
-                return  # the call after the run ended: no new tick
-            self._ticks = tree.count
-        if self._visits is None and isinstance(tree, py_trees.trees.BehaviourTree):
-            # From the next tick on; what the first tick visited is what it left non-INVALID.
-            self._visits = _Visits()
-            tree.visitors.append(self._visits)
-            visited = {n.id for n in self.nodes if n.status != Status.INVALID}
-        else:
-            visited = self._visits.ids if self._visits is not None else set()
-        self.publish(visited)
+            new_tick, self._ticks = tree.count != self._ticks, tree.count
+            if self._visits is None:
+                # Seen from the next tick on; the first tick visited what it left non-INVALID.
+                self._visits = _Visits()
+                tree.visitors.append(self._visits)
+                visited = {n.id for n in self.nodes if n.status != Status.INVALID}
+            else:
+                visited = self._visits.ids
+        self.publish(visited, new_tick=new_tick)
 
-    def publish(self, visited: set[Any]) -> None:
-        """Sends the statuses now (``visited``: the ids of the nodes the tick just ran)."""
+    def publish(self, visited: set[Any], new_tick: bool = True) -> None:
+        """Sends the statuses now.
+
+        Args:
+            visited: the ids of the nodes the tick just ran.
+            new_tick: False for the call after the run ended (the tree stopped, no new
+                tick): the server shows the stopped tree, the mirror is not ticked again
+                (it would start its tree over).
+        """
         if self._server is not None:
             self._server.publish(status_codes(self.nodes, self._last))
-        if self._mirror is not None:
+        if self._mirror is not None and new_tick:
             statuses = {index: node.status for index, node in enumerate(self.nodes)}
             indices = {index for index, node in enumerate(self.nodes) if node.id in visited}
             self._mirror.publish(statuses, indices)

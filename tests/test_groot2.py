@@ -121,6 +121,15 @@ def test_a_node_stopped_after_it_ran_is_sent_as_idle_from_its_last_status():
     assert groot2.status_codes([node], last) == [12]
 
 
+def test_a_mission_stopped_mid_tick_is_shown_stopped(port):
+    """The runner's last call (no new tick) after it stopped the tree: idle-after-RUNNING."""
+    for _, _, client, monitor, runner in watch("127.0.0.1", port, ticks=1):
+        assert client.statuses()[1] == 1
+        runner.tree.root.stop(Status.INVALID)
+        monitor(runner)
+        assert client.statuses()[1] == 11 and client.statuses()[2] == 11
+
+
 def test_the_loopback_server_refuses_breakpoints_and_answers_hook_dumps(port):
     for _, _, client, _, _ in watch("127.0.0.1", port, ticks=1):
         assert client.request("D") == [b"[]"]
