@@ -111,37 +111,15 @@ DECORATOR_ATTRIBUTES = {
     "ForceFailure": (),
 }
 CONTROL_ATTRIBUTES = {"Parallel": ("success_count", "failure_count")}
-UNMAPPED_BUILTINS = frozenset(
-    {
-        "SequenceWithMemory",
-        "IfThenElse",
-        "WhileDoElse",
-        "Switch2",
-        "Switch3",
-        "Switch4",
-        "Switch5",
-        "Switch6",
-        "ParallelAll",
-        "KeepRunningUntilFailure",
-        "RetryUntilSuccesful",
-        "Delay",
-        "RunOnce",
-        "Precondition",
-        "LoopInt",
-        "LoopDouble",
-        "LoopString",
-        "LoopBool",
-        "Script",
-        "ScriptCondition",
-        "SetBlackboard",
-        "UnsetBlackboard",
-        "Sleep",
-        "AlwaysRunning",
-        "WasEntryUpdated",
-        "SkipUnlessUpdated",
-        "WaitValueUpdate",
-    }
-)
+# fmt: off
+UNMAPPED_BUILTINS = frozenset({
+    "SequenceWithMemory", "IfThenElse", "WhileDoElse", "Switch2", "Switch3", "Switch4",
+    "Switch5", "Switch6", "ParallelAll", "KeepRunningUntilFailure", "RetryUntilSuccesful",
+    "Delay", "RunOnce", "Precondition", "LoopInt", "LoopDouble", "LoopString", "LoopBool",
+    "Script", "ScriptCondition", "SetBlackboard", "UnsetBlackboard", "Sleep",
+    "AlwaysRunning", "WasEntryUpdated", "SkipUnlessUpdated", "WaitValueUpdate",
+})
+# fmt: on
 """BT.CPP 4.8's built-in nodes with no py_trees counterpart here (said as such)."""
 IGNORED_ATTRIBUTES = frozenset({"_uid", "_fullpath"})
 """Attributes Groot2 and BT.CPP add to trees they write that mean nothing here."""
@@ -153,11 +131,12 @@ class _Builder:
         trees: Mapping[str, XmlElement],
         leaves: Mapping[str, Callable[..., object]],
         source: str,
+        main: str,
     ):
         self.trees = trees
         self.leaves = leaves
         self.source = source
-        self._expanding: list[str] = []
+        self._expanding: list[str] = [main]  # the trees being built, to refuse a cycle
 
     def where(self, element: XmlElement) -> str:
         return f"{self.source} line {element.line}: <{element.tag}>"
@@ -344,6 +323,24 @@ def tree_from_btcpp_xml(
         BtcppImportError: not BT.CPP v4, an unknown node, a bad attribute (with the line).
     """
     root = parse_xml(text, source)
+    trees = _behavior_trees(root, source)
+    main = root.attributes.get("main_tree_to_execute") or (
+        next(iter(trees)) if len(trees) == 1 else ""
+    )
+    if main not in trees:
+        raise BtcppImportError(
+            f"{source} line {root.line}: no <BehaviorTree ID={main!r}> to run (say which "
+            f"with main_tree_to_execute; found: {', '.join(trees) or 'none'})"
+        )
+    return _Builder(trees, leaves, source, main).build(_only_child(trees[main], source))
+
+
+def _behavior_trees(root: XmlElement, source: str) -> dict[str, XmlElement]:
+    """The ``<BehaviorTree>`` elements of a BT.CPP v4 ``<root>``, by ID.
+
+    Raises:
+        BtcppImportError: not ``<root BTCPP_format="4">``, or an element we do not read.
+    """
     if root.tag != "root":
         raise BtcppImportError(
             f"{source} line {root.line}: the document's element is <{root.tag}>, not <root>"
@@ -358,22 +355,12 @@ def tree_from_btcpp_xml(
     for element in root.children:
         if element.tag == "BehaviorTree":
             trees[element.attributes.get("ID", "")] = element
-        elif element.tag not in ("TreeNodesModel", "include"):
-            raise BtcppImportError(
-                f"{source} line {element.line}: unexpected <{element.tag}> in <root>"
-            )
         elif element.tag == "include":
             raise BtcppImportError(
                 f"{source} line {element.line}: <include> is not supported: inline the file"
             )
-    main = root.attributes.get("main_tree_to_execute") or (
-        next(iter(trees)) if len(trees) == 1 else ""
-    )
-    if main not in trees:
-        raise BtcppImportError(
-            f"{source} line {root.line}: no <BehaviorTree ID={main!r}> to run (say which "
-            f"with main_tree_to_execute; found: {', '.join(trees) or 'none'})"
-        )
-    builder = _Builder(trees, leaves, source)
-    builder._expanding.append(main)
-    return builder.build(_only_child(trees[main], source))
+        elif element.tag != "TreeNodesModel":
+            raise BtcppImportError(
+                f"{source} line {element.line}: unexpected <{element.tag}> in <root>"
+            )
+    return trees
