@@ -283,7 +283,12 @@ def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
 
 def check_groot2_arguments(command: str, args: argparse.Namespace) -> None:
     """One line before any work when ``--groot2`` cannot be served."""
-    from bearchair.executive.groot2 import INSTALL_HINT, check_groot2_port, missing_modules
+    from bearchair.executive.groot2 import (
+        INSTALL_HINT,
+        check_groot2_address,
+        check_groot2_port,
+        missing_modules,
+    )
 
     if args.groot2 is None:
         if args.groot2_bind is not None:
@@ -293,6 +298,7 @@ def check_groot2_arguments(command: str, args: argparse.Namespace) -> None:
     missing = missing_modules()
     if missing:
         raise InputError(f"{command}: --groot2 needs {', '.join(missing)}: {INSTALL_HINT}")
+    check_groot2_address(args.groot2, args.groot2_bind or "127.0.0.1")
 
 
 def _tree(args: argparse.Namespace) -> int:

@@ -80,6 +80,39 @@ def check_groot2_port(port: int) -> int:
     return port
 
 
+def zmq_endpoint(bind: str, port: int) -> str:
+    """``tcp://HOST:PORT``, an IPv6 address in brackets."""
+    return f"tcp://{f'[{bind}]' if ':' in bind else bind}:{port}"
+
+
+def check_groot2_address(port: int, bind: str) -> None:
+    """Binds PORT and PORT + 1 on ``bind`` and lets them go: a taken port or an address
+    not of this machine is one line before the mission starts, not after the world is
+    built.
+
+    Raises:
+        Groot2Unavailable: the address cannot be bound.
+    """
+    import zmq
+
+    with zmq.Context() as context:
+        sockets = []
+        try:
+            for offset in (0, 1):
+                socket = context.socket(zmq.REP)
+                sockets.append(socket)
+                socket.setsockopt(zmq.LINGER, 0)
+                socket.setsockopt(zmq.IPV6, ":" in bind)
+                socket.bind(zmq_endpoint(bind, port + offset))
+        except zmq.ZMQError as error:
+            raise Groot2Unavailable(
+                f"--groot2: cannot listen on {bind}:{port} and {port + 1}: {error}"
+            ) from error
+        finally:
+            for socket in sockets:
+                socket.close(linger=0)
+
+
 def status_codes(nodes: list[py_trees.behaviour.Behaviour], last: list[int]) -> list[int]:
     """Each node's BT.CPP status code now; ``last`` (updated) holds the last non-idle one."""
     codes = []
@@ -159,13 +192,12 @@ class LoopbackServer:
         self._context = zmq.Context()
         self._server = self._context.socket(zmq.REP)
         self._publisher = self._context.socket(zmq.PUB)
-        host = f"[{bind}]" if ":" in bind else bind  # an IPv6 address, e.g. ::1
         for socket in (self._server, self._publisher):
             socket.setsockopt(zmq.LINGER, 0)
-            socket.setsockopt(zmq.IPV6, ":" in bind)
+            socket.setsockopt(zmq.IPV6, ":" in bind)  # an IPv6 address, e.g. ::1
         try:
-            self._server.bind(f"tcp://{host}:{port}")
-            self._publisher.bind(f"tcp://{host}:{port + 1}")
+            self._server.bind(zmq_endpoint(bind, port))
+            self._publisher.bind(zmq_endpoint(bind, port + 1))
         except zmq.ZMQError as error:
             self._context.destroy(linger=0)
             raise Groot2Unavailable(
@@ -345,8 +377,7 @@ class Groot2Monitor:
             without_leaf_ports(xml),
             {type(node).__name__ for node in self.nodes if not node.children},
         )
-        host = "127.0.0.1" if bind in ALL_INTERFACES else bind
-        self.address = f"tcp://{f'[{host}]' if ':' in host else host}:{port}"
+        self.address = zmq_endpoint("127.0.0.1" if bind in ALL_INTERFACES else bind, port)
         self._last = [0] * len(self.nodes)
         self._visits: _Visits | None = None
         self._ticks = -1

@@ -183,6 +183,23 @@ def test_run_groot2_without_the_extra_says_which_extra_to_install(monkeypatch, c
     assert "pip install 'bearchair[groot2]'" in err
 
 
+def test_run_groot2_on_a_taken_port_stops_before_anything_runs(port, tmp_path, capsys):
+    with zmq.Context() as context, context.socket(zmq.REP) as taken:
+        taken.bind(f"tcp://127.0.0.1:{port + 1}")
+        started = time.monotonic()
+        out = tmp_path / "run"
+        assert main(["run", "--groot2", str(port), "--mute", "--out", str(out)]) == 2
+    assert time.monotonic() - started < 5.0, "before the world is built"
+    assert not out.exists()
+    err = capsys.readouterr().err.strip()
+    assert f"cannot listen on 127.0.0.1:{port} and {port + 1}" in err and "\n" not in err
+
+
+def test_run_groot2_bind_to_an_address_not_of_this_machine_is_one_line(port, capsys):
+    assert main(["run", "--groot2", str(port), "--groot2-bind", "192.0.2.1", "--mute"]) == 2
+    assert "cannot listen on 192.0.2.1" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     ("argv", "expected"),
     [
