@@ -124,16 +124,85 @@ def status_codes(nodes: list[py_trees.behaviour.Behaviour], last: list[int]) -> 
     return codes
 
 
+_COUNT = ("input_port", "int")
+BUILTIN_MODELS: dict[str, tuple[str, tuple[tuple[str, str, str, str], ...]]] = {
+    "Sequence": ("Control", ()),
+    "ReactiveSequence": ("Control", ()),
+    "Fallback": ("Control", ()),
+    "ReactiveFallback": ("Control", ()),
+    "Parallel": (
+        "Control",
+        (
+            ("failure_count", *_COUNT, "number of children that need to fail to trigger a FAILURE"),
+            (
+                "success_count",
+                *_COUNT,
+                "number of children that need to succeed to trigger a SUCCESS",
+            ),
+        ),
+    ),
+    "RetryUntilSuccessful": (
+        "Decorator",
+        (
+            (
+                "num_attempts",
+                *_COUNT,
+                "Execute again a failing child up to N times. Use -1 to create an infinite loop.",
+            ),
+        ),
+    ),
+    "Repeat": (
+        "Decorator",
+        (
+            (
+                "num_cycles",
+                *_COUNT,
+                "Repeat a successful child up to N times. Use -1 to create an infinite loop.",
+            ),
+        ),
+    ),
+    "Timeout": (
+        "Decorator",
+        (
+            (
+                "msec",
+                "input_port",
+                "unsigned int",
+                "After a certain amount of time, halt() the child if it is still running.",
+            ),
+        ),
+    ),
+    "Inverter": ("Decorator", ()),
+    "ForceSuccess": ("Decorator", ()),
+    "ForceFailure": ("Decorator", ()),
+    "AlwaysSuccess": ("Action", ()),
+    "AlwaysFailure": ("Action", ()),
+}
+"""The models BehaviorTree.CPP 4.8 sends Groot2 for the built-in nodes we map (its
+``WriteTreeToXML(tree, true, true)``): kind, and each port's name, direction, type, text."""
+
+
 def xml_with_uids(xml: str) -> str:
-    """Our export with each tree node's ``_uid`` (1, 2, ... in depth-first order, the
-    order :func:`bearchair.executive.record.tree_nodes` lists them) and the tree's
-    ``_fullpath``, as Groot2 expects of a ``FULLTREE`` reply."""
+    """Our export as Groot2 expects a ``FULLTREE`` reply, as BT.CPP's publisher sends it:
+    each tree node's ``_uid`` (1, 2, ... in depth-first order, the order
+    :func:`bearchair.executive.record.tree_nodes` lists them), the tree's ``_fullpath``,
+    and the models of the built-in nodes it uses, all models sorted by ID."""
     document = ET.fromstring(xml)
     tree = document.find("BehaviorTree")
-    assert tree is not None  # tree_to_btcpp_xml writes one
+    models = document.find("TreeNodesModel")
+    assert tree is not None and models is not None  # tree_to_btcpp_xml writes both
     tree.set("_fullpath", "")
-    for uid, element in enumerate(list(tree.iter())[1:], 1):
+    elements = list(tree.iter())[1:]
+    for uid, element in enumerate(elements, 1):
         element.set("_uid", str(uid))
+    entries = {model.get("ID"): model for model in models}
+    for tag in sorted({element.tag for element in elements} & set(BUILTIN_MODELS)):
+        kind, ports = BUILTIN_MODELS[tag]
+        entries[tag] = model = ET.Element(kind, {"ID": tag})
+        for name, direction, type_name, text in ports:
+            port = ET.SubElement(model, direction, {"name": name, "type": type_name})
+            port.text = text
+    models[:] = [entries[key] for key in sorted(entries, key=str)]
     return ET.tostring(document, encoding="unicode")
 
 

@@ -8,6 +8,7 @@ import subprocess
 import sys
 import time
 import types
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import py_trees
@@ -99,6 +100,13 @@ def test_the_loopback_server_sends_the_tree_and_py_trees_statuses_each_tick(port
                 "RetryUntilSuccessful",
                 "Sequence",
             ]
+            (xml,) = client.request("T")
+            models = {m.get("ID"): m.tag for m in ET.fromstring(xml).find("TreeNodesModel")}
+            assert models == {
+                "Sequence": "Control",
+                "RetryUntilSuccessful": "Decorator",
+                "StatusQueue": "Action",
+            }
             endpoint = monitor._server._server.getsockopt(zmq.LAST_ENDPOINT).decode()
             assert endpoint == f"tcp://127.0.0.1:{port}"
         expected = {}
