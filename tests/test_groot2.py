@@ -20,7 +20,7 @@ pytest.importorskip("behaviortreepy", reason="the groot2 extra (behaviortreepy)"
 
 import zmq
 
-from bearchair.executive import groot2
+from bearchair.executive import groot2, groot2_server
 from bearchair.executive.cli import main
 from bearchair.executive.groot2 import Groot2Monitor, Groot2Unavailable
 from bearchair.trees.mission import STAGES
@@ -122,11 +122,11 @@ def test_the_loopback_server_sends_the_tree_and_py_trees_statuses_each_tick(port
 def test_a_node_stopped_after_it_ran_is_sent_as_idle_from_its_last_status():
     node = py_trees.behaviours.Success(name="Done")
     last = [0]
-    assert groot2.status_codes([node], last) == [0]
+    assert groot2_server.status_codes([node], last) == [0]
     node.tick_once()
-    assert groot2.status_codes([node], last) == [2]
+    assert groot2_server.status_codes([node], last) == [2]
     node.stop(Status.INVALID)
-    assert groot2.status_codes([node], last) == [12]
+    assert groot2_server.status_codes([node], last) == [12]
 
 
 def test_a_mission_stopped_mid_tick_is_shown_stopped(port):
