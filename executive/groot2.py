@@ -151,10 +151,14 @@ class Groot2Monitor:
             self._mirror = None
             self._server = LoopbackServer(xml_with_uids(xml), len(self.nodes), port, bind)
 
-    def __call__(self, runner: Any) -> None:
-        """The runner's post-tick hook (``bearchair.executive.runner.MissionRunner``),
-        called after each tick and once more when the run has ended."""
-        tree = getattr(runner, "tree", None)
+    def __call__(self, host: Any) -> None:
+        """After a tick: the mission runner's post-tick hook
+        (``bearchair.executive.runner.MissionRunner``, called after each tick and once more
+        when the run has ended), or a py_trees ``BehaviourTree``'s post-tick handler
+        (``tree.add_post_tick_handler(monitor)``)."""
+        tree = (
+            host if isinstance(host, py_trees.trees.BehaviourTree) else getattr(host, "tree", None)
+        )
         visited: set[Any] = set()
         new_tick = True
         if isinstance(tree, py_trees.trees.BehaviourTree):

@@ -129,6 +129,23 @@ def test_a_node_stopped_after_it_ran_is_sent_as_idle_from_its_last_status():
     assert groot2_server.status_codes([node], last) == [12]
 
 
+def test_a_py_trees_behaviour_tree_takes_the_monitor_as_its_post_tick_handler(port):
+    root = small_tree()
+    tree = py_trees.trees.BehaviourTree(root)
+    monitor = Groot2Monitor(root, port)
+    tree.add_post_tick_handler(monitor)
+    client = Groot2Client(f"tcp://127.0.0.1:{port}")
+    try:
+        seen = []
+        for _ in range(8):
+            tree.tick()
+            seen.append(client.statuses()[1])
+        assert seen[0] == 1 and seen[-1] == 2, seen
+    finally:
+        client.close()
+        monitor.close()
+
+
 def test_a_mission_stopped_mid_tick_is_shown_stopped(port):
     """The runner's last call (no new tick) after it stopped the tree: idle-after-RUNNING."""
     for _, _, client, monitor, runner in watch("127.0.0.1", port, ticks=1):
