@@ -15,6 +15,7 @@ import struct
 import threading
 import uuid
 import xml.etree.ElementTree as ET
+from dataclasses import dataclass
 
 import py_trees
 from py_trees.common import Status
@@ -55,8 +56,22 @@ def status_codes(nodes: list[py_trees.behaviour.Behaviour], last: list[int]) -> 
     return codes
 
 
-_COUNT = ("input_port", "int")
-BUILTIN_MODELS: dict[str, tuple[str, tuple[tuple[str, str, str, str], ...]]] = {
+@dataclass(frozen=True)
+class BuiltinPort:
+    """An input port of a BT.CPP built-in node's model, as BT.CPP describes it."""
+
+    name: str
+    type: str
+    text: str
+    default: str = ""
+
+
+_RETRIES = "Execute again a failing child up to N times. Use -1 to create an infinite loop."
+_REPEATS = "Repeat a successful child up to N times. Use -1 to create an infinite loop."
+_TIMEOUT = "After a certain amount of time, halt() the child if it is still running."
+_FAILURES = "number of children that need to fail to trigger a FAILURE"
+_SUCCESSES = "number of children that need to succeed to trigger a SUCCESS"
+BUILTIN_MODELS: dict[str, tuple[str, tuple[BuiltinPort, ...]]] = {
     "Sequence": ("Control", ()),
     "ReactiveSequence": ("Control", ()),
     "Fallback": ("Control", ()),
@@ -64,53 +79,21 @@ BUILTIN_MODELS: dict[str, tuple[str, tuple[tuple[str, str, str, str], ...]]] = {
     "Parallel": (
         "Control",
         (
-            ("failure_count", *_COUNT, "number of children that need to fail to trigger a FAILURE"),
-            (
-                "success_count",
-                *_COUNT,
-                "number of children that need to succeed to trigger a SUCCESS",
-            ),
+            BuiltinPort("failure_count", "int", _FAILURES, "1"),
+            BuiltinPort("success_count", "int", _SUCCESSES, "-1"),
         ),
     ),
-    "RetryUntilSuccessful": (
-        "Decorator",
-        (
-            (
-                "num_attempts",
-                *_COUNT,
-                "Execute again a failing child up to N times. Use -1 to create an infinite loop.",
-            ),
-        ),
-    ),
-    "Repeat": (
-        "Decorator",
-        (
-            (
-                "num_cycles",
-                *_COUNT,
-                "Repeat a successful child up to N times. Use -1 to create an infinite loop.",
-            ),
-        ),
-    ),
-    "Timeout": (
-        "Decorator",
-        (
-            (
-                "msec",
-                "input_port",
-                "unsigned int",
-                "After a certain amount of time, halt() the child if it is still running.",
-            ),
-        ),
-    ),
+    "RetryUntilSuccessful": ("Decorator", (BuiltinPort("num_attempts", "int", _RETRIES),)),
+    "Repeat": ("Decorator", (BuiltinPort("num_cycles", "int", _REPEATS),)),
+    "Timeout": ("Decorator", (BuiltinPort("msec", "unsigned int", _TIMEOUT),)),
     "Inverter": ("Decorator", ()),
     "ForceSuccess": ("Decorator", ()),
     "ForceFailure": ("Decorator", ()),
     "AlwaysSuccess": ("Action", ()),
     "AlwaysFailure": ("Action", ()),
 }
-"""The models BehaviorTree.CPP 4.8 sends Groot2 for the built-in nodes we map (its
-``WriteTreeToXML(tree, true, true)``): kind, and each port's name, direction, type, text."""
+"""The models BehaviorTree.CPP 4.8.2 sends Groot2 for the built-in nodes we map (its
+``WriteTreeToXML(tree, true, true)``): the kind of node and its input ports."""
 
 
 def xml_with_uids(xml: str) -> str:
@@ -130,9 +113,12 @@ def xml_with_uids(xml: str) -> str:
     for tag in sorted({element.tag for element in elements} & set(BUILTIN_MODELS)):
         kind, ports = BUILTIN_MODELS[tag]
         entries[tag] = model = ET.Element(kind, {"ID": tag})
-        for name, direction, type_name, text in ports:
-            port = ET.SubElement(model, direction, {"name": name, "type": type_name})
-            port.text = text
+        for port in ports:
+            default = {"default": port.default} if port.default else {}
+            element = ET.SubElement(
+                model, "input_port", {"name": port.name, "type": port.type, **default}
+            )
+            element.text = port.text
     models[:] = [entries[key] for key in sorted(entries, key=str)]
     return ET.tostring(document, encoding="unicode")
 

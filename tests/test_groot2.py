@@ -9,6 +9,7 @@ import sys
 import time
 import types
 import xml.etree.ElementTree as ET
+from dataclasses import astuple
 from pathlib import Path
 
 import py_trees
@@ -295,3 +296,44 @@ def test_a_remapped_port_is_shown_to_groot2_and_left_out_of_the_btcpp_mirror():
         finally:
             client.close()
             monitor.close()
+
+
+def test_every_btcpp_builtin_is_mapped_or_said_to_be_unmapped(port):
+    """BT.CPP's publisher sends the models of all its built-in nodes (FULLTREE)."""
+    import behaviortreepy as bt
+
+    from bearchair.executive.btcpp_import import (
+        COMPOSITES,
+        CONTROL_ATTRIBUTES,
+        DECORATOR_ATTRIBUTES,
+        UNMAPPED_BUILTINS,
+    )
+    from bearchair.executive.groot2_server import BUILTIN_MODELS
+
+    tree = bt.BehaviorTreeFactory().create_tree_from_text(
+        '<root BTCPP_format="4"><BehaviorTree ID="M"><AlwaysSuccess/></BehaviorTree></root>'
+    )
+    publisher = bt.Groot2Publisher(tree, port)
+    client = Groot2Client(f"tcp://127.0.0.1:{port}")
+    try:
+        (xml,) = client.request("T")
+    finally:
+        client.close()
+        del publisher
+    models = {m.get("ID"): m for m in ET.fromstring(xml).find("TreeNodesModel")}
+    mapped = {
+        *COMPOSITES,
+        *CONTROL_ATTRIBUTES,
+        *DECORATOR_ATTRIBUTES,
+        "AlwaysSuccess",
+        "AlwaysFailure",
+    }
+    assert set(models) == mapped | UNMAPPED_BUILTINS | {"SubTree"}
+    assert set(BUILTIN_MODELS) == mapped
+    for tag, (kind, ports) in BUILTIN_MODELS.items():
+        assert models[tag].tag == kind, tag
+        sent = {
+            (p.tag, p.get("name"), p.get("type"), (p.text or "").strip(), p.get("default", ""))
+            for p in models[tag]
+        }
+        assert sent == {("input_port", *astuple(port)) for port in ports}, tag
