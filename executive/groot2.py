@@ -138,7 +138,9 @@ class Groot2Monitor:
             without_leaf_ports(xml),
             {type(node).__name__ for node in self.nodes if not node.children},
         )
-        self.address = zmq_endpoint("127.0.0.1" if bind in ALL_INTERFACES else bind, port)
+        self.every_interface = bind in ALL_INTERFACES
+        """True when BT.CPP's publisher listens on every interface of the machine."""
+        self.address = zmq_endpoint("127.0.0.1" if self.every_interface else bind, port)
         self._last = [0] * len(self.nodes)
         self._visits: _Visits | None = None
         self._ticks = -1

@@ -319,7 +319,8 @@ def open_groot2(root: Any, config: RunConfig) -> Any:
     from bearchair.executive.groot2 import Groot2Monitor
 
     monitor = Groot2Monitor(root, config.groot2_port, config.groot2_bind)
-    print(f"Groot2: connect to {monitor.address}", file=sys.stderr, flush=True)
+    where = " (it listens on every interface)" if monitor.every_interface else ""
+    print(f"Groot2: connect to {monitor.address}{where}", file=sys.stderr, flush=True)
     return monitor
 
 
