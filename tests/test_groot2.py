@@ -243,7 +243,7 @@ def test_bad_groot2_arguments_are_one_line(argv, expected, capsys):
 @pytest.mark.slow
 def test_groot2_sees_every_stage_of_a_simulated_mission_change(tmp_path: Path, port):
     """``bearchair run --groot2``: the client reads the mission's tree and, for every
-    stage, statuses changing while the mission runs (about 30 s)."""
+    stage, statuses changing while the mission runs (45 to 70 s on two cores)."""
     command = [sys.executable, "-m", "bearchair.executive.cli", "run", "--mute", "--seed", "0"]
     command += ["--out", str(tmp_path / "run"), "--groot2", str(port)]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
