@@ -293,6 +293,7 @@ def _run_tree(
 ) -> dict[str, Any]:
     """Ticks the tree on ``robot`` and writes the summary; the record survives any error."""
     recording = None
+    groot2 = None
     try:
         if skills is None:
             skills = configured_skills(config)
@@ -301,6 +302,7 @@ def _run_tree(
             skills = recording.watch_skills(skills, robot.clock)
             if recording.viewer_url:
                 print(f"live viewer: {recording.viewer_url}", file=sys.stderr, flush=True)
+        groot2 = open_groot2(root, config)
         runner = MissionRunner(
             root,
             skills,
@@ -311,7 +313,7 @@ def _run_tree(
             timeout_s=config.timeout_s,
             tick_period_s=config.tick_period_s,
             on_tick=on_tick,
-            post_tick=() if recording is None else (recording,),
+            post_tick=tuple(hook for hook in (recording, groot2) if hook is not None),
         )
         summary = summarise(runner.run(), run_info)
         # The summary first: a SIGKILL while the picture renders must not lose it.
@@ -339,6 +341,20 @@ def _run_tree(
         recorder.close()
         if recording is not None:
             recording.close()
+        if groot2 is not None:
+            groot2.close()
+
+
+def open_groot2(root: Any, config: RunConfig) -> Any:
+    """The Groot2 publisher of the run's tree (``--groot2``), or None when not asked for."""
+    if config.groot2_port is None:
+        return None
+    from bearchair.executive.groot2 import Groot2Monitor
+
+    monitor = Groot2Monitor(root, config.groot2_port, config.groot2_bind)
+    where = " (it listens on every interface)" if monitor.every_interface else ""
+    print(f"Groot2: connect to {monitor.address}{where}", file=sys.stderr, flush=True)
+    return monitor
 
 
 def configured_skills(config: RunConfig) -> MissionSkills:

@@ -108,3 +108,17 @@ def render_graph(
         with atomic_path(out) as scratch:
             shutil.copyfile(source, scratch)
     return out
+
+
+def write_btcpp(root: py_trees.behaviour.Behaviour, out: Path | None) -> int:
+    """``bearchair tree --format btcpp``: the BehaviorTree.CPP v4 XML on stdout, or in ``out``
+    (written whole or not at all)."""
+    from bearchair.executive.btcpp import tree_to_btcpp_xml
+    from bearchair.executive.outputs import check_output_file, write_text_atomic
+
+    xml = tree_to_btcpp_xml(root)
+    if out is None:
+        print(xml, end="")
+        return 0
+    print(write_text_atomic(check_output_file(out, "--out", (".xml",)), xml))
+    return 0
