@@ -304,9 +304,11 @@ def _why(error: BaseException) -> str:
     """One line on why Ray failed; a cluster wanting a token says how to give one."""
     text = str(error).strip()
     first = text.splitlines()[0] if text else type(error).__name__
-    if "authentication" in text.lower() or "token" in text.lower():
+    # Ray's own reason (an invalid token) goes to its log lines, not into the exception.
+    unsure = "failed to connect" in text.lower() and os.environ.get("RAY_AUTH_MODE") != "token"
+    if unsure or "authentication" in text.lower() or "token" in text.lower():
         return (
-            f"{first} (the cluster uses token authentication: export RAY_AUTH_MODE=token and "
+            f"{first} (if the cluster uses token authentication: export RAY_AUTH_MODE=token and "
             "RAY_AUTH_TOKEN, or copy the head's ~/.ray/auth_token here; docs/ray.md)"
         )
     return first

@@ -32,7 +32,7 @@ from bearchair.evaluation.shipping import (
 )
 from bearchair.evaluation.store import TrialStore
 from bearchair.executive import cli
-from tests.test_trials import FakeRay, fake_worker, write_chairs  # noqa: F401 - a fixture
+from tests.test_trials import FAKE_WORKER, FakeRay, write_chairs
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -90,9 +90,11 @@ def test_a_run_folder_round_trips_and_an_escaping_archive_is_refused(tmp_path):
     assert not (tmp_path / "outside.txt").exists()
 
 
-def test_ray_trials_run_in_a_node_folder_and_come_back_under_out(
-    tmp_path, fake_worker, monkeypatch, capsys
-):
+def test_ray_trials_run_in_a_node_folder_and_come_back_under_out(tmp_path, monkeypatch, capsys):
+    script = tmp_path / "fake_worker.py"
+    script.write_text(FAKE_WORKER)
+    monkeypatch.setenv("FAKE_LOG", str(tmp_path / "fake_worker.log"))
+    fake_worker = [sys.executable, str(script)]
     fake_ray = FakeRay(cpus=5)
     monkeypatch.setitem(sys.modules, "ray", fake_ray)
     folder = write_chairs(tmp_path / "chairs", ["a.obj"])
@@ -170,9 +172,10 @@ def _stop_cluster(marker: str) -> None:
 
 
 @pytest.fixture
-def ray_cluster(monkeypatch) -> Iterator[str]:
+def ray_cluster() -> Iterator[tuple[str, dict[str, str]]]:
     """A head without CPUs and two 1-CPU worker nodes, each started from its own folder,
-    with token authentication; yields the head's address."""
+    with token authentication; yields the head's address and the environment (with the
+    token) a driver needs."""
     pytest.importorskip("ray")
     if not RAY_CLI.exists():
         pytest.skip(f"no ray command beside {sys.executable}")
@@ -205,10 +208,7 @@ def ray_cluster(monkeypatch) -> Iterator[str]:
             if started.returncode != 0:
                 tail = (started.stderr or started.stdout).strip().splitlines()[-3:]
                 pytest.fail(f"ray start ({name}) failed: {' | '.join(tail)}")
-        monkeypatch.setenv("RAY_AUTH_MODE", "token")
-        monkeypatch.setenv("RAY_AUTH_TOKEN", token)
-        monkeypatch.delenv("RAY_ADDRESS", raising=False)
-        yield address
+        yield address, {k: v for k, v in env.items() if k != MARKER}
     finally:
         _stop_cluster(marker)
         shutil.rmtree(root, ignore_errors=True)
@@ -220,28 +220,33 @@ def _generated_chair(folder: Path) -> Path:
     folder.mkdir(parents=True)
     chair = generate_chair(seed=1, family="four_legs")
     chair.mesh.export(folder / "gen-01.obj")
-    entry = {"file": "gen-01.obj", "kind": "chair", "front_yaw_deg": math.degrees(chair.front_yaw_rad)}
+    entry = {
+        "file": "gen-01.obj",
+        "kind": "chair",
+        "front_yaw_deg": math.degrees(chair.front_yaw_rad),
+    }
     (folder / "manifest.json").write_text(json.dumps({"meshes": [entry]}))
     return folder
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(900)
-def test_trials_on_a_two_node_cluster_write_every_record_under_the_heads_out(
-    tmp_path, ray_cluster, capfd
-):
+def test_trials_on_a_two_node_cluster_write_every_record_under_the_heads_out(tmp_path, ray_cluster):
+    address, env = ray_cluster
     chairs = _generated_chair(tmp_path / "chairs")
     out = tmp_path / "out"
-    status = cli.main(
-        ["trials", "--chairs", str(chairs), "--backend", "ray", "--address", ray_cluster,
-         "--out", str(out), "--timeout", "60", "--no-record"]
+    # A command of its own, as a user runs it: Ray reads RAY_AUTH_MODE when imported.
+    trials = subprocess.run(
+        [str(Path(sys.executable).with_name("bearchair")), "trials", "--chairs", str(chairs),
+         "--backend", "ray", "--address", address, "--out", str(out), "--timeout", "60",
+         "--no-record"],
+        env=env, cwd=tmp_path, capture_output=True, text=True, timeout=840,
     )  # fmt: skip
-    captured = capfd.readouterr()
-    assert status == 0, captured.err
-    assert "3 node(s), 2 CPU(s); 2 trial(s) at once" in captured.err
+    assert trials.returncode == 0, trials.stderr
+    assert "3 node(s), 2 CPU(s); 2 trial(s) at once" in trials.stderr
     # Only our lines on stderr: the header, the cluster, the progress, the report.
     ours = ("bearchair trials:", "[", "report:", "1 chairs x 6 trials")
-    assert [line for line in captured.err.splitlines() if not line.startswith(ours)] == []
+    assert [line for line in trials.stderr.splitlines() if not line.startswith(ours)] == []
     with TrialStore(out / "trials.sqlite") as store:
         records = store.records()
     assert len(records) == 6
@@ -260,7 +265,9 @@ def test_trials_on_a_two_node_cluster_write_every_record_under_the_heads_out(
     # The trials imported the package the head shipped, not the checkout's.
     assert not any(Path(d).resolve().is_relative_to(REPO) for d in package_dirs)
     scenes = sorted(p.name for p in (out / "trials").glob("*.png"))
-    assert len(scenes) == len([r for r in records if (Path(r["run_dir"]) / "final_scene.png").is_file()])
+    assert len(scenes) == len(
+        [r for r in records if (Path(r["run_dir"]) / "final_scene.png").is_file()]
+    )
     assert len(scenes) >= 1
     report = (out / "report.md").read_text()
     for picture in (out / "chairs").glob("*.png"):
