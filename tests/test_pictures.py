@@ -81,3 +81,83 @@ def test_the_blackboard_table_holds_every_registration_and_no_other():
     assert set(keys) == {k for k, _ in access} and users[0] == "executive"
     label = tree_graph(root, with_blackboard=True).get_node("blackboard")[0].get("label")
     assert label.count("<TR>") == len(keys) + 2  # title, header, a row per key
+
+
+# --- scene pictures ---------------------------------------------------------------------
+
+
+def white_rows(rgb) -> int:
+    """Rows that are (almost) all background white: the band the far plane left."""
+    import numpy as np
+
+    return int(((np.asarray(rgb)[:, :, :3].min(axis=2) >= 250).mean(axis=1) > 0.98).sum())
+
+
+@pytest.fixture(scope="module")
+def world():
+    from bearchair.hardware.sim.world import SimConfig, SimWorld
+
+    with SimWorld(SimConfig(seed=0, camera_noise=False)) as built:
+        yield built
+
+
+def board_with_decisions():
+    """A blackboard holding a path, a goal and a sitting pose, as the mission writes them."""
+    import numpy as np
+
+    from bearchair.behaviours import keys
+    from bearchair.core.geometry import SittingPose
+    from bearchair.core.se2 import SE2Pose
+    from bearchair.skills.results import AccessibilityResult
+
+    goal = SE2Pose(1.15, -0.1, 3.0)
+    pose = SittingPose(np.array([0.8, -0.07, 0.28]), -0.12)
+    path = (SE2Pose(1.9, 0.0, 3.14), SE2Pose(1.5, -0.05, 3.1))
+    return {
+        keys.ACCESSIBILITY: AccessibilityResult(True, goal, pose, path),
+        keys.SE2_GOAL: goal,
+        keys.SITTING_POSE: pose,
+    }
+
+
+@pytest.mark.parametrize("view", ["perspective", "top"])
+def test_a_scene_picture_has_no_blank_band_and_carries_its_caption_and_marks(world, view):
+    import numpy as np
+
+    from bearchair.executive import scene_picture
+    from bearchair.executive.scene_picture import SceneCaption, SceneMarks
+
+    frame = world.render_scene(view)
+    assert white_rows(frame.rgb) == 0
+    marks = SceneMarks.from_blackboard(board_with_decisions())
+    assert marks.path_xy.shape == (3, 2) and marks.goal is not None and marks.sitting is not None
+    caption = SceneCaption("box-chair", 7, "WalkToChair", "FAILURE", 31.25, "path blocked")
+    picture, lines = scene_picture.compose(frame, marks, caption)
+    assert lines[0] == "box-chair | seed 7 | WalkToChair: FAILURE | robot time 31.2 s"
+    assert lines[1] == "why: path blocked" and lines[-1] == scene_picture.LEGEND
+    assert picture.width == frame.rgb.shape[1] and picture.height > frame.rgb.shape[0]
+    pixels = np.asarray(picture)
+    scene, band = pixels[: frame.rgb.shape[0]], pixels[frame.rgb.shape[0] :]
+    assert (band == scene_picture.CAPTION_BACKGROUND).all(axis=2).mean() > 0.8  # a dark band
+    assert (band.max(axis=2) > 200).any()  # with text in it
+    assert white_rows(pixels) == 0
+    # The marks are drawn where the camera sees them: the goal's base in its colour.
+    ((u, v),), _ = frame.project(np.array([[1.15, -0.1, 0.01]]))
+    patch = scene[int(v) - 3 : int(v) + 4, int(u) - 3 : int(u) + 4].reshape(-1, 3)
+    assert (patch == scene_picture.GOAL_COLOUR).all(axis=1).any()
+    assert not (frame.rgb.reshape(-1, 3) == scene_picture.GOAL_COLOUR).all(axis=1).any()
+
+
+def test_stage_snapshots_of_an_unchanged_scene_differ_by_their_captions(world, tmp_path):
+    from types import SimpleNamespace
+
+    from bearchair.executive.mission import ScenePictures, StageSnapshots
+
+    Stage = SimpleNamespace
+    snapshots = StageSnapshots(ScenePictures(world, "box-chair", 0), tmp_path)
+    runner = SimpleNamespace(stages=[Stage(name="ScanChair", status="SUCCESS", feedback="")])
+    snapshots(runner)
+    runner.stages.append(Stage(name="ImagineSitting", status="FAILURE", feedback="no sitting"))
+    snapshots(runner)  # nothing moved in the world between the two stages
+    contents = [p.read_bytes() for p in snapshots.written]
+    assert len(contents) == 4 and len(set(contents)) == 4
