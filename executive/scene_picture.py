@@ -35,7 +35,12 @@ CAPTION_FONT_PX = 18
 ARROW_M = 0.25
 """Length of the goal's and the sitting direction's arrows, metres (about the NAO's
 foot length and a half: visible from 4 m without hiding the chair)."""
-LEGEND = "blue: planned SE(2) path   green: SE(2) goal   red: sitting pose g (pelvis p, direction)"
+LEGEND = (
+    "blue: planned SE(2) path   green: SE(2) goal (the NAO's footprint)   "
+    "red: sitting pose g (pelvis p, direction)"
+)
+FLOOR_MARK_M = 0.01
+"""Height at which floor marks are drawn, metres (above the floor, under everything else)."""
 
 
 class Frame(Protocol):
@@ -114,8 +119,7 @@ def compose(
     width_px = max(2, picture.width // 320)
     _draw_path(draw, frame, marks.path_xy, width_px)
     if marks.goal is not None:
-        x, y, theta = marks.goal
-        _draw_arrow(draw, frame, (x, y, 0.01), theta, GOAL_COLOUR, width_px, "goal")
+        _draw_footprint(draw, frame, marks.goal, width_px)
     if marks.sitting is not None:
         x, y, z, yaw = marks.sitting
         _draw_arrow(draw, frame, (x, y, z), yaw, SITTING_COLOUR, width_px, "g")
@@ -140,14 +144,40 @@ def _font(size_px: int) -> ImageFont.ImageFont | ImageFont.FreeTypeFont:
 def _draw_path(draw: ImageDraw.ImageDraw, frame: Frame, path_xy: np.ndarray, width_px: int) -> None:
     if len(path_xy) == 0:
         return
-    points = np.column_stack([path_xy, np.full(len(path_xy), 0.01)])
+    points = np.column_stack([path_xy, np.full(len(path_xy), FLOOR_MARK_M)])
     pixels, in_front = frame.project(points)
     visible = [tuple(p) for p, ok in zip(pixels.tolist(), in_front, strict=True) if ok]
     if len(visible) >= 2:
         draw.line(visible, fill=PATH_COLOUR, width=width_px, joint="curve")
-    radius = 2 * width_px
+    radius = width_px + 1
     for u, v in visible:
         draw.ellipse((u - radius, v - radius, u + radius, v + radius), fill=PATH_COLOUR)
+
+
+def _draw_footprint(
+    draw: ImageDraw.ImageDraw, frame: Frame, goal: tuple[float, float, float], width_px: int
+) -> None:
+    """The SE(2) goal as the planner sees the NAO there: its ellipse on the floor
+    (``skills.planning.collision``), a dot at the goal and a tick toward its heading."""
+    from bearchair.skills.planning.collision import NAO_CENTRE_FORWARD_M, NAO_SEMI_AXES_M
+
+    x, y, theta = goal
+    heading = np.array([math.cos(theta), math.sin(theta)])
+    lateral = np.array([-heading[1], heading[0]])
+    centre = np.array([x, y]) + NAO_CENTRE_FORWARD_M * heading
+    angles = np.linspace(0.0, 2.0 * math.pi, 48)
+    outline = (
+        centre
+        + np.outer(NAO_SEMI_AXES_M[0] * np.cos(angles), heading)
+        + np.outer(NAO_SEMI_AXES_M[1] * np.sin(angles), lateral)
+    )
+    pixels, in_front = frame.project(
+        np.column_stack([outline, np.full(len(outline), FLOOR_MARK_M)])
+    )
+    if in_front.all():
+        draw.line([tuple(p) for p in pixels.tolist()], fill=GOAL_COLOUR, width=width_px)
+    tick_m = NAO_SEMI_AXES_M[0]
+    _draw_arrow(draw, frame, (x, y, FLOOR_MARK_M), theta, GOAL_COLOUR, width_px, "goal", tick_m)
 
 
 def _draw_arrow(
@@ -158,10 +188,11 @@ def _draw_arrow(
     colour: tuple[int, int, int],
     width_px: int,
     label: str,
+    length_m: float = ARROW_M,
 ) -> None:
-    """An arrow of :data:`ARROW_M` from ``base`` along ``yaw_rad``, a dot and a label at its base."""
+    """An arrow of ``length_m`` from ``base`` along ``yaw_rad``, a dot and a label at its base."""
     start = np.asarray(base, dtype=float)
-    tip = start + ARROW_M * np.array([math.cos(yaw_rad), math.sin(yaw_rad), 0.0])
+    tip = start + length_m * np.array([math.cos(yaw_rad), math.sin(yaw_rad), 0.0])
     (a, b), in_front = frame.project(np.stack([start, tip]))
     if not in_front.all():
         return

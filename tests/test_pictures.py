@@ -7,6 +7,7 @@ import html
 import re
 import shutil
 import subprocess
+from pathlib import Path
 
 import pytest
 
@@ -161,3 +162,61 @@ def test_stage_snapshots_of_an_unchanged_scene_differ_by_their_captions(world, t
     snapshots(runner)  # nothing moved in the world between the two stages
     contents = [p.read_bytes() for p in snapshots.written]
     assert len(contents) == 4 and len(set(contents)) == 4
+
+
+# --- one renderer of imagined poses ------------------------------------------------------
+
+
+def test_imagine_image_and_the_report_draw_with_the_same_renderer(tmp_path, monkeypatch):
+    import math
+    import types
+
+    import numpy as np
+
+    from bearchair.core.meshes import box_chair_mesh
+    from bearchair.evaluation.pictures import render_chair_pictures
+    from bearchair.executive import cmd_imagine
+    from bearchair.skills.imagination import render
+
+    calls = []
+
+    def recording(mesh, sitting_pose, path, title=""):
+        calls.append((len(mesh.faces), sitting_pose, Path(path).name))
+        Path(path).write_bytes(b"png")
+        return Path(path)
+
+    monkeypatch.setattr(render, "render_sitting", recording)
+    mesh = box_chair_mesh()
+    pose = types.SimpleNamespace(position=np.array([0.0, 0.0, 0.3]), yaw=math.radians(30.0))
+    result = types.SimpleNamespace(found=True, sitting_pose=pose, n_correct=3, n_drops=24)
+    cmd_imagine._draw(mesh, result, "box.obj", tmp_path / "imagine.png")
+    run = tmp_path / "run"
+    run.mkdir()
+    mesh.export(run / "chair_reconstructed.ply")
+    record = {
+        "chair": "box.obj", "trial_index": 0, "experiment": "accessible", "outcome": "success",
+        "run_dir": str(run), "sitting_pose": {"position_m": [0.0, 0.0, 0.3], "yaw_deg": 30.0},
+    }  # fmt: skip
+    assert set(render_chair_pictures([record], tmp_path / "chairs")) == {"box.obj"}
+    assert [name for _, _, name in calls] == ["imagine.png", "box.png"]
+    assert calls[0][0] == calls[1][0] == len(mesh.faces)
+    assert math.isclose(calls[1][1].yaw, math.radians(30.0))
+
+
+def test_the_imagined_pose_picture_is_two_metric_views(tmp_path):
+    pytest.importorskip("matplotlib")
+    import math
+
+    import numpy as np
+    from PIL import Image
+
+    from bearchair.core.geometry import SittingPose
+    from bearchair.core.meshes import box_chair_mesh
+    from bearchair.skills.imagination.render import render_sitting
+
+    pose = SittingPose(np.array([0.02, 0.0, 0.30]), math.radians(20.0))
+    path = render_sitting(box_chair_mesh(), pose, tmp_path / "pose.png", "box chair")
+    width, height = Image.open(path).size
+    assert width > 1.8 * height  # side by side: from above, from the side
+    alone = render_sitting(box_chair_mesh(), None, tmp_path / "alone.png", "box chair")
+    assert alone.read_bytes() != path.read_bytes()

@@ -235,7 +235,8 @@ class SimWorld:
     def render_scene(self, view: Literal["top", "perspective"] = "perspective") -> SceneFrame:
         """A 960x720 picture of the scene with its camera, to draw on (``SceneFrame.project``).
 
-        ``top`` looks straight down from 4.2 m, world +x up the picture; ``perspective``
+        ``top`` looks straight down from 3.4 m above the arena's middle, world +x up the
+        picture (the arena and the Panda's base fill its height); ``perspective``
         looks at the arena from behind its far corner, 45 degrees down: steep enough that
         the top row meets the floor within the renderer's far plane (``FAR_M``), so no
         row is left blank.
@@ -243,7 +244,7 @@ class SimWorld:
         arena = self.config.arena
         centre = np.array([(arena.x_min + arena.x_max) / 2.0 - 0.3, 0.0, 0.25])
         if view == "top":
-            eye = centre + np.array([0.0, 0.0, 4.2])
+            eye = centre + np.array([0.0, 0.0, 3.4])
             forward = np.array([0.0, 0.0, -1.0])
             down = np.array([-1.0, 0.0, 0.0])
         elif view == "perspective":
