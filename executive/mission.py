@@ -62,7 +62,7 @@ class StageSnapshots:
     draws one (:class:`ScenePictures`: captioned, with what the stage decided).
     """
 
-    def __init__(self, render: Callable[..., None], out_dir: Path) -> None:
+    def __init__(self, render: Callable[..., object], out_dir: Path) -> None:
         self._render = render
         self._out_dir = out_dir
         self._seen: dict[str, str] = {}
@@ -80,7 +80,7 @@ class StageSnapshots:
             self._out_dir.mkdir(parents=True, exist_ok=True)
             for suffix, view in (("", "perspective"), ("-top", "top")):
                 path = self._out_dir / f"{stem}{suffix}.png"
-                reason = getattr(stage, "feedback", "") if stage.status == "FAILURE" else ""
+                reason = getattr(stage, "feedback", "")
                 try:
                     self._render(
                         path, view=view, stage=stage.name, status=stage.status, reason=reason
@@ -124,11 +124,15 @@ class ScenePictures:
         return scene_picture.write(frame, scene_picture.SceneMarks.from_blackboard(), caption, path)
 
     def final(self, path: Path, summary: dict[str, Any]) -> None:
-        """The end of the run: its outcome, the failed stage and the reason."""
+        """The end of the run: its outcome, the failed stage and the reason (a success:
+        what the last stage reported)."""
         status = summary["outcome"].upper()
         if summary.get("failed_stage"):
             status += f" at {summary['failed_stage']}"
-        self(path, "perspective", "final", status, summary.get("reason") or "")
+        reason = summary.get("reason") or ""
+        if not reason and summary.get("stages"):
+            reason = summary["stages"][-1].get("message", "")
+        self(path, "perspective", "final", status, reason)
 
 
 def _both(

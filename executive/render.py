@@ -101,7 +101,8 @@ def render_graph(
             Path(scratch).write_text(graph.to_string(), encoding="utf-8")
         else:
             try:
-                Path(scratch).write_bytes(graph.create(prog="dot", format=fmt))
+                image = graph.create(prog="dot", format=fmt)
+                Path(scratch).write_bytes(image if isinstance(image, bytes) else image.encode())
             except Exception as error:  # pydot raises bare Exception on dot's errors
                 raise RenderError(f"Graphviz's dot failed: {one_line(error)}") from error
     return out

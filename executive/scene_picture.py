@@ -46,7 +46,8 @@ FLOOR_MARK_M = 0.01
 class Frame(Protocol):
     """A picture with its camera (``bearchair.hardware.sim.camera.SceneFrame``)."""
 
-    rgb: np.ndarray
+    @property
+    def rgb(self) -> np.ndarray: ...
 
     def project(self, points_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
 
@@ -90,7 +91,8 @@ class SceneCaption(NamedTuple):
         stage: the stage just ended (``final`` for the end of the run).
         status: SUCCESS, FAILURE, ...
         robot_s: the robot's clock, seconds.
-        reason: why it failed or refused (empty when it did not).
+        reason: why it failed or refused; for a success, what the stage reports
+            (its feedback message); empty for none.
     """
 
     chair: str
@@ -106,8 +108,13 @@ class SceneCaption(NamedTuple):
             f"{self.chair} | seed {self.seed} | {self.stage}: {self.status} "
             f"| robot time {self.robot_s:.1f} s"
         )
-        why = textwrap.wrap(f"why: {self.reason}", width_chars)[:3] if self.reason else []
+        prefix = "why: " if self.failed else ""
+        why = textwrap.wrap(prefix + self.reason, width_chars)[:3] if self.reason else []
         return [first, *why, LEGEND]
+
+    @property
+    def failed(self) -> bool:
+        return "FAILURE" in self.status
 
 
 def compose(
@@ -124,7 +131,7 @@ def compose(
         x, y, z, yaw = marks.sitting
         _draw_arrow(draw, frame, (x, y, z), yaw, SITTING_COLOUR, width_px, "g")
     lines = caption.lines()
-    return _with_caption(picture, lines, caption.reason), lines
+    return _with_caption(picture, lines, caption.failed), lines
 
 
 def write(frame: Frame, marks: SceneMarks, caption: SceneCaption, path: Path) -> list[str]:
@@ -215,8 +222,8 @@ def _draw_arrow(
     )
 
 
-def _with_caption(picture: Image.Image, lines: list[str], reason: str) -> Image.Image:
-    """The picture over a dark band holding ``lines`` (the reason's lines in orange)."""
+def _with_caption(picture: Image.Image, lines: list[str], failed: bool) -> Image.Image:
+    """The picture over a dark band holding ``lines`` (a failure's reason in orange)."""
     font = _font(CAPTION_FONT_PX)
     line_px = CAPTION_FONT_PX + 6
     band_px = 10 + line_px * len(lines)
@@ -224,6 +231,6 @@ def _with_caption(picture: Image.Image, lines: list[str], reason: str) -> Image.
     out.paste(picture, (0, 0))
     draw = ImageDraw.Draw(out)
     for number, line in enumerate(lines):
-        colour = REASON_TEXT if reason and 0 < number < len(lines) - 1 else CAPTION_TEXT
+        colour = REASON_TEXT if failed and 0 < number < len(lines) - 1 else CAPTION_TEXT
         draw.text((10, picture.height + 6 + number * line_px), line, fill=colour, font=font)
     return out

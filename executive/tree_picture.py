@@ -12,6 +12,7 @@ key, a column per behaviour, W where it writes the key and R where it reads it.
 from __future__ import annotations
 
 import html
+import itertools
 import re
 
 import py_trees
@@ -81,7 +82,7 @@ def tree_graph(root: py_trees.behaviour.Behaviour, with_blackboard: bool = False
         )  # fmt: skip
         for child in node.children:
             graph.add_edge(pydot.Edge(ids[node.id], ids[child.id]))
-    graph.add_subgraph(legend())
+    graph.add_subgraph(legend())  # pyright: ignore[reportArgumentType] - pydot's stubs omit Cluster
     if with_blackboard:
         deepest = max(root.iterate(), key=_depth(root))
         graph.add_node(
@@ -126,25 +127,23 @@ def legend() -> pydot.Cluster:
     cluster = pydot.Cluster(
         "legend", label="Legend", fontsize=str(FONT_SIZE_PT), style="rounded", color="gray50"
     )
-    previous = None
-    for number, (shape, colour, kind, meaning) in enumerate(LEGEND):
-        name = f"legend{number}"
+    names = [f"legend{number}" for number in range(len(LEGEND))]
+    for name, (shape, colour, kind, meaning) in zip(names, LEGEND, strict=True):
         cluster.add_node(
             pydot.Node(
                 name, shape=shape, fillcolor=colour, fontsize=str(FONT_SIZE_PT - 1),
                 label=_label(kind, [], meaning),
             )
         )  # fmt: skip
-        if previous is not None:
-            cluster.add_edge(pydot.Edge(previous, name, style="invis"))
-        previous = name
     cluster.add_node(
         pydot.Node(
             "legend_marks", shape="plaintext", style="", fontsize=str(FONT_SIZE_PT - 1),
             label=_label("", [], MEMORY_NOTE),
         )
     )  # fmt: skip
-    cluster.add_edge(pydot.Edge(previous, "legend_marks", style="invis"))
+    names.append("legend_marks")
+    for above, below in itertools.pairwise(names):  # stacked, top to bottom
+        cluster.add_edge(pydot.Edge(above, below, style="invis"))
     return cluster
 
 

@@ -220,3 +220,13 @@ def test_the_imagined_pose_picture_is_two_metric_views(tmp_path):
     assert width > 1.8 * height  # side by side: from above, from the side
     alone = render_sitting(box_chair_mesh(), None, tmp_path / "alone.png", "box chair")
     assert alone.read_bytes() != path.read_bytes()
+
+
+def test_a_caption_says_why_a_stage_failed_and_what_a_successful_one_reported():
+    from bearchair.executive.scene_picture import SceneCaption
+
+    done = SceneCaption("c.obj", 1, "ScanChair", "SUCCESS", 2.0, "chair from 9 views")
+    failed = SceneCaption("c.obj", 1, "final", "FAILURE at WalkToChair", 2.0, "blocked")
+    assert done.lines()[1] == "chair from 9 views" and not done.failed
+    assert failed.lines()[1] == "why: blocked" and failed.failed
+    assert len(SceneCaption("c.obj", 1, "final", "SUCCESS", 2.0).lines()) == 2
