@@ -171,6 +171,41 @@ def _stop_cluster(marker: str) -> None:
             time.sleep(0.2)
 
 
+START_ATTEMPTS = 3
+"""``ray start`` gives a node 30 s to register (hard-coded in Ray); on a loaded machine it
+can miss that, so the cluster is started again from scratch, up to this many times."""
+
+
+def _start_cluster(root: Path, env: dict[str, str]) -> str:
+    """Starts the head (not niced: it only coordinates) and two niced 1-CPU worker nodes,
+    each from its own folder; returns the head's address."""
+    failures = []
+    for attempt in range(START_ATTEMPTS):
+        address = f"127.0.0.1:{_free_port()}"
+        common = ["--node-ip-address", "127.0.0.1", "--disable-usage-stats"]
+        starts = [
+            ("head", [], ["--head", "--num-cpus", "0", "--port", address.split(":")[1],
+                          "--temp-dir", str(root / f"tmp{attempt}"), "--include-dashboard", "false"]),
+            ("worker-1", ["nice", "-n", "10"], ["--address", address, "--num-cpus", "1"]),
+            ("worker-2", ["nice", "-n", "10"], ["--address", address, "--num-cpus", "1"]),
+        ]  # fmt: skip
+        for name, prefix, args in starts:
+            cwd = root / name
+            cwd.mkdir(exist_ok=True)
+            started = subprocess.run(
+                [*prefix, str(RAY_CLI), "start", *args, *common],
+                cwd=cwd, env=env, capture_output=True, text=True, timeout=180,
+            )  # fmt: skip
+            if started.returncode != 0:
+                tail = (started.stderr or started.stdout).strip().splitlines()[-1:]
+                failures.append(f"attempt {attempt + 1}, {name}: {' | '.join(tail)}")
+                _stop_cluster(env[MARKER])
+                break
+        else:
+            return address
+    pytest.fail("ray start failed: " + "; ".join(failures))
+
+
 @pytest.fixture
 def ray_cluster() -> Iterator[tuple[str, dict[str, str]]]:
     """A head without CPUs and two 1-CPU worker nodes, each started from its own folder,
@@ -185,29 +220,8 @@ def ray_cluster() -> Iterator[tuple[str, dict[str, str]]]:
     token = secrets.token_hex(16)
     env = {**os.environ, MARKER: marker, "RAY_AUTH_MODE": "token", "RAY_AUTH_TOKEN": token}
     env.pop("RAY_ADDRESS", None)
-    address = f"127.0.0.1:{_free_port()}"
-    common = ["--node-ip-address", "127.0.0.1", "--disable-usage-stats"]
-    starts = [
-        ("head", ["--head", "--num-cpus", "0", "--port", address.split(":")[1],
-                  "--temp-dir", str(root / "tmp"), "--include-dashboard", "false"]),
-        ("worker-1", ["--address", address, "--num-cpus", "1"]),
-        ("worker-2", ["--address", address, "--num-cpus", "1"]),
-    ]  # fmt: skip
     try:
-        for name, args in starts:
-            cwd = root / name
-            cwd.mkdir()
-            started = subprocess.run(
-                ["nice", "-n", "10", str(RAY_CLI), "start", *args, *common],
-                cwd=cwd,
-                env=env,
-                capture_output=True,
-                text=True,
-                timeout=120,
-            )
-            if started.returncode != 0:
-                tail = (started.stderr or started.stdout).strip().splitlines()[-3:]
-                pytest.fail(f"ray start ({name}) failed: {' | '.join(tail)}")
+        address = _start_cluster(root, env)
         yield address, {k: v for k, v in env.items() if k != MARKER}
     finally:
         _stop_cluster(marker)
