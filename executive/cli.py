@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from bearchair.core.errors import BackendUnavailable, BearchairError, InputError, one_line
+from bearchair.core.provenance import version_line
 from bearchair.executive import (
     cmd_calibrate_hand_eye,
     cmd_check_hardware,
@@ -66,6 +67,9 @@ def build_parser() -> argparse.ArgumentParser:
     assert __doc__ is not None  # only python -OO strips it, and that strips asserts too
     parser = _Parser(prog="bearchair", description=__doc__.split("\n")[0])
     parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    parser.add_argument(
+        "--version", action="version", version=version_line(), help="print the version and exit"
+    )
     subparsers = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     run = subparsers.add_parser("run", help="run the mission in the simulated world")
