@@ -17,6 +17,8 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from bearchair.core.provenance import SHIPPED_FILE, bearchair_version, git_commit
+
 MANIFEST_NAME = "manifest.json"
 
 
@@ -32,7 +34,8 @@ def stage_package(into: Path) -> Path:
 
     Ray zips a ``py_modules`` folder as it finds it; a checkout's ``bearchair/<room>``
     links would reach the nodes as links to folders they do not have, so the copy holds
-    real files (byte caches left out).
+    real files (byte caches left out), and :data:`~bearchair.core.provenance.SHIPPED_FILE`
+    names the version and commit it was copied from.
 
     Returns:
         The copy's folder, for ``runtime_env={"py_modules": [...]}``.
@@ -42,8 +45,12 @@ def stage_package(into: Path) -> Path:
         package_dir(),
         target,
         symlinks=False,
-        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.egg-info"),
+        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.egg-info", SHIPPED_FILE),
     )
+    # The copy is neither installed nor a checkout: it says where it came from, so the
+    # records the nodes write name the head's version and commit.
+    shipped = {"bearchair": bearchair_version(), "git_commit": git_commit()}
+    (target / SHIPPED_FILE).write_text(json.dumps(shipped))
     return target
 
 

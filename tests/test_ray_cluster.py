@@ -42,17 +42,25 @@ def test_the_staged_package_holds_real_files_and_is_imported_before_the_install(
     assert (staged / "evaluation" / "worker.py").is_file()
     assert not [p for p in staged.rglob("*") if p.is_symlink()]
     assert not list(staged.rglob("__pycache__"))
-    # A node's trial subprocess puts the shipped copy first: it wins over the install.
+    # A node's trial subprocess puts the shipped copy first: it wins over the install,
+    # and its records name the version and commit of the code it was copied from.
+    from bearchair.core.provenance import software_versions
+
     env = {**os.environ, "PYTHONPATH": str(staged.parent)}
-    where = subprocess.run(
-        [sys.executable, "-c", "import bearchair.evaluation.worker as w; print(w.__file__)"],
-        env=env,
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        check=True,
-    ).stdout.strip()
+    code = (
+        "import json, bearchair.evaluation.worker as w; from bearchair.core.provenance import "
+        "software_versions as s; print(json.dumps([w.__file__, s()]))"
+    )
+    where, software = json.loads(
+        subprocess.run(
+            [sys.executable, "-c", code], env=env, cwd=tmp_path, capture_output=True, text=True,
+            check=True,
+        ).stdout
+    )  # fmt: skip
     assert Path(where).resolve() == (staged / "evaluation" / "worker.py").resolve()
+    here = software_versions()
+    assert software["git_commit"] == here["git_commit"] and here["git_commit"] is not None
+    assert software["bearchair"] == here["bearchair"]
 
 
 def test_a_chair_ships_with_its_own_manifest_entry_only(tmp_path):
