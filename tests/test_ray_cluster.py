@@ -254,7 +254,10 @@ def _generated_chair(folder: Path) -> Path:
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 def test_trials_on_a_two_node_cluster_write_every_record_under_the_heads_out(tmp_path, ray_cluster):
+    from bearchair.core.provenance import software_versions
+
     address, env = ray_cluster
+    head_software = software_versions()
     chairs = _generated_chair(tmp_path / "chairs")
     out = tmp_path / "out"
     # A command of its own, as a user runs it: Ray reads RAY_AUTH_MODE when imported.
@@ -278,6 +281,8 @@ def test_trials_on_a_two_node_cluster_write_every_record_under_the_heads_out(tmp
         assert run_dir.is_relative_to(out.resolve())
         for name in ("summary.json", "ticks.jsonl", "tree.json", "worker.log", NODE_FILE):
             assert (run_dir / name).is_file(), f"{run_dir.name} lacks {name}"
+        software = json.loads((run_dir / "summary.json").read_text())["software"]
+        assert software["git_commit"] == head_software["git_commit"]  # the shipped code's
         where = json.loads((run_dir / NODE_FILE).read_text())
         nodes.add(where["node_id"])
         package_dirs.add(where["package_dir"])
