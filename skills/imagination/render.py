@@ -103,13 +103,7 @@ def render_sitting(
     side_triangles = np.stack([along(triangles), triangles[:, :, 2]], axis=-1)
     side_segments = [np.column_stack([along(seg), seg[:, 2]]) for seg in segments]
     _draw_view(side, side_triangles, side_segments)
-    side.axhline(0.0, color="0.4", lw=1)
-    top.set_title("from above")
-    top.set_xlabel("x (m)")
-    top.set_ylabel("y (m)")
-    side.set_title("from the side (sitting direction to the right)")
-    side.set_xlabel("along the sitting direction (m)")
-    side.set_ylabel("z (m)")
+    _label_views(top, side, "the sitting direction" if sitting_pose is not None else "x")
     if sitting_pose is not None:
         tip = origin[:2] + ARROW_M * forward
         _arrow(top, origin[:2], tip)
@@ -127,21 +121,7 @@ def render_sitting(
     if title:
         figure.suptitle(title)
     if segments:
-        from matplotlib.lines import Line2D
-
-        figure.legend(
-            handles=[
-                Line2D([], [], color=AGENT_COLOUR, lw=3, label="the agent, seated"),
-                Line2D(
-                    [], [], color=SITTING_COLOUR, marker="o", label="pelvis p, sitting direction γ"
-                ),
-            ],
-            loc="lower center",
-            ncol=2,
-            fontsize=9,
-            frameon=False,
-        )
-        figure.tight_layout(rect=(0.0, 0.06, 1.0, 1.0))  # room for the legend below
+        _legend_below(figure)
     else:
         figure.tight_layout()
     path = Path(path)
@@ -149,6 +129,26 @@ def render_sitting(
     figure.savefig(path, dpi=90)
     plt.close(figure)
     return path
+
+
+def _label_views(top: Any, side: Any, horizontal: str) -> None:
+    side.axhline(0.0, color="0.4", lw=1)  # the floor
+    top.set_title("from above")
+    top.set_xlabel("x (m)")
+    top.set_ylabel("y (m)")
+    side.set_title(f"from the side ({horizontal} to the right)")
+    side.set_xlabel(f"along {horizontal} (m)")
+    side.set_ylabel("z (m)")
+
+
+def _legend_below(figure: Any) -> None:
+    """What the agent's and the pose's colours are, under both views."""
+    from matplotlib.lines import Line2D
+
+    agent = Line2D([], [], color=AGENT_COLOUR, lw=3, label="the agent, seated")
+    pose = Line2D([], [], color=SITTING_COLOUR, marker="o", label="pelvis p, sitting direction γ")
+    figure.legend(handles=[agent, pose], loc="lower center", ncol=2, fontsize=9, frameon=False)
+    figure.tight_layout(rect=(0.0, 0.06, 1.0, 1.0))  # room for the legend below
 
 
 def _pyplot() -> Any:
