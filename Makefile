@@ -58,9 +58,13 @@ $(DEMO_STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install -q -e ".[$(DEMO_EXTRAS)]"
 	touch $(DEMO_STAMP)
 
-$(TEST_STAMP): pyproject.toml | $(BIN)/python
+# The example plug-in (its own distribution) is installed too: make test runs its tests.
+PLUGIN := examples/bearchair-example-plugin
+
+$(TEST_STAMP): pyproject.toml $(PLUGIN)/pyproject.toml | $(BIN)/python
 	$(MAKE) system-test
 	$(BIN)/python -m pip install -q -e ".[$(TEST_EXTRAS)]"
+	$(BIN)/python -m pip install -q -e $(PLUGIN)
 	touch $(TEST_STAMP) $(DEMO_STAMP)
 
 install-demo: $(DEMO_STAMP)
