@@ -33,6 +33,7 @@ from bearchair.evaluation.shipping import (
     pack_folder,
     package_dir,
     stage_package,
+    tree_file,
     unpack_folder,
 )
 from bearchair.evaluation.worker_process import (
@@ -113,7 +114,11 @@ NODE_FILE = "ray_node.json"
 
 
 def _ray_trial(
-    command: list[str] | None, payload: dict[str, Any], timeout_s: float, chair: dict[str, bytes]
+    command: list[str] | None,
+    payload: dict[str, Any],
+    timeout_s: float,
+    chair: dict[str, bytes],
+    tree: dict[str, bytes] | None = None,
 ) -> dict[str, Any]:
     """The Ray task: one trial subprocess on whichever node runs it, its run folder sent back.
 
@@ -121,7 +126,7 @@ def _ray_trial(
     temporary folder, whose run record returns as a gzipped tar (``record``).
     """
     with TrialScratch() as scratch:
-        here = scratch.payload_here(payload, chair)
+        here = scratch.payload_here(payload, chair, tree)
         launcher = CommandLauncher(command or default_worker_command(), env=_worker_env())
         outcome = run_worker_with_retry(launcher, here, timeout_s)
         scratch.run_dir.mkdir(parents=True, exist_ok=True)
@@ -247,7 +252,8 @@ class RayBackend:
                 while queue and len(in_flight) < workers:
                     spec, payload = queue.pop(0)
                     chair = chair_files(payload.get("chair_path"))
-                    ref = task.remote(self.command, payload, self.timeout_s, chair)
+                    tree = tree_file(payload.get("tree"))
+                    ref = task.remote(self.command, payload, self.timeout_s, chair, tree)
                     in_flight[ref] = (spec, payload)
                 ready, _ = ray.wait(list(in_flight), num_returns=1)
                 for ref in ready:

@@ -2,7 +2,7 @@
 
 No filesystem is shared: the head ships the ``bearchair`` package (as real files: in a
 checkout ``bearchair/<room>`` are symbolic links) and each trial's chair (its mesh and
-its manifest entry) to the node that runs the trial; the node sends the trial's run
+its manifest entry) and ``--tree`` file, if any, to the node that runs the trial; the node sends the trial's run
 folder back as one gzipped tar, which the head unpacks under its own ``--out``.
 """
 
@@ -76,8 +76,18 @@ def chair_files(chair_path: str | Path | None) -> dict[str, bytes]:
     return files
 
 
+def tree_file(tree_spec: str | None) -> dict[str, bytes]:
+    """A ``--tree`` SPEC that is a BehaviorTree.CPP file, as bytes (the node has no copy);
+    an entry point or ``module:factory`` ships nothing: it must be installed on the node."""
+    if not tree_spec or not tree_spec.endswith(".xml"):
+        return {}
+    path = Path(tree_spec)
+    return {path.name: path.read_bytes()}
+
+
 def write_chair(files: dict[str, bytes], folder: Path) -> Path | None:
-    """Writes :func:`chair_files`' files into ``folder``; returns the mesh's path (None: none)."""
+    """Writes :func:`chair_files`' (or :func:`tree_file`'s) files into ``folder``; returns
+    the mesh's (the tree's) path (None: none)."""
     folder.mkdir(parents=True, exist_ok=True)
     mesh = None
     for name, data in files.items():
@@ -123,14 +133,19 @@ class TrialScratch:
         self.root = Path(tempfile.mkdtemp(prefix="bearchair-trial-"))
         self.run_dir = self.root / "run"
 
-    def payload_here(self, payload: dict[str, Any], chair: dict[str, bytes]) -> dict[str, Any]:
-        """The head's payload with this node's chair path and run folder."""
+    def payload_here(
+        self, payload: dict[str, Any], chair: dict[str, bytes], tree: dict[str, bytes] | None = None
+    ) -> dict[str, Any]:
+        """The head's payload with this node's chair path, tree file and run folder."""
         mesh = write_chair(chair, self.root / "chair")
-        return {
+        here = {
             **payload,
             "chair_path": str(mesh) if mesh is not None else payload.get("chair_path"),
             "out_dir": str(self.run_dir),
         }
+        if tree:
+            here["tree"] = str(write_chair(tree, self.root / "tree"))
+        return here
 
     def __enter__(self) -> TrialScratch:
         return self

@@ -77,6 +77,20 @@ def test_a_chair_ships_with_its_own_manifest_entry_only(tmp_path):
         write_chair({"../evil.obj": b""}, tmp_path / "node")
 
 
+def test_a_tree_file_ships_and_lands_in_the_nodes_folder(tmp_path):
+    from bearchair.evaluation.shipping import TrialScratch, tree_file
+
+    xml = tmp_path / "my_tree.xml"
+    xml.write_text('<root BTCPP_format="4"/>')
+    assert tree_file("mission") == {} and tree_file("pkg.module:factory") == {}
+    files = tree_file(str(xml))
+    with TrialScratch() as scratch:
+        here = scratch.payload_here({"tree": str(xml), "chair_path": None}, {}, files)
+        assert Path(here["tree"]).read_text() == xml.read_text()
+        assert Path(here["tree"]).is_relative_to(scratch.root)
+    assert not Path(here["tree"]).exists()  # the node's folder goes with the trial
+
+
 def test_a_run_folder_round_trips_and_an_escaping_archive_is_refused(tmp_path):
     run = tmp_path / "run"
     (run / "snapshots").mkdir(parents=True)
