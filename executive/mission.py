@@ -60,10 +60,11 @@ class StageSnapshots:
 
     The pictures go to ``out_dir`` as ``NN-<stage>-<status>.png`` (a perspective and a
     ``-top`` view): what the scene looked like when SeatBear finished, for example, which
-    the final picture no longer shows.
+    the final picture no longer shows. ``render(path, view=, stage=, status=, reason=)``
+    draws one (:class:`ScenePictures`: captioned, with what the stage decided).
     """
 
-    def __init__(self, render: Callable[..., None], out_dir: Path) -> None:
+    def __init__(self, render: Callable[..., object], out_dir: Path) -> None:
         self._render = render
         self._out_dir = out_dir
         self._seen: dict[str, str] = {}
@@ -81,12 +82,59 @@ class StageSnapshots:
             self._out_dir.mkdir(parents=True, exist_ok=True)
             for suffix, view in (("", "perspective"), ("-top", "top")):
                 path = self._out_dir / f"{stem}{suffix}.png"
+                reason = getattr(stage, "feedback", "")
                 try:
-                    self._render(path, view=view)
+                    self._render(
+                        path, view=view, stage=stage.name, status=stage.status, reason=reason
+                    )
                 except Exception as error:  # a missing picture must not stop the mission
                     logger.warning("could not render %s: %s", path.name, error)
                     continue
                 self.written.append(path)
+
+
+class ScenePictures:
+    """Pictures of the simulated scene with the mission's marks and a caption
+    (``bearchair.executive.scene_picture``).
+
+    Args:
+        world: the simulated world (its ``render_scene`` and its clock).
+        chair: the chair's name, for the caption.
+        seed: the run's seed, for the caption.
+    """
+
+    def __init__(self, world: SimWorld, chair: str, seed: int) -> None:
+        self._world = world
+        self._chair = chair
+        self._seed = seed
+
+    def __call__(
+        self,
+        path: Path,
+        view: str = "perspective",
+        stage: str = "final",
+        status: str = "",
+        reason: str = "",
+    ) -> list[str]:
+        """Writes the picture at ``path``; returns the caption's lines."""
+        from bearchair.executive import scene_picture
+
+        frame = self._world.render_scene("top" if view == "top" else "perspective")
+        caption = scene_picture.SceneCaption(
+            self._chair, self._seed, stage, status, self._world.clock.now(), reason
+        )
+        return scene_picture.write(frame, scene_picture.SceneMarks.from_blackboard(), caption, path)
+
+    def final(self, path: Path, summary: dict[str, Any]) -> None:
+        """The end of the run: its outcome, the failed stage and the reason (a success:
+        what the last stage reported)."""
+        status = summary["outcome"].upper()
+        if summary.get("failed_stage"):
+            status += f" at {summary['failed_stage']}"
+        reason = summary.get("reason") or ""
+        if not reason and summary.get("stages"):
+            reason = summary["stages"][-1].get("message", "")
+        self(path, "perspective", "final", status, reason)
 
 
 def _both(
@@ -152,8 +200,9 @@ def run_in_simulation(
         if isinstance(error, KeyboardInterrupt):
             return summary
         raise
+    pictures = ScenePictures(world, config.chair_name(), config.seed)
     if config.snapshots:
-        on_tick = _both(on_tick, StageSnapshots(world.render_png, config.out_dir / "snapshots"))
+        on_tick = _both(on_tick, StageSnapshots(pictures, config.out_dir / "snapshots"))
     try:
         return _run_tree(
             root,
@@ -163,7 +212,7 @@ def run_in_simulation(
             run_info,
             skills,
             on_tick,
-            world.render_png,
+            pictures.final,
             lambda summary: _ground_truth(world, summary),
         )
     finally:
@@ -288,7 +337,7 @@ def _run_tree(
     run_info: dict[str, Any],
     skills: MissionSkills | None,
     on_tick: Callable[[MissionRunner], None] | None,
-    render_png: Callable[[Path], None] | None,
+    render_png: Callable[[Path, dict[str, Any]], None] | None,
     ground_truth: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """Ticks the tree on ``robot`` and writes the summary; the record survives any error."""
@@ -321,7 +370,7 @@ def _run_tree(
         if render_png is not None:
             try:
                 with atomic_path(config.out_dir / "final_scene.png") as scratch:
-                    render_png(scratch)
+                    render_png(scratch, summary)
                 summary["picture"] = "final_scene.png"
             except Exception as error:  # a missing picture must not lose the record
                 logger.warning("could not render the final scene: %s", error)
