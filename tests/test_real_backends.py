@@ -99,34 +99,52 @@ def test_odometry_counts_from_the_first_reading(naoqi, nao):
         -math.pi, abs=1e-6
     )
     nao.activate()
+    boot = naoqi.body.odometry()
     nao.set_velocity(0.1, 0.0, 0.0)
-    assert _eventually(lambda: naoqi.called("moveTo"))
-    assert _eventually(lambda: not naoqi.motion.walking())  # the 0.5 s command ran out
+    time.sleep(0.1)
+    nao.stop()
+    walked_m = float(np.linalg.norm(naoqi.body.odometry()[:2] - boot[:2]))
     pose = nao.pose()
-    # Forward from a start facing -x: 5 cm toward -x.
-    assert pose.x == pytest.approx(1.9 - 0.05, abs=2e-3) and pose.y == pytest.approx(0.0, abs=2e-3)
+    # Forward from a start facing -x: toward -x by what NAOqi's odometry walked.
+    assert walked_m > 0.01
+    assert pose.x == pytest.approx(1.9 - walked_m, abs=1e-6) and pose.y == pytest.approx(0.0, abs=1e-6)
 
 
-def test_walking_commands_are_bounded_moves_that_end_by_themselves(naoqi, nao):
+def test_walking_is_a_latched_move_that_the_heartbeat_ends(naoqi, nao):
+    from bearchair.hardware.real.nao import HEARTBEAT_PERIOD_S
+
     nao.activate()
     nao.set_velocity(1.0, 0.0, -3.0)  # clipped to 0.1 m/s and 0.5 rad/s
-    assert _eventually(lambda: naoqi.called("moveTo"))
-    sent = time.monotonic()
-    x, y, theta = naoqi.called("moveTo")[-1]
-    assert x == pytest.approx(0.05) and y == 0.0 and theta == pytest.approx(-0.25)
-    # The process "dies": no more commands. The walk ends 0.5 s of robot time later.
-    assert _eventually(lambda: not naoqi.motion.walking())
-    assert time.monotonic() - sent < 0.5 / naoqi.time_scale + 0.1
+    assert naoqi.called("move")[-1] == pytest.approx((0.1, 0.0, -0.5))
+    assert not naoqi.called("moveTo")
+    # The controller keeps commanding: the walk goes on past two heartbeat periods.
+    for _ in range(8):
+        time.sleep(HEARTBEAT_PERIOD_S / 2)
+        nao.set_velocity(0.05, 0.0, 0.0)
+    assert naoqi.motion.walking() and nao.watchdog.fired == 0
+    # The controller falls silent: two missed periods and the watchdog calls stopMove.
+    silent = time.monotonic()
+    assert _eventually(lambda: not naoqi.motion.walking(), timeout_s=2.0)
+    assert time.monotonic() - silent < 2.25 * HEARTBEAT_PERIOD_S + 0.1
+    assert nao.watchdog.fired == 1 and naoqi.called("stopMove")
+
+
+def test_a_refused_walking_command_raises(naoqi, nao):
+    from bearchair.core.errors import BackendError
+
+    # Not awake: NAOqi refuses move(); the backend checks its result and says so.
+    with pytest.raises(BackendError, match="not awake"):
+        nao.set_velocity(0.1, 0.0, 0.0)
 
 
 def test_trajectory_is_one_cancellable_angle_interpolation(naoqi, nao):
     nao.activate()
-    positions = np.array([[0.0, 0.1], [0.2, 0.3], [0.4, 0.5]])
+    positions = -np.array([[0.0, 0.1], [0.2, 0.3], [0.4, 0.5]])
     nao.play_joint_trajectory(["LHipPitch", "RHipPitch"], [0.0, 0.4, 0.8], positions)
     names, angles, times, absolute = naoqi.called("angleInterpolation")[-1]
     assert names == ["LHipPitch", "RHipPitch"] and absolute is True
-    assert angles == [[0.2, 0.4], [0.3, 0.5]] and times == [[0.4, 0.8], [0.4, 0.8]]
-    assert naoqi.motion.joints["RHipPitch"] == pytest.approx(0.5)
+    assert angles == [[-0.2, -0.4], [-0.3, -0.5]] and times == [[0.4, 0.8], [0.4, 0.8]]
+    assert naoqi.motion.joints["RHipPitch"] == pytest.approx(-0.5)
     with pytest.raises(ValueError, match="does not match"):
         nao.play_joint_trajectory(["LHipPitch"], [1.0], positions)
 
@@ -158,13 +176,44 @@ def test_emergency_stop_ends_every_nao_motion(naoqi, nao, motion):
     worker.join(5.0)
     assert not worker.is_alive() and time.monotonic() - stopped_at < 0.5
     assert errors, "the running motion must end with EmergencyStopped"
-    assert not naoqi.motion.walking()
-    assert naoqi.called("stopMove") and naoqi.called("killTasksUsingResources")
-    assert "LKneePitch" in naoqi.called("killTasksUsingResources")[-1][0]
+    assert not naoqi.motion.walking() and naoqi.called("stopMove")
+    kills = [set(joints) for (joints,) in naoqi.called("killTasksUsingResources")]
+    # Only the joints of the motions that ran are freed; the walk is left to stopMove.
+    expected = {"trajectory": [{"LKneePitch"}], "walk": [], "hands": [{"LHand", "RHand"}]}
+    assert kills == expected[motion] or (motion == "hands" and kills == [{"LHand"}])
+    assert naoqi.fell == ""
     if motion == "trajectory":
         assert "LKneePitch" not in naoqi.motion.joints  # cancelled, never completed
     with pytest.raises(EmergencyStopped):
         nao.set_velocity(0.1, 0.0, 0.0)
+
+
+def test_emergency_stop_waits_for_the_walk_to_end_before_killing(naoqi, nao):
+    """A stop mid-walk with a head motion running: the head is freed only once
+    ``moveIsActive()`` reads false, so the walk's legs are never killed mid-step."""
+    naoqi.body.stop_runout_s = 0.3 * naoqi.time_scale  # 0.3 s on both feet after stopMove
+    nao.activate()
+    nao.set_velocity(0.1, 0.0, 0.0)
+    head = threading.Thread(
+        target=_ignore_stop,
+        args=(lambda: nao.play_joint_trajectory(["HeadYaw"], [5.0], np.array([[0.5]])),),
+    )
+    head.start()
+    assert _eventually(lambda: naoqi.called("angleInterpolation"))
+    nao.emergency_stop()
+    head.join(3.0)
+    order = [name for _, name, _ in naoqi.calls]
+    stop = order.index("stopMove")
+    kill = order.index("killTasksUsingResources")
+    assert stop < order.index("moveIsActive", stop) < kill and naoqi.called("killTasksUsingResources") == [(["HeadYaw"],)]
+    assert naoqi.fell == ""
+
+
+def _ignore_stop(job) -> None:
+    try:
+        job()
+    except EmergencyStopped:
+        pass
 
 
 def test_speech_goes_through_text_to_speech(naoqi):

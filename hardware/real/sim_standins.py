@@ -172,7 +172,9 @@ def robot_over_standins(world: Any, standin: NaoqiStandin) -> tuple[Robot, Any]:
     )
     robot = Robot(
         arm=arm,
-        humanoid=NaoHumanoid(session, odom_origin=SE2Pose(start.x, start.y, start.theta)),
+        humanoid=NaoHumanoid(
+            session, odom_origin=SE2Pose(start.x, start.y, start.theta), clock=world.clock
+        ),
         speaker=NaoSpeaker(session),
         clock=world.clock,
         helper=world.helper,
