@@ -24,6 +24,7 @@ given (:class:`bearchair.hardware.real.sim_standins.SimulatedNaoBody`).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import math
@@ -321,15 +322,24 @@ def task_future(
     run: Callable[[threading.Event], None],
     value: Any = None,
     on_cancel: Callable[[], None] | None = None,
+    cancel_delay_s: float = 0.0,
 ) -> tuple[Any, threading.Event]:
-    """A qi future for ``run(cancelled)`` in a thread; cancelling it sets ``cancelled``."""
+    """A qi future for ``run(cancelled)`` in a thread; cancelling it sets ``cancelled``
+    (``cancel_delay_s`` later: the cancel request crosses the same slow link)."""
     cancelled = threading.Event()
 
-    def cancel(promise: Any) -> None:
+    def cancel_now(promise: Any) -> None:
         cancelled.set()
         if on_cancel is not None:
             on_cancel()
-        promise.setCanceled()
+        with contextlib.suppress(RuntimeError):  # it may have finished meanwhile
+            promise.setCanceled()
+
+    def cancel(promise: Any) -> None:
+        if cancel_delay_s > 0.0:
+            threading.Timer(cancel_delay_s, cancel_now, args=(promise,)).start()
+        else:
+            cancel_now(promise)
 
     promise = qi.Promise(cancel)
 

@@ -73,8 +73,8 @@ def make_services(qi: Any, owner: Any) -> dict[str, Any]:
 class _Tasks:
     """ALMotion's motion tasks: each holds its joints; one needing a held joint waits."""
 
-    def __init__(self, qi: Any, body: Any) -> None:
-        self._qi, self._body = qi, body
+    def __init__(self, qi: Any, owner: Any) -> None:
+        self._qi, self._body, self._owner = qi, owner.body, owner
         self._running: list[tuple[frozenset[str], threading.Event]] = []
         self._free = threading.Condition()
 
@@ -97,7 +97,12 @@ class _Tasks:
                     self._running.remove(entry)
                     self._free.notify_all()
 
-        future, _ = task_future(self._qi, task, on_cancel=self._body.cancel_motions)
+        future, _ = task_future(
+            self._qi,
+            task,
+            on_cancel=self._body.cancel_motions,
+            cancel_delay_s=self._owner.call_latency_s,
+        )
         return future
 
     def kill(self, joints: list[str] | None) -> int:
@@ -113,7 +118,7 @@ class _Tasks:
 
 def _motion(qi: Any, owner: Any) -> Any:
     body = owner.body
-    tasks = _Tasks(qi, body)
+    tasks = _Tasks(qi, owner)
     api = exposed(owner, "ALMotion")
 
     class ALMotion(_walking(qi, owner)):

@@ -91,6 +91,7 @@ class _LibfrankaRobot:
         self._panda = panda
 
     def stop(self) -> None:
+        self._panda.stop_times_s.append(time.monotonic())
         self._panda.calls.append(("Robot.stop", ()))
         self._panda.stop_motion()
 
@@ -122,6 +123,8 @@ class FakePanda:
         self.errors = _Errors()
         self.time_scale = 10.0
         self.calls: list[tuple[str, tuple[Any, ...]]] = []
+        self.stop_times_s: list[float] = []
+        """When (``time.monotonic()``) each ``Robot::stop`` arrived."""
         self._abort = threading.Event()
         self._last_error: Exception | None = None
         self._lock = threading.Lock()
