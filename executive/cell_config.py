@@ -17,6 +17,12 @@ homogeneous matrices with translations in metres, named ``T_<to>_<from>``. Examp
 F frame), not against the end effector set in Desk (``O_T_EE``): the backend removes
 ``F_T_EE`` from the arm's pose before composing it.
 
+``camera_intrinsics`` (optional) is the calibrated pinhole model of the registered
+640x480 images, ``{"fx_px": ..., "fy_px": ..., "cx_px": ..., "cy_px": ...}`` (the colour
+camera's: depth is registered to it; calibrate it as docs/real-robots.md says). Without
+it the Carmine's come from its colour stream's field of view, a RealSense's from the
+device.
+
 Checks (each failure is one line naming the field): unknown keys are refused (with the
 nearest known name), rotations are proper and orthonormal (a scaled or mirrored matrix
 is refused), translations are bounded (millimetres written as metres are refused), the
@@ -40,6 +46,7 @@ from bearchair.core.arena import DEFAULT_ARENA, Arena
 from bearchair.core.errors import BackendUnavailable
 from bearchair.core.geometry import yaw_of
 from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import CameraIntrinsics
 
 ROTATION_TOLERANCE = 1e-3
 """Largest element of R^T R - I (and |det R - 1|) accepted: a 4-decimal matrix passes."""
@@ -54,6 +61,12 @@ SPEED_FACTOR_RANGE = (0.01, 0.5)
 """panda-py's ``speed_factor`` (fraction of the joint velocity limits) allowed for scanning
 with a person near the chair; the SDK's default is 0.2."""
 CAMERAS = ("carmine", "realsense")
+IMAGE_SIZE_PX = (640, 480)
+"""The wrist camera's image size (both backends ask for 640x480)."""
+FOCAL_RANGE_PX = (300.0, 1200.0)
+"""Focal lengths accepted at 640x480 (pixels): fields of view from 94 to 30 degrees; a
+value outside is a unit or resolution mistake."""
+_INTRINSICS_KEYS = ("fx_px", "fy_px", "cx_px", "cy_px")
 
 LEGACY_KEYS = {
     "T_hand_camera": "renamed T_flange_camera: the hand-eye calibration against the Panda's "
@@ -82,6 +95,7 @@ class CellConfig:
         openni_library_dir: the folder holding ``libOpenNI2.so`` (Debian installs it
             outside the binding's search path); None to use the binding's default.
         panda_speed_factor: fraction of the Panda's joint velocity limits for scan moves.
+        camera_intrinsics: the calibrated 640x480 pinhole model, or None (from the camera).
         source: the file this came from.
     """
 
@@ -97,6 +111,7 @@ class CellConfig:
     camera: str = "carmine"
     openni_library_dir: str | None = None
     panda_speed_factor: float = 0.2
+    camera_intrinsics: CameraIntrinsics | None = None
     source: Path | None = None
 
     @property
@@ -114,6 +129,8 @@ class CellConfig:
                 value = value.tolist()
             elif item.name == "nao_password" and value:
                 value = "***"
+            elif item.name == "camera_intrinsics" and value is not None:
+                value = dict(zip(_INTRINSICS_KEYS, value[2:], strict=True))
             out[item.name] = value
         return out
 
@@ -196,8 +213,33 @@ def parse_cell_config(
         camera=camera,
         openni_library_dir=_optional_text(raw, "openni_library_dir"),
         panda_speed_factor=speed,
+        camera_intrinsics=_intrinsics(raw),
         source=source,
     )
+
+
+def _intrinsics(raw: dict[str, Any]) -> CameraIntrinsics | None:
+    """The optional ``camera_intrinsics`` field, checked (focal lengths, principal point)."""
+    value = raw.get("camera_intrinsics")
+    if value is None:
+        return None
+    if not isinstance(value, dict) or set(value) != set(_INTRINSICS_KEYS):
+        raise CellConfigError(
+            f"camera_intrinsics: an object with exactly {', '.join(_INTRINSICS_KEYS)} is needed"
+        )
+    fx, fy, cx, cy = (_number(value, key) for key in _INTRINSICS_KEYS)
+    width, height = IMAGE_SIZE_PX
+    for key, focal in (("fx_px", fx), ("fy_px", fy)):
+        if not FOCAL_RANGE_PX[0] <= focal <= FOCAL_RANGE_PX[1]:
+            raise CellConfigError(
+                f"camera_intrinsics.{key}: {focal:g} px outside {list(FOCAL_RANGE_PX)} at 640x480"
+            )
+    if not (0.25 * width < cx < 0.75 * width and 0.25 * height < cy < 0.75 * height):
+        raise CellConfigError(
+            f"camera_intrinsics: principal point ({cx:g}, {cy:g}) px is not near the centre "
+            "of a 640x480 image"
+        )
+    return CameraIntrinsics(width, height, fx, fy, cx, cy)
 
 
 def _check_fields(raw: Any) -> None:

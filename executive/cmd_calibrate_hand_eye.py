@@ -221,7 +221,7 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     )
     if not args.yes and not ask_operator("The Panda will move now. Go on? [y/N] "):
         raise _error("the operator did not confirm: nothing moved")
-    arm._speed_factor = MOVE_SPEED_FACTOR  # as check-hardware --move: slow, near a person
+    arm.speed_factor = MOVE_SPEED_FACTOR  # as check-hardware --move: slow, near a person
     return _visit_views(arm, cell, board, CALIBRATION_CONFIGURATIONS[:count], args.timeout)
 
 

@@ -181,7 +181,7 @@ def _check_camera(arm: Any, timeout_s: float, report: _Report, move: bool) -> No
     from bearchair.skills.perception.views import HOME_CONFIGURATION, OVERVIEW_CONFIGURATION
 
     if move:
-        arm._speed_factor = MOVE_SPEED_FACTOR
+        arm.speed_factor = MOVE_SPEED_FACTOR
         try:
             arm.move_to(HOME_CONFIGURATION, timeout_s=60.0)
             arm.move_to(OVERVIEW_CONFIGURATION, timeout_s=60.0)

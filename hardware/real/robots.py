@@ -19,7 +19,11 @@ def connect_panda(config: Any) -> PandaArm:
     if config.panda_host == STANDIN_HOST:
         from bearchair.hardware.real.camera import CarmineCamera
 
-        camera = CarmineCamera(FakeOpenNI2(), library_dir=config.openni_library_dir)
+        camera = CarmineCamera(
+            FakeOpenNI2(),
+            library_dir=config.openni_library_dir,
+            intrinsics=config.camera_intrinsics,
+        )
         panda = FakePanda(STANDIN_HOST)
         panda.time_scale = 100.0  # a dry run: the stand-in arm moves 100 times faster
         return PandaArm(
@@ -36,6 +40,7 @@ def connect_panda(config: Any) -> PandaArm:
         config.panda_speed_factor,
         config.openni_library_dir,
         camera=config.camera,
+        camera_intrinsics=config.camera_intrinsics,
     )
 
 
@@ -55,7 +60,9 @@ def connect_robots(config: Any) -> Robot:
 
 
 def activate(robot: Robot) -> None:
-    """Sets the NAO up for carrying (Autonomous Life and awareness off, no arm swing,
-    carrying posture, hands closed, head held): the robots move from here on."""
-    assert isinstance(robot.humanoid, NaoHumanoid)  # connect_robots' humanoid is one
+    """Sets the arm's collision thresholds and payload, then the NAO up for carrying
+    (Autonomous Life and awareness off, no arm swing, carrying posture, hands closed,
+    head held): the robots move from here on."""
+    assert isinstance(robot.arm, PandaArm) and isinstance(robot.humanoid, NaoHumanoid)
+    robot.arm.activate()
     robot.humanoid.activate()

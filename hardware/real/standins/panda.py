@@ -48,6 +48,20 @@ def panda_flange_pose(q: np.ndarray) -> np.ndarray:
     return T
 
 
+JOINT_LIMITS = {
+    "fer": (
+        (-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973),
+        (2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973),
+    ),
+    "fr3": (
+        (-2.7437, -1.7837, -2.9007, -3.0421, -2.8065, 0.5445, -3.0159),
+        (2.7437, 1.7837, 2.9007, -0.1518, 2.8065, 4.5169, 3.0159),
+    ),
+}
+"""The FER's and the FR3's (robot system < 5.9) joint limits, as panda-py 1.1.1's
+``constants`` give them (rad)."""
+
+
 class _RobotMode(enum.Enum):
     kOther = 0
     kIdle = 1
@@ -105,6 +119,21 @@ class _LibfrankaRobot:
     def server_version(self) -> int:
         return 5
 
+    def set_collision_behavior(self, lower_torque, upper_torque, lower_force, upper_force) -> None:
+        self._panda.calls.append(
+            ("Robot.set_collision_behavior", (list(lower_torque), list(lower_force)))
+        )
+        self._panda.collision_thresholds = (
+            list(lower_torque),
+            list(upper_torque),
+            list(lower_force),
+            list(upper_force),
+        )
+
+    def set_load(self, load_mass, F_x_Cload, load_inertia) -> None:
+        self._panda.calls.append(("Robot.set_load", (load_mass, list(F_x_Cload))))
+        self._panda.load = (float(load_mass), list(F_x_Cload), list(load_inertia))
+
 
 class FakePanda:
     """``panda_py.Panda`` as this project uses it (see the module docstring).
@@ -118,6 +147,10 @@ class FakePanda:
 
     def __init__(self, hostname: str, name: str = "panda", realtime_config: Any = None) -> None:
         self.hostname = hostname
+        self.model = "fer"
+        """"fer" or "fr3": which joint limits the robot reports."""
+        self.collision_thresholds: tuple[list[float], ...] | None = None
+        self.load: tuple[float, list[float], list[float]] | None = None
         self.q = np.array([0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4])
         self.mode = _RobotMode.kIdle
         self.errors = _Errors()
@@ -139,6 +172,12 @@ class FakePanda:
 
     def get_pose(self) -> np.ndarray:
         return panda_flange_pose(self.q) @ FRANKA_HAND_F_T_EE
+
+    def get_joint_limits_lower(self) -> np.ndarray:
+        return np.array(JOINT_LIMITS[self.model][0])
+
+    def get_joint_limits_upper(self) -> np.ndarray:
+        return np.array(JOINT_LIMITS[self.model][1])
 
     def get_robot(self) -> _LibfrankaRobot:
         return _LibfrankaRobot(self)
