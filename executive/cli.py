@@ -72,12 +72,17 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--chair", type=Path, help="chair mesh (OBJ/PLY/STL/OFF/GLB); default: a box chair"
     )
-    run.add_argument("--placement", choices=("accessible", "inaccessible"), default="accessible")
-    run.add_argument("--helper", choices=("obeys", "disobeys", "ignores"), default="obeys")
+    # Default None, so that one given with --robots (simulation only) is refused, not ignored.
+    run.add_argument("--placement", choices=("accessible", "inaccessible"), default=None)
+    run.add_argument("--helper", choices=("obeys", "disobeys", "ignores"), default=None)
     run.add_argument("--seed", type=seed_value, default=0)
     run.add_argument("--gui", action="store_true", help="watch in the pybullet GUI")
     run.add_argument("--out", type=Path, help="run record directory (default: runs/<time>-seed<N>)")
-    run.add_argument("--mute", action="store_true", help="print instructions instead of speaking")
+    run.add_argument(
+        "--mute",
+        action="store_true",
+        help="print instructions instead of speaking (with --robots: the NAO stays silent)",
+    )
     run.add_argument(
         "--timeout", type=positive_seconds, default=900.0, help="stop after this many seconds"
     )
@@ -152,10 +157,16 @@ def _run(args: argparse.Namespace) -> int:
     )
     from bearchair.executive.outputs import default_run_dir, prepare_run_dir
 
+    if args.robots is not None:
+        for option in ("placement", "helper"):
+            if getattr(args, option) is not None:
+                raise InputError(
+                    f"bearchair run: --{option} is for the simulated world; not with --robots"
+                )
     config = RunConfig(
         chair_path=args.chair,
-        placement=args.placement,
-        helper=args.helper,
+        placement=args.placement or "accessible",
+        helper=args.helper or "obeys",
         seed=args.seed,
         gui=args.gui,
         mute=args.mute,

@@ -68,6 +68,18 @@ WALK_END_TIMEOUT_S = 1.5
 both feet, at most one step (about 0.6 s at the default step period) after ``stopMove``."""
 POSTURE_SPEED = 0.3
 """Fraction of the joints' maximum speed for set-up postures (a bear in the arms)."""
+MIN_BATTERY_PERCENT = 15
+"""Below this charge a run stops (the NAO is set down while it can still stand): at about
+an hour of walking per charge (NAO datasheet), 15 % is some 9 minutes, one mission."""
+LEG_JOINTS = tuple(
+    f"{side}{joint}"
+    for side in "LR"
+    for joint in ("HipYawPitch", "HipRoll", "HipPitch", "KneePitch", "AnklePitch", "AnkleRoll")
+)
+TEMPERATURE_STATUS_KEY = "Device/SubDeviceList/{}/Temperature/Sensor/Status"
+"""ALMemory's temperature status of a joint: 0 normal; from 1 NAOqi limits its stiffness,
+and at 2 on a leg the robot goes to rest (NAOqi 2.8, Diagnosis effect): with a bear in
+its arms, the run stops at 1."""
 HEAD_JOINTS = ("HeadYaw", "HeadPitch")
 HAND_JOINTS = {"LHand": ("LHand",), "RHand": ("RHand",)}
 
@@ -200,6 +212,7 @@ class NaoHumanoid:
         self._running: dict[Any, tuple[str, ...]] = {}  # future -> the joints it moves
         self._walking = False
         self._stopped = False
+        self._active = False
         now = clock.now if clock is not None else time.monotonic
         self.watchdog = WalkWatchdog(self._watchdog_stop, HEARTBEAT_PERIOD_S, now)
         # Odometry is counted from here: NAOqi's own origin is where it booted.
@@ -242,6 +255,26 @@ class NaoHumanoid:
         self.set_hands(False)
         # The first odometry reading is where the cell file says the NAO starts.
         self._odom_first = np.asarray(self._call("getRobotPosition", True), dtype=float)
+        self._active = True
+
+    def health(self) -> str | None:
+        """Why the NAO cannot go on carrying (battery, a fall, a hot leg), or None."""
+        battery = service(self._session, "ALBattery", self._timeout_s)
+        charge = int(call(battery, "getBatteryCharge", timeout_s=self._timeout_s))
+        if charge < MIN_BATTERY_PERCENT:
+            return f"the NAO's battery is at {charge} % (below {MIN_BATTERY_PERCENT} %)"
+        if self._active:
+            family = str(call(self._posture, "getPostureFamily", timeout_s=self._timeout_s))
+            if family != "Standing":
+                return f"the NAO is no longer standing (posture family {family}): it fell?"
+        memory = service(self._session, "ALMemory", self._timeout_s)
+        keys = [TEMPERATURE_STATUS_KEY.format(joint) for joint in LEG_JOINTS]
+        statuses = call(memory, "getListData", keys, timeout_s=self._timeout_s)
+        hot = [(j, int(v)) for j, v in zip(LEG_JOINTS, statuses, strict=True) if int(v or 0) >= 1]
+        if hot:
+            joint, status = max(hot, key=lambda item: item[1])
+            return f"the NAO's {joint} is hot (temperature status {status}): NAOqi limits its stiffness"
+        return None
 
     # --- Humanoid protocol -----------------------------------------------------------
     def pose(self) -> SE2Pose:

@@ -44,17 +44,26 @@ def connect_panda(config: Any) -> PandaArm:
     )
 
 
-def connect_robots(config: Any) -> Robot:
+def connect_robots(config: Any, mute: bool = False) -> Robot:
     """Connects the NAO and the Panda of an :class:`bearchair.executive.cell_config.CellConfig`.
+
+    Args:
+        config: the checked cell file.
+        mute: the NAO stays silent; instructions are logged as text instead.
 
     Raises:
         BackendUnavailable: an SDK or a robot is missing (the message names which).
     """
     session = connect(config.nao_url, config.nao_user, config.nao_password)
+    speaker: Any = NaoSpeaker(session)
+    if mute:
+        from bearchair.hardware.speech import TextToSpeech
+
+        speaker = TextToSpeech(mute=True)
     return Robot(
         arm=connect_panda(config),
         humanoid=NaoHumanoid(session, odom_origin=config.nao_start),
-        speaker=NaoSpeaker(session),
+        speaker=speaker,
         clock=WallClock(),
     )
 
