@@ -9,13 +9,15 @@ from __future__ import annotations
 from typing import Any
 
 from bearchair.hardware.interfaces import Robot
+from bearchair.hardware.real.camera import READ_TIMEOUT_S
 from bearchair.hardware.real.nao import NaoHumanoid, NaoSpeaker, WallClock, connect
-from bearchair.hardware.real.panda import PandaArm
+from bearchair.hardware.real.panda import CONNECT_TIMEOUT_S, PandaArm
 from bearchair.hardware.real.standins import STANDIN_HOST, FakeOpenNI2, FakePanda
 
 
-def connect_panda(config: Any) -> PandaArm:
-    """The arm and its camera (``panda_host`` "standin": the SDK stand-ins)."""
+def connect_panda(config: Any, timeout_s: float = CONNECT_TIMEOUT_S) -> PandaArm:
+    """The arm and its camera (``panda_host`` "standin": the SDK stand-ins), each read
+    bounded by ``timeout_s``."""
     if config.panda_host == STANDIN_HOST:
         from bearchair.hardware.real.camera import CarmineCamera
 
@@ -23,6 +25,7 @@ def connect_panda(config: Any) -> PandaArm:
             FakeOpenNI2(),
             library_dir=config.openni_library_dir,
             intrinsics=config.camera_intrinsics,
+            timeout_s=min(timeout_s, READ_TIMEOUT_S),
         )
         panda = FakePanda(STANDIN_HOST)
         panda.time_scale = 100.0  # a dry run: the stand-in arm moves 100 times faster
@@ -41,6 +44,7 @@ def connect_panda(config: Any) -> PandaArm:
         config.openni_library_dir,
         camera=config.camera,
         camera_intrinsics=config.camera_intrinsics,
+        timeout_s=timeout_s,
     )
 
 
