@@ -435,3 +435,55 @@ def test_fake_realsense_matches_the_installed_sdk():
     assert "width: int, height: int, format: pyrealsense2.pyrealsense2.format, framerate: int" in (
         rs.config.enable_stream.__doc__
     )
+
+
+# --- connects that never hang -------------------------------------------------------------
+
+
+def _ends_within(job, bound_s: float) -> BaseException | None:
+    """Runs ``job`` in a daemon thread: what it raised, or a failure if still running."""
+    outcome: list[BaseException | None] = []
+
+    def run() -> None:
+        try:
+            job()
+            outcome.append(None)
+        except BaseException as error:
+            outcome.append(error)
+
+    worker = threading.Thread(target=run, daemon=True)
+    worker.start()
+    worker.join(bound_s)
+    assert not worker.is_alive(), f"still waiting after {bound_s} s: it hangs"
+    return outcome[0]
+
+
+def test_connecting_to_a_silent_nao_ends_in_its_timeout_naming_it():
+    pytest.importorskip("qi")
+    from bearchair.hardware.real.nao import connect
+    from tests.test_check_hardware_silent import silent_peer
+
+    with silent_peer() as (host, port):
+        started = time.monotonic()
+        error = _ends_within(lambda: connect(f"tcp://{host}:{port}", timeout_s=0.3), 3.0)
+    assert isinstance(error, BackendUnavailable) and f"NAO at tcp://{host}:{port}" in str(error)
+    assert time.monotonic() - started < 1.0
+
+
+def test_connecting_to_a_silent_panda_ends_in_its_timeout_naming_it():
+    pytest.importorskip("panda_py")
+    from tests.test_check_hardware_silent import silent_panda
+
+    with silent_panda() as host:
+        started = time.monotonic()
+        error = _ends_within(
+            lambda: PandaArm.connect(host, np.eye(4), np.eye(4), timeout_s=0.3), 3.0
+        )
+    assert isinstance(error, BackendUnavailable) and f"the Panda at {host}" in str(error)
+    assert time.monotonic() - started < 1.0
+
+
+def test_a_silent_camera_read_ends_in_its_timeout_naming_it():
+    camera = CarmineCamera(FakeOpenNI2(silent=True), timeout_s=0.2)
+    error = _ends_within(camera.read, 3.0)
+    assert isinstance(error, BackendUnavailable) and "the Carmine sent no depth frame" in str(error)
