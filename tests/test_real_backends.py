@@ -8,6 +8,7 @@ panda-py's and openni's signatures, checked against the installed SDKs when pres
 
 from __future__ import annotations
 
+import contextlib
 import inspect
 import math
 import threading
@@ -27,6 +28,9 @@ from bearchair.hardware.real.standins import (
     FakeOpenNI2,
     FakePanda,
     panda_flange_pose,
+    sdk_openni2,
+    sdk_panda,
+    sdk_realsense,
 )
 from bearchair.skills.perception.views import SCAN_CONFIGURATIONS
 
@@ -107,7 +111,9 @@ def test_odometry_counts_from_the_first_reading(naoqi, nao):
     pose = nao.pose()
     # Forward from a start facing -x: toward -x by what NAOqi's odometry walked.
     assert walked_m > 0.01
-    assert pose.x == pytest.approx(1.9 - walked_m, abs=1e-6) and pose.y == pytest.approx(0.0, abs=1e-6)
+    assert pose.x == pytest.approx(1.9 - walked_m, abs=1e-6) and pose.y == pytest.approx(
+        0.0, abs=1e-6
+    )
 
 
 def test_walking_is_a_latched_move_that_the_heartbeat_ends(naoqi, nao):
@@ -205,15 +211,15 @@ def test_emergency_stop_waits_for_the_walk_to_end_before_killing(naoqi, nao):
     order = [name for _, name, _ in naoqi.calls]
     stop = order.index("stopMove")
     kill = order.index("killTasksUsingResources")
-    assert stop < order.index("moveIsActive", stop) < kill and naoqi.called("killTasksUsingResources") == [(["HeadYaw"],)]
+    assert stop < order.index("moveIsActive", stop) < kill and naoqi.called(
+        "killTasksUsingResources"
+    ) == [(["HeadYaw"],)]
     assert naoqi.fell == ""
 
 
 def _ignore_stop(job) -> None:
-    try:
+    with contextlib.suppress(EmergencyStopped):
         job()
-    except EmergencyStopped:
-        pass
 
 
 def test_speech_goes_through_text_to_speech(naoqi):
@@ -252,9 +258,12 @@ def test_unreachable_nao_fails_fast_with_its_url():
 # --- Panda --------------------------------------------------------------------------------
 
 
-def _arm(panda: FakePanda | None = None, camera=None) -> PandaArm:
-    camera = camera or CarmineCamera(FakeOpenNI2())
-    return PandaArm(panda or FakePanda("standin"), camera, np.eye(4), np.eye(4))
+def _arm(panda: FakePanda | None = None, camera=None, **options) -> PandaArm:
+    """The backend over the fakes, each behind the installed SDK's own classes."""
+    camera = camera or CarmineCamera(sdk_openni2(FakeOpenNI2()))
+    return PandaArm(
+        sdk_panda(panda or FakePanda("standin")), camera, np.eye(4), np.eye(4), **options
+    )
 
 
 def test_fake_panda_matches_the_installed_sdk():
@@ -347,7 +356,7 @@ def test_emergency_stop_preempts_a_running_arm_move():
 
 def test_carmine_sets_640x480_depth_in_mm_registered_and_synchronised():
     openni = FakeOpenNI2()
-    camera = CarmineCamera(openni)
+    camera = CarmineCamera(sdk_openni2(openni))
     rgb, depth_m = camera.read()
     assert rgb.shape == (480, 640, 3) and depth_m.shape == (480, 640)
     assert depth_m.dtype == np.float32 and np.all(depth_m == pytest.approx(1.0))
@@ -402,7 +411,7 @@ def test_realsense_aligns_depth_to_colour_in_metres():
     from bearchair.hardware.real.standins import FakeRealSense
 
     rs = FakeRealSense(depth_scale_m=0.0001)  # a D405-like 0.1 mm unit
-    camera = RealSenseCamera(rs)
+    camera = RealSenseCamera(sdk_realsense(rs))
     rgb, depth_m = camera.read()
     assert rgb.shape == (480, 640, 3) and depth_m.dtype == np.float32
     assert np.all(depth_m == pytest.approx(1.0))

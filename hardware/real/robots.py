@@ -12,7 +12,13 @@ from bearchair.hardware.interfaces import Robot
 from bearchair.hardware.real.camera import READ_TIMEOUT_S
 from bearchair.hardware.real.nao import NaoHumanoid, NaoSpeaker, WallClock, connect
 from bearchair.hardware.real.panda import CONNECT_TIMEOUT_S, PandaArm
-from bearchair.hardware.real.standins import STANDIN_HOST, FakeOpenNI2, FakePanda
+from bearchair.hardware.real.standins import (
+    STANDIN_HOST,
+    FakeOpenNI2,
+    FakePanda,
+    sdk_openni2,
+    sdk_panda,
+)
 
 
 def connect_panda(config: Any, timeout_s: float = CONNECT_TIMEOUT_S) -> PandaArm:
@@ -22,7 +28,7 @@ def connect_panda(config: Any, timeout_s: float = CONNECT_TIMEOUT_S) -> PandaArm
         from bearchair.hardware.real.camera import CarmineCamera
 
         camera = CarmineCamera(
-            FakeOpenNI2(),
+            sdk_openni2(FakeOpenNI2()),
             library_dir=config.openni_library_dir,
             intrinsics=config.camera_intrinsics,
             timeout_s=min(timeout_s, READ_TIMEOUT_S),
@@ -30,7 +36,7 @@ def connect_panda(config: Any, timeout_s: float = CONNECT_TIMEOUT_S) -> PandaArm
         panda = FakePanda(STANDIN_HOST)
         panda.time_scale = 100.0  # a dry run: the stand-in arm moves 100 times faster
         return PandaArm(
-            panda,
+            sdk_panda(panda),
             camera,
             config.T_world_base,
             config.T_flange_camera,

@@ -17,6 +17,8 @@ A cell file whose ``panda_host`` is ``"standin"`` gets :class:`FakePanda` and a
 
 from __future__ import annotations
 
+from typing import Any
+
 from bearchair.hardware.real.standins.naoqi import JointKeyframes, KinematicNao, NaoqiStandin
 from bearchair.hardware.real.standins.openni import FakeOpenNI2
 from bearchair.hardware.real.standins.panda import (
@@ -26,6 +28,42 @@ from bearchair.hardware.real.standins.panda import (
     panda_flange_pose,
 )
 from bearchair.hardware.real.standins.realsense import FakeRealSense
+from bearchair.hardware.real.standins.sdk_double import sdk_double
+
+
+def sdk_panda(fake: FakePanda) -> Any:
+    """``fake`` behind the installed ``panda_py.Panda`` (the fake itself without panda-py)."""
+    try:
+        import panda_py
+    except ImportError:
+        return fake
+    return sdk_double(fake, panda_py.Panda, module=panda_py)
+
+
+def sdk_openni2(fake: FakeOpenNI2) -> Any:
+    """``fake`` behind the installed ``openni.openni2`` (the fake itself without it)."""
+    try:
+        from openni import openni2
+    except ImportError:
+        return fake
+    returns = {
+        "create_depth_stream": openni2.VideoStream,
+        "create_color_stream": openni2.VideoStream,
+        "read_frame": openni2.VideoFrame,
+        "get_video_mode": openni2.VideoMode,
+        "open_any": openni2.Device,
+    }
+    return sdk_double(fake, openni2, returns=returns)
+
+
+def sdk_realsense(fake: FakeRealSense) -> Any:
+    """``fake`` behind the installed ``pyrealsense2`` (the fake itself without it)."""
+    try:
+        import pyrealsense2
+    except ImportError:
+        return fake
+    return sdk_double(fake, pyrealsense2)
+
 
 STANDIN_HOST = "standin"
 """The ``panda_host`` that selects :class:`FakePanda` and :class:`FakeOpenNI2`."""
@@ -41,4 +79,8 @@ __all__ = [
     "KinematicNao",
     "NaoqiStandin",
     "panda_flange_pose",
+    "sdk_double",
+    "sdk_openni2",
+    "sdk_panda",
+    "sdk_realsense",
 ]

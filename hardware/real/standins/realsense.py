@@ -1,4 +1,10 @@
-"""The pyrealsense2 stand-in (see :mod:`bearchair.hardware.real.standins`)."""
+"""The pyrealsense2 stand-in (see :mod:`bearchair.hardware.real.standins`).
+
+Depth comes in the depth camera's own geometry: :data:`DEPTH_TO_COLOUR_SHIFT_PX` columns
+off the colour image (the D4xx's depth and colour imagers sit apart), and only
+``align(stream.color).process`` brings it onto the colour pixels, so a backend that
+skips the alignment reads depth beside its colour.
+"""
 
 from __future__ import annotations
 
@@ -9,6 +15,20 @@ from typing import Any
 import numpy as np
 
 from bearchair.hardware.real.standins.openni import _wall
+
+DEPTH_TO_COLOUR_SHIFT_PX = 24
+"""How far (columns) unaligned depth sits from colour: a 15 mm baseline at 0.4 m, 615 px."""
+
+
+def _shift(depth: np.ndarray, columns: int) -> np.ndarray:
+    """``depth`` moved ``columns`` to the right (left if negative), zeros (no depth) let in."""
+    out = np.zeros_like(depth)
+    if columns >= 0:
+        out[:, columns:] = depth[:, : depth.shape[1] - columns]
+    else:
+        out[:, :columns] = depth[:, -columns:]
+    return out
+
 
 _RealSenseStream = enum.Enum("stream", {"depth": 1, "color": 2})
 _RealSenseFormat = enum.Enum("format", {"z16": 1, "rgb8": 5})
@@ -96,7 +116,8 @@ class FakeRealSense:
                 w, h = fake.enabled[0][1], fake.enabled[0][2]
                 rgb, depth_mm = fake.render(w, h)
                 units = np.round(depth_mm.astype(np.float64) / 1000.0 / fake.depth_scale_m)
-                return _RealSenseFrameset(units.astype(np.uint16), rgb)
+                raw = _shift(units.astype(np.uint16), DEPTH_TO_COLOUR_SHIFT_PX)
+                return _RealSenseFrameset(raw, rgb)
 
             def stop(self) -> None:
                 pass
@@ -106,7 +127,11 @@ class FakeRealSense:
                 fake.aligned_to = align_to
 
             def process(self, frames: Any) -> Any:
-                return frames
+                if fake.aligned_to is not fake.stream.color:
+                    return frames
+                frames = getattr(frames, "_impl", frames)  # the SDK double's fake
+                depth = _shift(frames._depth, -DEPTH_TO_COLOUR_SHIFT_PX)
+                return _RealSenseFrameset(depth, frames._colour)
 
         self._devices = devices
         self.stream, self.format, self.config = _RealSenseStream, _RealSenseFormat, config
