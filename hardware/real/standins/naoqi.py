@@ -220,6 +220,7 @@ class NaoqiStandin:
         body: what the services move (:class:`KinematicNao` by default).
         call_latency_s: how long every call takes to be answered (a slow link).
         stop_runout_s: the default body's walk after ``stopMove`` (robot seconds).
+        without: services not to serve (a NAO without them).
 
     Attributes:
         calls: (service, method, args) of every call, in arrival order.
@@ -234,6 +235,7 @@ class NaoqiStandin:
         body: Any | None = None,
         call_latency_s: float = 0.0,
         stop_runout_s: float = 0.0,
+        without: tuple[str, ...] = (),
     ) -> None:
         from bearchair.hardware.real.standins.naoqi_services import make_services
 
@@ -254,7 +256,8 @@ class NaoqiStandin:
         self.services = make_services(qi, self)
         self.motion = self.services["ALMotion"]
         for name, service in self.services.items():
-            self._session.registerService(name, service)
+            if name not in without:
+                self._session.registerService(name, service)
 
     def record(self, service: str, method: str, *args: Any) -> None:
         self.calls.append((service, method, args))
