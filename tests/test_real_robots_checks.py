@@ -347,6 +347,21 @@ def test_mute_with_robots_keeps_the_nao_silent(naoqi):
     assert not naoqi.called("say")
 
 
+def test_run_with_robots_passes_mute_on(tmp_path, capsys, monkeypatch):
+    from bearchair.hardware.real import robots
+
+    asked: list[bool] = []
+
+    def connect_robots(cell, mute=False):
+        asked.append(mute)
+        raise BackendUnavailable("no robots in this test")
+
+    monkeypatch.setattr(robots, "connect_robots", connect_robots)
+    cell = _cell(tmp_path, "tcp://127.0.0.1:9")
+    status = main(["run", "--robots", str(cell), "--mute", "--out", str(tmp_path / "out")])
+    assert status == 2 and asked == [True], capsys.readouterr().err
+
+
 def _cell_text(nao_url: str) -> str:
     return json.dumps(
         {
