@@ -96,6 +96,7 @@ class CellConfig:
             outside the binding's search path); None to use the binding's default.
         panda_speed_factor: fraction of the Panda's joint velocity limits for scan moves.
         camera_intrinsics: the calibrated 640x480 pinhole model, or None (from the camera).
+        payload_mass_kg: the wrist camera with its mount, weighed (the Panda's payload).
         source: the file this came from.
     """
 
@@ -112,6 +113,7 @@ class CellConfig:
     openni_library_dir: str | None = None
     panda_speed_factor: float = 0.2
     camera_intrinsics: CameraIntrinsics | None = None
+    payload_mass_kg: float = 0.16
     source: Path | None = None
 
     @property
@@ -214,8 +216,23 @@ def parse_cell_config(
         openni_library_dir=_optional_text(raw, "openni_library_dir"),
         panda_speed_factor=speed,
         camera_intrinsics=_intrinsics(raw),
+        payload_mass_kg=_payload(raw),
         source=source,
     )
+
+
+MAX_PAYLOAD_KG = 3.0
+"""The Panda's rated payload (kilograms)."""
+
+
+def _payload(raw: dict[str, Any]) -> float:
+    """The optional ``payload_mass_kg`` (default: a Carmine 1.09's 160 g), checked."""
+    mass = _number(raw, "payload_mass_kg", 0.16)
+    if not 0.0 < mass <= MAX_PAYLOAD_KG:
+        raise CellConfigError(
+            f"payload_mass_kg: {mass:g} kg outside (0, {MAX_PAYLOAD_KG}] (kilograms, not grams)"
+        )
+    return mass
 
 
 def _intrinsics(raw: dict[str, Any]) -> CameraIntrinsics | None:

@@ -44,7 +44,9 @@ command is still being walked out (the turn itself moves the torso about 1 cm)."
 DISCONNECT_WAIT_S = 1.5
 
 
-def check_walk(session: Any, cell: Any, timeout_s: float, line: Callable[[str, str, str], None]) -> None:
+def check_walk(
+    session: Any, cell: Any, timeout_s: float, line: Callable[[str, str, str], None]
+) -> None:
     """Activates the NAO (it stands up) and runs the three probes; one line each."""
     from bearchair.hardware.real.nao import NaoHumanoid, call, connect
 

@@ -200,6 +200,7 @@ class PandaArm:
         camera: str = "carmine",
         camera_intrinsics: CameraIntrinsics | None = None,
         timeout_s: float = CONNECT_TIMEOUT_S,
+        payload_mass_kg: float = CAMERA_MASS_KG,
     ) -> PandaArm:
         """Connects to the arm's controller at ``host`` within ``timeout_s`` and opens the
         wrist camera ("carmine" or "realsense"); moves nothing.
@@ -221,7 +222,14 @@ class PandaArm:
             wrist: Any = RealSenseCamera()
         else:
             wrist = CarmineCamera(library_dir=openni_library_dir, intrinsics=camera_intrinsics)
-        return cls(robot, wrist, T_world_base, T_flange_camera, speed_factor)
+        return cls(
+            robot,
+            wrist,
+            T_world_base,
+            T_flange_camera,
+            speed_factor,
+            payload_mass_kg=payload_mass_kg,
+        )
 
     @property
     def camera(self) -> Any:

@@ -41,6 +41,7 @@ def connect_panda(config: Any, timeout_s: float = CONNECT_TIMEOUT_S) -> PandaArm
             config.T_world_base,
             config.T_flange_camera,
             config.panda_speed_factor,
+            payload_mass_kg=config.payload_mass_kg,
         )
     return PandaArm.connect(
         config.panda_host,
@@ -51,6 +52,7 @@ def connect_panda(config: Any, timeout_s: float = CONNECT_TIMEOUT_S) -> PandaArm
         camera=config.camera,
         camera_intrinsics=config.camera_intrinsics,
         timeout_s=timeout_s,
+        payload_mass_kg=config.payload_mass_kg,
     )
 
 

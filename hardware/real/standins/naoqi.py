@@ -80,7 +80,10 @@ def nao_joint_limits() -> dict[str, tuple[float, float]]:
     for joint in ET.parse(QIBULLET_NAO_URDF).getroot().iter("joint"):
         limit = joint.find("limit")
         if joint.get("name") in known and limit is not None:
-            limits[str(joint.get("name"))] = (float(limit.get("lower")), float(limit.get("upper")))
+            limits[str(joint.get("name"))] = (
+                float(limit.get("lower", "nan")),
+                float(limit.get("upper", "nan")),
+            )
     return limits
 
 
