@@ -81,7 +81,8 @@ def test_connecting_moves_nothing_and_activation_sets_up_carrying(naoqi, nao):
         "basic_awareness": True,
         "battery_percent": 87,
     }
-    moving = {"wakeUp", "moveTo", "angleInterpolation", "goToPosture", "setState", "setEnabled"}
+    moving = {"wakeUp", "move", "moveTo", "angleInterpolation", "goToPosture", "setState"}
+    moving |= {"setEnabled"}
     assert not moving & {name for _, name, _ in naoqi.calls}
     nao.activate()
     assert naoqi.called("setState") == [("disabled",)]
