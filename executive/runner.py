@@ -152,8 +152,9 @@ class MissionRunner:
         except RecordWriteError as error:
             stopped, record_error = True, str(error)
             self._stop(f"stopped: {error}")
-        except RobotFault as error:  # a device's monitor: the robots are already stopped
+        except RobotFault as error:  # a device's monitor: the robots first, then the tree
             stopped = True
+            stop_robots(self.robot)
             self._stop(f"stopped: {error}")
         finally:
             record_error = self._finish(record_error)

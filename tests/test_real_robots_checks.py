@@ -235,10 +235,7 @@ def test_monitoring_stops_the_robots_and_names_the_reason(naoqi, fault, reason):
     monitor.close()
     with pytest.raises(RobotFault, match=reason):
         monitor.check()
-    # The reason is kept first, then every device is stopped at once.
-    while not naoqi.called("stopMove") and time.monotonic() < deadline:
-        time.sleep(0.02)
-    assert ("Robot.stop", ()) in panda.calls and naoqi.called("stopMove")
+    assert not naoqi.called("stopMove")  # the runner stops the robots, at the next tick
 
 
 def test_the_panda_in_reflex_stops_a_run(naoqi):
@@ -397,3 +394,19 @@ def test_check_hardware_walk_measures_the_run_out_and_refuses_an_unsafe_one(
     assert code == status, out
     if status:
         assert "[FAIL] nao walk run-out" in out
+
+
+def test_a_run_on_robots_stops_when_the_monitor_sees_a_fault(tmp_path, capsys):
+    pytest.importorskip("qi")
+    from bearchair.hardware.real.standins import NaoqiStandin
+
+    with NaoqiStandin(time_scale=20.0) as naoqi:
+        naoqi.battery_percent = 9
+        out = tmp_path / "run"
+        status = main(
+            ["run", "--robots", str(_cell(tmp_path, naoqi.url)), "--yes", "--out", str(out)]
+        )
+        capsys.readouterr()
+    summary = json.loads((out / "summary.json").read_text())
+    assert status == 1 and summary["outcome"] == "failure"
+    assert "battery is at 9 %" in summary["reason"], summary["reason"]

@@ -2,9 +2,12 @@
 
 :class:`RobotMonitor` asks each device's ``health()`` every :data:`POLL_PERIOD_S` in
 its own thread (the NAO: battery, fall, leg temperature; the Panda: reflex, user stop,
-errors). On the first fault it emergency-stops the whole robot at once and keeps the
-reason; :meth:`RobotMonitor.check`, called by the mission after every tick, raises it
-as :class:`~bearchair.hardware.real.RobotFault`, so the run ends with that message.
+errors) and keeps the first fault's reason; :meth:`RobotMonitor.check`, called by the
+mission after every tick, raises it as :class:`~bearchair.hardware.real.RobotFault`,
+and the runner stops every device at once and then the tree, so the run ends with that
+message rather than with the first motion refused. None of these faults needs a stop
+faster than a tick: the Panda's reflex has stopped it already and NAOqi's fall manager
+acts on its own.
 """
 
 from __future__ import annotations
@@ -58,6 +61,5 @@ class RobotMonitor:
                     reason = f"{type(device).__name__} health check failed: {error}"
                 if reason is not None:
                     self.reason = reason
-                    log.error("stopping the robots: %s", reason)
-                    self._robot.emergency_stop()
+                    log.error("stopping the run: %s", reason)
                     return
