@@ -267,7 +267,7 @@ def test_a_missing_naoqi_service_is_one_line_naming_it():
 
 def test_the_naoqi_standin_serves_only_documented_methods_with_the_naos_joints(naoqi):
     from bearchair.hardware.real.nao import connect
-    from bearchair.hardware.real.standins.naoqi import documented, naoqi_api
+    from bearchair.hardware.real.standins.naoqi_model import documented, naoqi_api
 
     api = naoqi_api()
     assert "doc.aldebaran.com/2-8" in api["source"]

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from bearchair.hardware.real.standins.naoqi import (
+from bearchair.hardware.real.standins.naoqi_model import (
     JointKeyframes,
     check_angles,
     documented,
