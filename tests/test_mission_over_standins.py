@@ -51,7 +51,7 @@ def test_the_mission_runs_over_the_sdk_standins():
             create_tree(), DefaultSkills(), robot, seed=1, arena=DEFAULT_ARENA, timeout_s=900
         )
         summary = summarise(runner.run(), {})
-        panda_calls = list(robot.arm._robot.calls)
+        panda_calls = list(robot.arm._robot._impl.calls)  # the fake behind the SDK double
         session.close()
     assert summary["outcome"] == "success", f"{summary['failed_stage']}: {summary['reason']}"
     assert summary["judgement"]["seated"]
