@@ -181,8 +181,9 @@ class SeatingJudge(Protocol):
         ...
 
 
-EMERGENCY_STOP_WAIT_S = 2.0
-"""How long :meth:`Robot.emergency_stop` waits for its devices' stops to return (seconds);
+EMERGENCY_STOP_WAIT_S = 5.0
+"""How long :meth:`Robot.emergency_stop` waits for its devices' stops to return (seconds:
+the NAO's take at most about 1.4 s, each NAOqi call bounded);
 a device that has not by then goes on stopping in its own thread."""
 
 
