@@ -88,11 +88,13 @@ def _still_after(motion: Any, limit_s: float) -> float:
 
 def _runout(nao: Any, motion: Any, line: Callable[[str, str, str], None]) -> None:
     deadline = time.monotonic() + WALK_S
-    while time.monotonic() < deadline:
+    while True:
         nao.set_velocity(PROBE_SPEED_MPS, 0.0, 0.0)
+        last = time.monotonic()
+        at_last = _odometry(motion)
+        if last >= deadline:
+            break
         time.sleep(0.1)
-    last = time.monotonic()
-    at_last = _odometry(motion)
     # No more commands: the heartbeat stops the walk two periods later.
     still_s = (time.monotonic() - last) + _still_after(motion, 3.0 * MAX_RUNOUT_S)
     runout_m = float(np.linalg.norm(_odometry(motion)[:2] - at_last[:2]))
