@@ -373,7 +373,7 @@ def _cell_text(nao_url: str) -> str:
     )
 
 
-@pytest.mark.parametrize(("runout_s", "status"), [(0.0, 0), (3.0, 1)])
+@pytest.mark.parametrize(("runout_s", "status"), [(0.0, 0), (1.0, 1)])
 def test_check_hardware_walk_measures_the_run_out_and_refuses_an_unsafe_one(
     tmp_path, capsys, monkeypatch, runout_s, status
 ):
@@ -384,6 +384,7 @@ def test_check_hardware_walk_measures_the_run_out_and_refuses_an_unsafe_one(
     monkeypatch.setattr(walk_check, "WALK_S", 0.5)
     monkeypatch.setattr(walk_check, "REPLACE_WAIT_S", 0.3)
     monkeypatch.setattr(walk_check, "DISCONNECT_WAIT_S", 0.3)
+    monkeypatch.setattr(walk_check, "MAX_RUNOUT_S", 0.8)  # heartbeat 0.45 s, a quick stop
     with NaoqiStandin(stop_runout_s=runout_s) as naoqi:
         code = main(
             ["check-hardware", "--robots", str(_cell(tmp_path, naoqi.url)), "--move", "--walk"]
