@@ -373,9 +373,12 @@ def _cell_text(nao_url: str) -> str:
     )
 
 
-@pytest.mark.parametrize(("runout_s", "status"), [(0.0, 0), (1.0, 1)])
+@pytest.mark.parametrize(
+    ("runout_s", "queue_s", "failed"),
+    [(0.0, 0.0, ""), (1.0, 0.0, "run-out"), (0.0, 1.5, "commands: queue")],
+)
 def test_check_hardware_walk_measures_the_run_out_and_refuses_an_unsafe_one(
-    tmp_path, capsys, monkeypatch, runout_s, status
+    tmp_path, capsys, monkeypatch, runout_s, queue_s, failed
 ):
     pytest.importorskip("qi")
     from bearchair.executive import walk_check
@@ -385,16 +388,16 @@ def test_check_hardware_walk_measures_the_run_out_and_refuses_an_unsafe_one(
     monkeypatch.setattr(walk_check, "REPLACE_WAIT_S", 0.3)
     monkeypatch.setattr(walk_check, "DISCONNECT_WAIT_S", 0.3)
     monkeypatch.setattr(walk_check, "MAX_RUNOUT_S", 0.8)  # heartbeat 0.45 s, a quick stop
-    with NaoqiStandin(stop_runout_s=runout_s) as naoqi:
+    with NaoqiStandin(stop_runout_s=runout_s, move_queue_s=queue_s) as naoqi:
         code = main(
             ["check-hardware", "--robots", str(_cell(tmp_path, naoqi.url)), "--move", "--walk"]
         )
         out = capsys.readouterr().out
-    assert "] nao walk run-out:" in out and "] nao walk commands: replace" in out
+    assert "] nao walk run-out:" in out and "] nao walk commands:" in out
     assert "] nao walk disconnect:" in out
-    assert code == status, out
-    if status:
-        assert "[FAIL] nao walk run-out" in out
+    assert code == (1 if failed else 0), out
+    if failed:
+        assert f"[FAIL] nao walk {failed}" in out
 
 
 def test_a_run_on_robots_stops_when_the_monitor_sees_a_fault(tmp_path, capsys):

@@ -132,6 +132,9 @@ class NaoqiStandin:
         call_latency_s: how long every call takes to be answered (a slow link).
         stop_runout_s: the default body's walk after ``stopMove`` (robot seconds).
         without: services not to serve (a NAO without them).
+        move_queue_s: when positive, a ``move`` sent while walking takes effect only this
+            much later (wall seconds): NAOqi queueing commands, which the documentation
+            does not rule out and ``check-hardware --walk`` must catch.
 
     Attributes:
         calls: (service, method, args) of every call, in arrival order.
@@ -147,12 +150,14 @@ class NaoqiStandin:
         call_latency_s: float = 0.0,
         stop_runout_s: float = 0.0,
         without: tuple[str, ...] = (),
+        move_queue_s: float = 0.0,
     ) -> None:
         qi = import_sdk("qi", "bearchair[nao]")
         self.qi = qi
         self.calls: list[tuple[str, str, tuple[Any, ...]]] = []
         self.time_scale = time_scale
         self.call_latency_s = call_latency_s
+        self.move_queue_s = move_queue_s
         boot = np.asarray(boot_odometry, dtype=float)
         self.body = body or KinematicNao(boot, time_scale, stop_runout_s)
         self.fell = ""

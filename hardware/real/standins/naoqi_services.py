@@ -230,6 +230,11 @@ def _walking(qi: Any, owner: Any) -> type:
             if not np.any(velocity):
                 body.stop_walk()
                 return
+            if owner.move_queue_s > 0.0 and body.walking():
+                later = threading.Timer(owner.move_queue_s, body.walk, (velocity, float("inf")))
+                later.daemon = True
+                later.start()
+                return
             body.walk(velocity, float("inf"))
 
         @api
