@@ -295,11 +295,16 @@ def test_naoqis_moveto_blocks_and_a_second_motion_on_held_joints_is_postponed(na
     started = time.monotonic()
     motion.moveTo(0.04, 0.0, 0.0)  # 0.4 s of robot time at 0.1 m/s, 4x faster
     assert time.monotonic() - started >= 0.09
+    sent = time.monotonic()
     first = motion.angleInterpolation(["HeadYaw"], [[0.3]], [[0.8]], True, _async=True)
+    while not naoqi.called("angleInterpolation"):  # arrived, then holds HeadYaw
+        time.sleep(0.005)
+    time.sleep(0.05)
     second = motion.angleInterpolation(["HeadYaw"], [[-0.3]], [[0.8]], True, _async=True)
     first.wait()
-    assert not second.isFinished()  # waited for HeadYaw to be free
     second.wait()
+    # 0.2 s of wall time each: one after the other, not together.
+    assert time.monotonic() - sent >= 0.39
     assert naoqi.motion.joints["HeadYaw"] == pytest.approx(-0.3)
 
 

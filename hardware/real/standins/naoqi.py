@@ -181,9 +181,10 @@ class NaoqiStandin:
         return [args for _, name, args in self.calls if name == method]
 
     def answer(self, work: Callable[[], Any], blocking: bool) -> Any:
-        """``work()``'s result as the caller gets it: at once, or (slow link, or a
-        blocking NAOqi call) as a future answered from a thread."""
-        if self.call_latency_s <= 0.0 and not blocking:
+        """``work()``'s result as the caller gets it: at once, or on a slow link as a
+        future answered from a thread. A call NAOqi documents as blocking (``blocking``)
+        returns a future its work completes, so it never holds up other calls."""
+        if self.call_latency_s <= 0.0:
             return work()
         return answered_later(self.qi, work, self.call_latency_s)
 

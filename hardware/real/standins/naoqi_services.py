@@ -71,30 +71,36 @@ def make_services(qi: Any, owner: Any) -> dict[str, Any]:
 
 
 class _Tasks:
-    """ALMotion's motion tasks: each holds its joints; one needing a held joint waits."""
+    """ALMotion's motion tasks: each books its joints when called; one needing a joint an
+    earlier task holds waits for it ("postponed until the resource is freed")."""
 
     def __init__(self, qi: Any, owner: Any) -> None:
         self._qi, self._body, self._owner = qi, owner.body, owner
-        self._running: list[tuple[frozenset[str], threading.Event]] = []
+        self._booked: list[tuple[frozenset[str], threading.Event]] = []  # in call order
         self._free = threading.Condition()
 
     def start(self, joints: list[str], run: Callable[[threading.Event], None]) -> Any:
-        """A future for ``run``; postponed until no running task holds its joints."""
+        """A future for ``run``; postponed while an earlier task holds one of its joints."""
         needed = frozenset(joints)
+        booked = threading.Event()  # the task's cancel event, once its thread has it
+        entry: list[Any] = [needed, None]
+        with self._free:
+            self._booked.append(entry)  # type: ignore[arg-type]  # booked at call time
 
         def task(cancelled: threading.Event) -> None:
             with self._free:
-                # "the second one is postponed until the resource is freed"
-                while any(needed & held for held, _ in self._running) and not cancelled.is_set():
+                entry[1] = cancelled
+                booked.set()
+                while not cancelled.is_set() and any(
+                    needed & held for held, _ in self._booked[: self._booked.index(entry)]
+                ):
                     self._free.wait(0.01)
-                entry = (needed, cancelled)
-                self._running.append(entry)
             try:
                 if not cancelled.is_set():
                     run(cancelled)
             finally:
                 with self._free:
-                    self._running.remove(entry)
+                    self._booked.remove(entry)  # type: ignore[arg-type]
                     self._free.notify_all()
 
         future, _ = task_future(
@@ -103,12 +109,17 @@ class _Tasks:
             on_cancel=self._body.cancel_motions,
             cancel_delay_s=self._owner.call_latency_s,
         )
+        booked.wait(1.0)
         return future
 
     def kill(self, joints: list[str] | None) -> int:
-        """Ends the tasks using any of ``joints`` (None: all); how many were running."""
+        """Ends the tasks (running or postponed) using any of ``joints`` (None: all)."""
         with self._free:
-            killed = [e for h, e in self._running if joints is None or h & set(joints)]
+            killed = [
+                cancelled
+                for held, cancelled in self._booked
+                if cancelled is not None and (joints is None or held & set(joints))
+            ]
         for cancelled in killed:
             cancelled.set()
         if killed:
@@ -238,15 +249,19 @@ def _walking(qi: Any, owner: Any) -> type:
             body.walk(velocity, float("inf"))
 
         @api
-        def moveTo(self, x: float, y: float, theta: float) -> None:
+        def moveTo(self, x: float, y: float, theta: float) -> Any:
             # "Makes the robot move to the given pose ... This is a blocking call."
             self._refuse_asleep("moveTo")
             duration = float(np.max(np.abs([x, y, theta]) / np.array(WALK_LIMITS)))
             if duration <= 0.0:
                 return
             body.walk(np.array([x, y, theta]) / duration, duration)
-            while body.walking():
-                time.sleep(0.01)
+
+            def walked(cancelled: threading.Event) -> None:
+                while body.walking() and not cancelled.is_set():
+                    time.sleep(0.01)
+
+            return task_future(qi, walked)[0]  # answered once the walk has ended
 
         @api
         def stopMove(self) -> None:
