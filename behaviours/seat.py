@@ -8,7 +8,7 @@ from py_trees.common import Status
 
 from bearchair.behaviours import keys
 from bearchair.behaviours.skill_behaviour import SkillBehaviour
-from bearchair.behaviours.tracking import tracked_humanoid_pose
+from bearchair.behaviours.tracking import locate_torso, tracked_humanoid_pose
 from bearchair.hardware.interfaces import SeatingJudgement
 from bearchair.skills.results import SeatingPlan
 
@@ -52,7 +52,7 @@ class SeatBear(SkillBehaviour):
                 step_in = skills.walk_path(
                     robot.humanoid,
                     robot.clock,
-                    lambda: skills.locate_humanoid(robot.arm),
+                    lambda: locate_torso(skills, robot),
                     (here, accessibility.se2_goal),
                     cancel=self.cancel_event,
                 )

@@ -9,6 +9,7 @@ from py_trees.common import Status
 
 from bearchair.behaviours import keys
 from bearchair.behaviours.skill_behaviour import SkillBehaviour
+from bearchair.behaviours.tracking import locate_torso
 from bearchair.skills.results import WalkResult
 
 
@@ -32,7 +33,7 @@ class WalkToChair(SkillBehaviour):
         return lambda: skills.walk_path(
             robot.humanoid,
             robot.clock,
-            lambda: skills.locate_humanoid(robot.arm),
+            lambda: locate_torso(skills, robot),
             path,
             cancel=self.cancel_event,
         )

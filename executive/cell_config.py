@@ -26,6 +26,12 @@ The other devices keep the built-in backends (``panda``, ``nao``); an arm from a
 needs no ``panda_host`` nor ``T_flange_camera``, a humanoid and a speaker both from
 plug-ins no ``nao_url``.
 
+``camera_intrinsics`` (optional) is the calibrated pinhole model of the registered
+640x480 images, ``{"fx_px": ..., "fy_px": ..., "cx_px": ..., "cy_px": ...}`` (the colour
+camera's: depth is registered to it; calibrate it as docs/real-robots.md says). Without
+it the Carmine's come from its colour stream's field of view, a RealSense's from the
+device.
+
 Checks (each failure is one line naming the field): unknown keys are refused (with the
 nearest known name), rotations are proper and orthonormal (a scaled or mirrored matrix
 is refused), translations are bounded (millimetres written as metres are refused), the
@@ -49,6 +55,7 @@ from bearchair.core.arena import DEFAULT_ARENA, Arena
 from bearchair.core.errors import BackendUnavailable
 from bearchair.core.geometry import yaw_of
 from bearchair.core.se2 import SE2Pose
+from bearchair.hardware.interfaces import CameraIntrinsics
 
 ROTATION_TOLERANCE = 1e-3
 """Largest element of R^T R - I (and |det R - 1|) accepted: a 4-decimal matrix passes."""
@@ -63,6 +70,12 @@ SPEED_FACTOR_RANGE = (0.01, 0.5)
 """panda-py's ``speed_factor`` (fraction of the joint velocity limits) allowed for scanning
 with a person near the chair; the SDK's default is 0.2."""
 CAMERAS = ("carmine", "realsense")
+IMAGE_SIZE_PX = (640, 480)
+"""The wrist camera's image size (both backends ask for 640x480)."""
+FOCAL_RANGE_PX = (300.0, 1200.0)
+"""Focal lengths accepted at 640x480 (pixels): fields of view from 94 to 30 degrees; a
+value outside is a unit or resolution mistake."""
+_INTRINSICS_KEYS = ("fx_px", "fy_px", "cx_px", "cy_px")
 
 LEGACY_KEYS = {
     "T_hand_camera": "renamed T_flange_camera: the hand-eye calibration against the Panda's "
@@ -96,6 +109,8 @@ class CellConfig:
         panda_speed_factor: fraction of the Panda's joint velocity limits for scan moves.
         devices: per role ("arm", "humanoid", "speaker") that a plug-in backend fills,
             its section: ``{"backend": name, ...settings}``.
+        camera_intrinsics: the calibrated 640x480 pinhole model, or None (from the camera).
+        payload_mass_kg: the wrist camera with its mount, weighed (the Panda's payload).
         source: the file this came from.
     """
 
@@ -112,6 +127,8 @@ class CellConfig:
     openni_library_dir: str | None = None
     panda_speed_factor: float = 0.2
     devices: dict[str, dict[str, Any]] = field(default_factory=dict)
+    camera_intrinsics: CameraIntrinsics | None = None
+    payload_mass_kg: float = 0.16
     source: Path | None = None
 
     @property
@@ -129,6 +146,8 @@ class CellConfig:
                 value = value.tolist()
             elif item.name == "nao_password" and value:
                 value = "***"
+            elif item.name == "camera_intrinsics" and value is not None:
+                value = dict(zip(_INTRINSICS_KEYS, value[2:], strict=True))
             out[item.name] = value
         return out
 
@@ -225,8 +244,48 @@ def parse_cell_config(
         openni_library_dir=_optional_text(raw, "openni_library_dir"),
         panda_speed_factor=speed,
         devices=devices,
+        camera_intrinsics=_intrinsics(raw),
+        payload_mass_kg=_payload(raw),
         source=source,
     )
+
+
+MAX_PAYLOAD_KG = 3.0
+"""The Panda's rated payload (kilograms)."""
+
+
+def _payload(raw: dict[str, Any]) -> float:
+    """The optional ``payload_mass_kg`` (default: a Carmine 1.09's 160 g), checked."""
+    mass = _number(raw, "payload_mass_kg", 0.16)
+    if not 0.0 < mass <= MAX_PAYLOAD_KG:
+        raise CellConfigError(
+            f"payload_mass_kg: {mass:g} kg outside (0, {MAX_PAYLOAD_KG}] (kilograms, not grams)"
+        )
+    return mass
+
+
+def _intrinsics(raw: dict[str, Any]) -> CameraIntrinsics | None:
+    """The optional ``camera_intrinsics`` field, checked (focal lengths, principal point)."""
+    value = raw.get("camera_intrinsics")
+    if value is None:
+        return None
+    if not isinstance(value, dict) or set(value) != set(_INTRINSICS_KEYS):
+        raise CellConfigError(
+            f"camera_intrinsics: an object with exactly {', '.join(_INTRINSICS_KEYS)} is needed"
+        )
+    fx, fy, cx, cy = (_number(value, key) for key in _INTRINSICS_KEYS)
+    width, height = IMAGE_SIZE_PX
+    for key, focal in (("fx_px", fx), ("fy_px", fy)):
+        if not FOCAL_RANGE_PX[0] <= focal <= FOCAL_RANGE_PX[1]:
+            raise CellConfigError(
+                f"camera_intrinsics.{key}: {focal:g} px outside {list(FOCAL_RANGE_PX)} at 640x480"
+            )
+    if not (0.25 * width < cx < 0.75 * width and 0.25 * height < cy < 0.75 * height):
+        raise CellConfigError(
+            f"camera_intrinsics: principal point ({cx:g}, {cy:g}) px is not near the centre "
+            "of a 640x480 image"
+        )
+    return CameraIntrinsics(width, height, fx, fy, cx, cy)
 
 
 def _check_fields(raw: Any) -> None:

@@ -95,7 +95,11 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=seed_value)
     run.add_argument("--gui", action="store_true", help="watch in the pybullet GUI")
     run.add_argument("--out", type=Path, help="run record directory (default: runs/<time>-seed<N>)")
-    run.add_argument("--mute", action="store_true", help="print instructions instead of speaking")
+    run.add_argument(
+        "--mute",
+        action="store_true",
+        help="print instructions instead of speaking (with --robots: the NAO stays silent)",
+    )
     run.add_argument(
         "--timeout", type=positive_seconds, help="stop after this many seconds (default: 900)"
     )
@@ -194,6 +198,12 @@ def _run(args: argparse.Namespace) -> int:
     )
     from bearchair.executive.outputs import default_run_dir, prepare_run_dir
 
+    if args.robots is not None:
+        for option in ("placement", "helper"):
+            if getattr(args, option) is not None:
+                raise InputError(
+                    f"bearchair run: --{option} is for the simulated world; not with --robots"
+                )
     check_groot2_arguments("bearchair run", args)
     # Every input and the output place are checked before anything runs.
     mission = mission_from_args(args)

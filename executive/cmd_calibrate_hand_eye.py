@@ -191,9 +191,10 @@ def _write_board(args: argparse.Namespace) -> int:
 def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     """Connects, asks, moves through the views and captures; always ends at HOME."""
     from bearchair.executive.cell_config import load_cell_config
-    from bearchair.executive.cmd_check_hardware import MOVE_SPEED_FACTOR, _within
+    from bearchair.executive.cmd_check_hardware import MOVE_SPEED_FACTOR
     from bearchair.executive.operator import ask_operator
     from bearchair.hardware.real import robots
+    from bearchair.hardware.real.bounded import call_within
     from bearchair.skills.perception.hand_eye import (
         BOARD_CENTRE_BASE_XY_M,
         CALIBRATION_CONFIGURATIONS,
@@ -203,8 +204,8 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     if not 3 <= count <= len(CALIBRATION_CONFIGURATIONS):
         raise _error(f"--views {count}: from 3 to {len(CALIBRATION_CONFIGURATIONS)}")
     cell = load_cell_config(args.robots)  # CellConfigError: one line, exit 2
-    arm = _within(args.timeout, lambda: robots.connect_panda(cell))
-    state = _within(args.timeout, arm.state)
+    arm = call_within(args.timeout, lambda: robots.connect_panda(cell), "the Panda")
+    state = call_within(args.timeout, arm.state, "the Panda")
     if state["mode"] not in ("kIdle", "kMove") or state["errors"] != "none":
         raise _error(
             f"the Panda is in {state['mode']} with errors {state['errors']}: clear it in Desk "
@@ -221,7 +222,7 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     )
     if not args.yes and not ask_operator("The Panda will move now. Go on? [y/N] "):
         raise _error("the operator did not confirm: nothing moved")
-    arm._speed_factor = MOVE_SPEED_FACTOR  # as check-hardware --move: slow, near a person
+    arm.speed_factor = MOVE_SPEED_FACTOR  # as check-hardware --move: slow, near a person
     return _visit_views(arm, cell, board, CALIBRATION_CONFIGURATIONS[:count], args.timeout)
 
 
@@ -235,8 +236,8 @@ def _visit_views(
     """HOME, then each configuration (capture, detect the board) and back to HOME; any
     failure emergency-stops the arm."""
     from bearchair.core.errors import BackendUnavailable
-    from bearchair.executive.cmd_check_hardware import _within
     from bearchair.executive.interrupts import emergency_stop_on_second_signal
+    from bearchair.hardware.real.bounded import call_within
     from bearchair.skills.perception.views import HOME_CONFIGURATION
 
     T_base_world = np.linalg.inv(cell.T_world_base)
@@ -250,8 +251,10 @@ def _visit_views(
                 where = f"view calib{index}"
                 arm.move_to(joints, timeout_s=MOVE_TIMEOUT_S)
                 time.sleep(SETTLE_S)
-                _within(timeout_s, arm.capture)  # a frame buffered during the motion
-                frame = _within(timeout_s, arm.capture)
+                call_within(
+                    timeout_s, arm.capture, "the wrist camera"
+                )  # buffered during the motion
+                frame = call_within(timeout_s, arm.capture, "the wrist camera")
                 T_base_flange = T_base_world @ frame.T_world_camera @ T_camera_flange
                 view = _detect(f"calib{index}", arm.joint_positions(), T_base_flange, frame, board)
                 _print_view(view)
@@ -351,7 +354,9 @@ def _solve_and_report(views: list[View], board: Any, out: Path | None) -> int:
     if scale is not None and abs(scale - 1.0) > MAX_SCALE_ERROR:
         problems.append(
             f"the depth camera measures the board {100 * (scale - 1):+.1f} % from its printed "
-            f"size (at most {100 * MAX_SCALE_ERROR:g} %): measure a square and give --square-mm"
+            f"size (at most {100 * MAX_SCALE_ERROR:g} %): measure a square and give "
+            "--square-mm; if it was right, the camera's focal length is off by as much: "
+            "calibrate camera_intrinsics (docs/real-robots.md)"
         )
     if not problems:
         return 0

@@ -300,7 +300,7 @@ def run_on_robots(
     else:
         cell = load_cell_config(cell_file, config.arena)
     root = build_tree(tree or create_tree, config.tree_options, config.tree_spec)
-    robot = connect_robots(cell)
+    robot = connect_robots(cell, mute=config.mute)
     if confirm is not None and not confirm("The NAO and the Panda will move now. Go on? [y/N] "):
         robot.close()
         raise BackendUnavailable("the operator did not confirm: nothing moved")
@@ -312,6 +312,12 @@ def run_on_robots(
     except BaseException:  # Ctrl-C while setting up: stop, then let it through
         robot.emergency_stop()
         raise
+    from bearchair.hardware.real.monitor import RobotMonitor
+
+    # Battery, falls, temperature and the arm's mode, watched for the whole run: a fault
+    # stops the robots at once and the mission after that tick, with the reason.
+    monitor = RobotMonitor(robot).start()
+    on_tick = _both(on_tick, monitor.check)
     recorder = RunRecorder(config.out_dir, root)
     write_config(config)
     (config.out_dir / "cell.json").write_text(json.dumps(cell.to_json(), indent=2))
@@ -326,7 +332,10 @@ def run_on_robots(
         "sdk_versions": sdk_versions(),
         "started_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
-    return _run_tree(root, recorder, robot, config, run_info, skills, on_tick, None)
+    try:
+        return _run_tree(root, recorder, robot, config, run_info, skills, on_tick, None)
+    finally:
+        monitor.close()
 
 
 def _run_tree(

@@ -23,6 +23,7 @@ from bearchair.executive.interrupts import (
 from bearchair.executive.jsonable import to_jsonable
 from bearchair.executive.record import RecordWriteError, RunRecorder
 from bearchair.hardware.interfaces import Robot
+from bearchair.hardware.real import RobotFault
 from bearchair.skills.toolbox import MissionSkills
 
 logger = logging.getLogger(__name__)
@@ -148,6 +149,10 @@ class MissionRunner:
             logger.warning("writing the run record; a second %s exits at once", stop_signal)
         except RecordWriteError as error:
             stopped, record_error = True, str(error)
+            self._stop(f"stopped: {error}")
+        except RobotFault as error:  # a device's monitor: the robots first, then the tree
+            stopped = True
+            stop_robots(self.robot)
             self._stop(f"stopped: {error}")
         finally:
             record_error = self._finish(record_error)

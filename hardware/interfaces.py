@@ -8,9 +8,11 @@ metres, radians, seconds. Camera frames follow OpenCV: x right, y down, z forwar
 from __future__ import annotations
 
 import contextlib
+import threading
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import NamedTuple, Protocol, runtime_checkable
+from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -179,6 +181,17 @@ class SeatingJudge(Protocol):
         ...
 
 
+EMERGENCY_STOP_WAIT_S = 5.0
+"""How long :meth:`Robot.emergency_stop` waits for its devices' stops to return (seconds:
+the NAO's take at most about 1.4 s, each NAOqi call bounded);
+a device that has not by then goes on stopping in its own thread."""
+
+
+def _stop_quietly(device: Any) -> None:
+    with contextlib.suppress(Exception):
+        device.emergency_stop()
+
+
 @dataclass
 class Robot:
     """Everything the mission needs from the outside world, injected at ``tree.setup``.
@@ -204,11 +217,17 @@ class Robot:
 
         Safe from any thread and more than once; motions are refused afterwards.
         """
-        # Stopping must never raise, whatever state the robot is in: one device's error
-        # must not keep the other moving.
-        for device in (self.humanoid, self.arm):
-            with contextlib.suppress(Exception):
-                device.emergency_stop()
+        # Every device at once, each in its own thread: the wired arm never waits on the
+        # humanoid's Wi-Fi, and one device's error or hang never keeps another moving.
+        stoppers = [
+            threading.Thread(target=_stop_quietly, args=(device,), daemon=True, name="estop")
+            for device in (self.arm, self.humanoid)
+        ]
+        for stopper in stoppers:
+            stopper.start()
+        deadline = time.monotonic() + EMERGENCY_STOP_WAIT_S
+        for stopper in stoppers:
+            stopper.join(max(0.0, deadline - time.monotonic()))
 
     def close(self) -> None:
         """Stops every actuator; safe to call more than once."""

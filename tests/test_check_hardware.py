@@ -37,7 +37,7 @@ def test_check_hardware_prints_every_check_and_moves_nothing(tmp_path, capsys):
     with NaoqiStandin() as naoqi:
         status = main(["check-hardware", "--robots", str(_cell(tmp_path, naoqi.url))])
         out = capsys.readouterr().out
-        moving = {"wakeUp", "moveTo", "angleInterpolation", "goToPosture", "setState"}
+        moving = {"wakeUp", "move", "moveTo", "angleInterpolation", "goToPosture", "setState"}
         assert not moving & {name for _, name, _ in naoqi.calls}
     assert status == 0, out
     for device in (
@@ -74,7 +74,7 @@ def test_run_on_robots_asks_first_then_records_the_cell_and_sdk_versions(
         monkeypatch.setattr("builtins.input", lambda prompt: "n")
         status = main(["run", "--robots", str(cell), "--out", str(tmp_path / "no")])
         assert status == 2 and "did not confirm: nothing moved" in capsys.readouterr().err
-        assert not naoqi.called("wakeUp") and not naoqi.called("moveTo")
+        assert not naoqi.called("wakeUp") and not naoqi.called("move")
 
         out = tmp_path / "yes"
         status = main(

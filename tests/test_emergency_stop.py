@@ -9,12 +9,19 @@ counts the robot (simulated) time until every actuator is still: the Panda's joi
 slower than :data:`STILL_RADPS`, the NAO's pose and joints unchanged over a step. The
 bound is 0.2 s of robot time; the workers must end (with an error) and later motions
 are refused.
+
+Over the SDK stand-ins a third time with a slow link: every NAOqi call answered
+:data:`SLOW_CALL_S` late (a bad Wi-Fi link) and NAOqi's blocking ``moveTo``. A ticker
+keeps the paced world stepping while the stop goes out, and wall time is measured: the
+arm's ``Robot::stop`` must arrive within :data:`ARM_SIGNAL_BOUND_S` of the signal and
+every actuator be still within :data:`SLOW_STOP_BOUND_S`.
 """
 
 from __future__ import annotations
 
 import contextlib
 import threading
+import time
 from collections.abc import Iterator
 
 import numpy as np
@@ -25,6 +32,9 @@ from bearchair.hardware.sim.world import SimConfig, SimWorld
 from bearchair.skills.perception.views import HOME_CONFIGURATION, SCAN_CONFIGURATIONS
 
 STOP_BOUND_S = 0.2
+SLOW_CALL_S = 0.3
+ARM_SIGNAL_BOUND_S = 0.05
+SLOW_STOP_BOUND_S = 0.5
 STILL_RADPS = 0.01
 """Joint speed below which the arm counts as still (the encoders' noise is about this)."""
 
@@ -46,6 +56,7 @@ class MotionProbe:
         self._world = world
         self._previous = _nao_state(world)
         self.last_moving_s = world.clock.now()
+        self.last_moving_wall_s = time.monotonic()
         world.clock.add_process(self)
 
     def __call__(self, now_s: float, dt_s: float) -> None:
@@ -53,6 +64,7 @@ class MotionProbe:
         arm_moving = np.max(np.abs(self._world.panda.joint_velocities())) >= STILL_RADPS
         if arm_moving or not np.allclose(state, self._previous, atol=1e-9, rtol=0.0):
             self.last_moving_s = now_s
+            self.last_moving_wall_s = time.monotonic()
         self._previous = state
 
 
@@ -131,11 +143,31 @@ def _robot(world: SimWorld, backend: str) -> Iterator[Robot]:
     with NaoqiStandin(body=SimulatedNaoBody(world)) as standin:
         robot, session = robot_over_standins(world, standin)
         robot.humanoid.activate()
+        if backend == "real-over-slow-standins":
+            standin.call_latency_s = SLOW_CALL_S  # from here on: set up on a good link
         yield robot
         session.close()
 
 
-@pytest.mark.parametrize("backend", ["sim", "real-over-standins"])
+@contextlib.contextmanager
+def _ticking(world: SimWorld) -> Iterator[None]:
+    """Keeps the paced world stepping (robot time about wall time) while inside."""
+    done = threading.Event()
+
+    def tick() -> None:
+        while not done.is_set():
+            world.clock.sleep(0.01)
+
+    ticker = threading.Thread(target=tick, daemon=True)
+    ticker.start()
+    try:
+        yield
+    finally:
+        done.set()
+        ticker.join(5.0)
+
+
+@pytest.mark.parametrize("backend", ["sim", "real-over-standins", "real-over-slow-standins"])
 @pytest.mark.parametrize("stage", list(STAGE_MOTIONS))
 def test_emergency_stop_stills_every_actuator_within_bound(stage, backend):
     with SimWorld(SimConfig(seed=1, camera_noise=False)) as world, _robot(world, backend) as robot:
@@ -159,14 +191,35 @@ def test_emergency_stop_stills_every_actuator_within_bound(stage, backend):
         while world.clock.now() - started < 0.6 and thread.is_alive():
             threading.Event().wait(0.005)
         stopped_s = world.clock.now()
-        robot.emergency_stop()
-        stop_walking.set()
-        thread.join(timeout=20.0)
-        assert not thread.is_alive(), f"{stage}: the worker did not end after the stop"
-        world.clock.sleep(0.5)  # long enough to see anything still moving
-        moving_s = max(0.0, probe.last_moving_s - stopped_s)
-        print(f"{backend} {stage}: still {moving_s * 1000:.0f} ms of robot time after the stop")
-        assert moving_s <= STOP_BOUND_S, f"{stage}: moved until {moving_s:.3f} s after the stop"
+        slow = backend == "real-over-slow-standins"
+        with _ticking(world) if slow else contextlib.nullcontext():
+            signal_s = time.monotonic()
+            robot.emergency_stop()
+            stop_walking.set()
+            thread.join(timeout=20.0)
+            assert not thread.is_alive(), f"{stage}: the worker did not end after the stop"
+            if slow:
+                time.sleep(SLOW_STOP_BOUND_S + 0.3)  # long enough to see anything still moving
+        if not slow:
+            world.clock.sleep(0.5)  # long enough to see anything still moving
+        if slow:
+            panda = getattr(robot.arm._robot, "_impl", robot.arm._robot)  # behind the SDK double
+            arm_signal_s = panda.stop_times_s[0] - signal_s
+            still_s = max(0.0, probe.last_moving_wall_s - signal_s)
+            print(
+                f"{backend} {stage}: arm stop sent {arm_signal_s * 1000:.1f} ms after the "
+                f"signal, all still {still_s * 1000:.0f} ms after it (wall time)"
+            )
+            assert arm_signal_s <= ARM_SIGNAL_BOUND_S, (
+                f"{stage}: arm stopped {arm_signal_s:.3f} s late"
+            )
+            assert still_s <= SLOW_STOP_BOUND_S, (
+                f"{stage}: moved until {still_s:.3f} s after the stop"
+            )
+        else:
+            moving_s = max(0.0, probe.last_moving_s - stopped_s)
+            print(f"{backend} {stage}: still {moving_s * 1000:.0f} ms of robot time after the stop")
+            assert moving_s <= STOP_BOUND_S, f"{stage}: moved until {moving_s:.3f} s after the stop"
         with pytest.raises(RuntimeError, match="emergency-stopped"):
             robot.humanoid.set_velocity(0.1, 0.0, 0.0)
         with pytest.raises(RuntimeError, match="emergency-stopped"):

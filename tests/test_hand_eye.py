@@ -136,7 +136,7 @@ def test_the_residuals_expose_a_wrong_hand_eye():
 
 @pytest.mark.skipif(
     not hasattr(cv2, "calibrateHandEye"),
-    reason=f"OpenCV {cv2.__version__} does not bind calibrateHandEye (opencv/opencv#29565)",
+    reason=f"OpenCV {cv2.__version__} does not bind calibrateHandEye (opencv/opencv#29565; 5.1 does)",
 )
 def test_the_solver_agrees_with_opencvs_park_method():
     rng = np.random.default_rng(7)
@@ -432,7 +432,11 @@ def board_arm(monkeypatch):
         panda = FakePanda("standin")
         panda.time_scale = 200.0
         scene = _BoardScene(panda, T_base_board=_floor_board(yaw_rad=2.0, offset_m=(-0.03, 0.02)))
-        camera = CarmineCamera(FakeOpenNI2(render=scene, stamp_us=scene.stamp_us))
+        # The scene renders through the nominal intrinsics: the camera is given them, as a
+        # cell file with camera_intrinsics would.
+        camera = CarmineCamera(
+            FakeOpenNI2(render=scene, stamp_us=scene.stamp_us), intrinsics=CARMINE_INTRINSICS
+        )
         arm = PandaArm(panda, camera, config.T_world_base, config.T_flange_camera, 0.2)
         made.update(panda=panda, scene=scene, arm=arm)
         return arm

@@ -8,6 +8,7 @@ panda-py's and openni's signatures, checked against the installed SDKs when pres
 
 from __future__ import annotations
 
+import contextlib
 import inspect
 import math
 import threading
@@ -27,6 +28,9 @@ from bearchair.hardware.real.standins import (
     FakeOpenNI2,
     FakePanda,
     panda_flange_pose,
+    sdk_openni2,
+    sdk_panda,
+    sdk_realsense,
 )
 from bearchair.skills.perception.views import SCAN_CONFIGURATIONS
 
@@ -77,7 +81,8 @@ def test_connecting_moves_nothing_and_activation_sets_up_carrying(naoqi, nao):
         "basic_awareness": True,
         "battery_percent": 87,
     }
-    moving = {"wakeUp", "moveTo", "angleInterpolation", "goToPosture", "setState", "setEnabled"}
+    moving = {"wakeUp", "move", "moveTo", "angleInterpolation", "goToPosture", "setState"}
+    moving |= {"setEnabled"}
     assert not moving & {name for _, name, _ in naoqi.calls}
     nao.activate()
     assert naoqi.called("setState") == [("disabled",)]
@@ -99,34 +104,54 @@ def test_odometry_counts_from_the_first_reading(naoqi, nao):
         -math.pi, abs=1e-6
     )
     nao.activate()
+    boot = naoqi.body.odometry()
     nao.set_velocity(0.1, 0.0, 0.0)
-    assert _eventually(lambda: naoqi.called("moveTo"))
-    assert _eventually(lambda: not naoqi.motion.walking())  # the 0.5 s command ran out
+    time.sleep(0.1)
+    nao.stop()
+    walked_m = float(np.linalg.norm(naoqi.body.odometry()[:2] - boot[:2]))
     pose = nao.pose()
-    # Forward from a start facing -x: 5 cm toward -x.
-    assert pose.x == pytest.approx(1.9 - 0.05, abs=2e-3) and pose.y == pytest.approx(0.0, abs=2e-3)
+    # Forward from a start facing -x: toward -x by what NAOqi's odometry walked.
+    assert walked_m > 0.01
+    assert pose.x == pytest.approx(1.9 - walked_m, abs=1e-6) and pose.y == pytest.approx(
+        0.0, abs=1e-6
+    )
 
 
-def test_walking_commands_are_bounded_moves_that_end_by_themselves(naoqi, nao):
+def test_walking_is_a_latched_move_that_the_heartbeat_ends(naoqi, nao):
+    from bearchair.hardware.real.nao import HEARTBEAT_PERIOD_S
+
     nao.activate()
     nao.set_velocity(1.0, 0.0, -3.0)  # clipped to 0.1 m/s and 0.5 rad/s
-    assert _eventually(lambda: naoqi.called("moveTo"))
-    sent = time.monotonic()
-    x, y, theta = naoqi.called("moveTo")[-1]
-    assert x == pytest.approx(0.05) and y == 0.0 and theta == pytest.approx(-0.25)
-    # The process "dies": no more commands. The walk ends 0.5 s of robot time later.
-    assert _eventually(lambda: not naoqi.motion.walking())
-    assert time.monotonic() - sent < 0.5 / naoqi.time_scale + 0.1
+    assert naoqi.called("move")[-1] == pytest.approx((0.1, 0.0, -0.5))
+    assert not naoqi.called("moveTo")
+    # The controller keeps commanding: the walk goes on past two heartbeat periods.
+    for _ in range(8):
+        time.sleep(HEARTBEAT_PERIOD_S / 2)
+        nao.set_velocity(0.05, 0.0, 0.0)
+    assert naoqi.motion.walking() and nao.watchdog.fired == 0
+    # The controller falls silent: two missed periods and the watchdog calls stopMove.
+    silent = time.monotonic()
+    assert _eventually(lambda: not naoqi.motion.walking(), timeout_s=2.0)
+    assert time.monotonic() - silent < 2.25 * HEARTBEAT_PERIOD_S + 0.1
+    assert nao.watchdog.fired == 1 and naoqi.called("stopMove")
+
+
+def test_a_refused_walking_command_raises(naoqi, nao):
+    from bearchair.core.errors import BackendError
+
+    # Not awake: NAOqi refuses move(); the backend checks its result and says so.
+    with pytest.raises(BackendError, match="not awake"):
+        nao.set_velocity(0.1, 0.0, 0.0)
 
 
 def test_trajectory_is_one_cancellable_angle_interpolation(naoqi, nao):
     nao.activate()
-    positions = np.array([[0.0, 0.1], [0.2, 0.3], [0.4, 0.5]])
+    positions = -np.array([[0.0, 0.1], [0.2, 0.3], [0.4, 0.5]])
     nao.play_joint_trajectory(["LHipPitch", "RHipPitch"], [0.0, 0.4, 0.8], positions)
     names, angles, times, absolute = naoqi.called("angleInterpolation")[-1]
     assert names == ["LHipPitch", "RHipPitch"] and absolute is True
-    assert angles == [[0.2, 0.4], [0.3, 0.5]] and times == [[0.4, 0.8], [0.4, 0.8]]
-    assert naoqi.motion.joints["RHipPitch"] == pytest.approx(0.5)
+    assert angles == [[-0.2, -0.4], [-0.3, -0.5]] and times == [[0.4, 0.8], [0.4, 0.8]]
+    assert naoqi.motion.joints["RHipPitch"] == pytest.approx(-0.5)
     with pytest.raises(ValueError, match="does not match"):
         nao.play_joint_trajectory(["LHipPitch"], [1.0], positions)
 
@@ -158,13 +183,44 @@ def test_emergency_stop_ends_every_nao_motion(naoqi, nao, motion):
     worker.join(5.0)
     assert not worker.is_alive() and time.monotonic() - stopped_at < 0.5
     assert errors, "the running motion must end with EmergencyStopped"
-    assert not naoqi.motion.walking()
-    assert naoqi.called("stopMove") and naoqi.called("killTasksUsingResources")
-    assert "LKneePitch" in naoqi.called("killTasksUsingResources")[-1][0]
+    assert not naoqi.motion.walking() and naoqi.called("stopMove")
+    kills = [set(joints) for (joints,) in naoqi.called("killTasksUsingResources")]
+    # Only the joints of the motions that ran are freed; the walk is left to stopMove.
+    expected = {"trajectory": [{"LKneePitch"}], "walk": [], "hands": [{"LHand", "RHand"}]}
+    assert kills == expected[motion] or (motion == "hands" and kills == [{"LHand"}])
+    assert naoqi.fell == ""
     if motion == "trajectory":
         assert "LKneePitch" not in naoqi.motion.joints  # cancelled, never completed
     with pytest.raises(EmergencyStopped):
         nao.set_velocity(0.1, 0.0, 0.0)
+
+
+def test_emergency_stop_waits_for_the_walk_to_end_before_killing(naoqi, nao):
+    """A stop mid-walk with a head motion running: the head is freed only once
+    ``moveIsActive()`` reads false, so the walk's legs are never killed mid-step."""
+    naoqi.body.stop_runout_s = 0.3 * naoqi.time_scale  # 0.3 s on both feet after stopMove
+    nao.activate()
+    nao.set_velocity(0.1, 0.0, 0.0)
+    head = threading.Thread(
+        target=_ignore_stop,
+        args=(lambda: nao.play_joint_trajectory(["HeadYaw"], [5.0], np.array([[0.5]])),),
+    )
+    head.start()
+    assert _eventually(lambda: naoqi.called("angleInterpolation"))
+    nao.emergency_stop()
+    head.join(3.0)
+    order = [name for _, name, _ in naoqi.calls]
+    stop = order.index("stopMove")
+    kill = order.index("killTasksUsingResources")
+    assert stop < order.index("moveIsActive", stop) < kill and naoqi.called(
+        "killTasksUsingResources"
+    ) == [(["HeadYaw"],)]
+    assert naoqi.fell == ""
+
+
+def _ignore_stop(job) -> None:
+    with contextlib.suppress(EmergencyStopped):
+        job()
 
 
 def test_speech_goes_through_text_to_speech(naoqi):
@@ -203,9 +259,12 @@ def test_unreachable_nao_fails_fast_with_its_url():
 # --- Panda --------------------------------------------------------------------------------
 
 
-def _arm(panda: FakePanda | None = None, camera=None) -> PandaArm:
-    camera = camera or CarmineCamera(FakeOpenNI2())
-    return PandaArm(panda or FakePanda("standin"), camera, np.eye(4), np.eye(4))
+def _arm(panda: FakePanda | None = None, camera=None, **options) -> PandaArm:
+    """The backend over the fakes, each behind the installed SDK's own classes."""
+    camera = camera or CarmineCamera(sdk_openni2(FakeOpenNI2()))
+    return PandaArm(
+        sdk_panda(panda or FakePanda("standin")), camera, np.eye(4), np.eye(4), **options
+    )
 
 
 def test_fake_panda_matches_the_installed_sdk():
@@ -298,7 +357,7 @@ def test_emergency_stop_preempts_a_running_arm_move():
 
 def test_carmine_sets_640x480_depth_in_mm_registered_and_synchronised():
     openni = FakeOpenNI2()
-    camera = CarmineCamera(openni)
+    camera = CarmineCamera(sdk_openni2(openni))
     rgb, depth_m = camera.read()
     assert rgb.shape == (480, 640, 3) and depth_m.shape == (480, 640)
     assert depth_m.dtype == np.float32 and np.all(depth_m == pytest.approx(1.0))
@@ -353,10 +412,11 @@ def test_realsense_aligns_depth_to_colour_in_metres():
     from bearchair.hardware.real.standins import FakeRealSense
 
     rs = FakeRealSense(depth_scale_m=0.0001)  # a D405-like 0.1 mm unit
-    camera = RealSenseCamera(rs)
+    camera = RealSenseCamera(sdk_realsense(rs))
     rgb, depth_m = camera.read()
     assert rgb.shape == (480, 640, 3) and depth_m.dtype == np.float32
-    assert np.all(depth_m == pytest.approx(1.0))
+    valid = depth_m > 0.0  # alignment leaves no depth where the depth imager did not see
+    assert np.all(depth_m[valid] == pytest.approx(1.0)) and valid[:, :600].all()
     assert rs.aligned_to == rs.stream.color
     assert (rs.stream.depth, 640, 480, rs.format.z16, 30) in rs.enabled
     assert camera.intrinsics.fx == 615.0 and "0.1 mm" in camera.mode()["depth"]
@@ -386,3 +446,55 @@ def test_fake_realsense_matches_the_installed_sdk():
     assert "width: int, height: int, format: pyrealsense2.pyrealsense2.format, framerate: int" in (
         rs.config.enable_stream.__doc__
     )
+
+
+# --- connects that never hang -------------------------------------------------------------
+
+
+def _ends_within(job, bound_s: float) -> BaseException | None:
+    """Runs ``job`` in a daemon thread: what it raised, or a failure if still running."""
+    outcome: list[BaseException | None] = []
+
+    def run() -> None:
+        try:
+            job()
+            outcome.append(None)
+        except BaseException as error:
+            outcome.append(error)
+
+    worker = threading.Thread(target=run, daemon=True)
+    worker.start()
+    worker.join(bound_s)
+    assert not worker.is_alive(), f"still waiting after {bound_s} s: it hangs"
+    return outcome[0]
+
+
+def test_connecting_to_a_silent_nao_ends_in_its_timeout_naming_it():
+    pytest.importorskip("qi")
+    from bearchair.hardware.real.nao import connect
+    from tests.test_check_hardware_silent import silent_peer
+
+    with silent_peer() as (host, port):
+        started = time.monotonic()
+        error = _ends_within(lambda: connect(f"tcp://{host}:{port}", timeout_s=0.3), 3.0)
+    assert isinstance(error, BackendUnavailable) and f"NAO at tcp://{host}:{port}" in str(error)
+    assert time.monotonic() - started < 1.0
+
+
+def test_connecting_to_a_silent_panda_ends_in_its_timeout_naming_it():
+    pytest.importorskip("panda_py")
+    from tests.test_check_hardware_silent import silent_panda
+
+    with silent_panda() as host:
+        started = time.monotonic()
+        error = _ends_within(
+            lambda: PandaArm.connect(host, np.eye(4), np.eye(4), timeout_s=0.3), 3.0
+        )
+    assert isinstance(error, BackendUnavailable) and f"the Panda at {host}" in str(error)
+    assert time.monotonic() - started < 1.0
+
+
+def test_a_silent_camera_read_ends_in_its_timeout_naming_it():
+    camera = CarmineCamera(FakeOpenNI2(silent=True), timeout_s=0.2)
+    error = _ends_within(camera.read, 3.0)
+    assert isinstance(error, BackendUnavailable) and "the Carmine sent no depth frame" in str(error)

@@ -5,6 +5,8 @@
 * :mod:`bearchair.hardware.real.panda`: the Franka Panda through ``panda_py``.
 * :mod:`bearchair.hardware.real.camera`: the PrimeSense Carmine through OpenNI2 (``openni``).
 * :mod:`bearchair.hardware.real.robots`: all of them from a checked cell file.
+* :mod:`bearchair.hardware.real.monitor`: the devices' health watched during a run.
+* :mod:`bearchair.hardware.real.bounded`: waits that never hang.
 * :mod:`bearchair.hardware.real.standins`: SDK stand-ins for tests and ``check-hardware`` dry runs.
 
 The SDKs are imported only when a backend is built, so the rest of the project installs
@@ -22,6 +24,11 @@ from bearchair.core.errors import BackendError, BackendUnavailable
 
 class EmergencyStopped(BackendError, RuntimeError):
     """A motion was refused or ended because the robot was emergency-stopped."""
+
+
+class RobotFault(BackendError, RuntimeError):
+    """A device reported it cannot go on (battery, fall, temperature, arm reflex): the
+    mission stops with this message (:class:`bearchair.hardware.real.monitor.RobotMonitor`)."""
 
 
 SDK_DISTRIBUTIONS = {

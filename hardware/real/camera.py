@@ -8,9 +8,18 @@ about it:
   ``PIXEL_FORMAT_DEPTH_1_MM`` and colour in ``PIXEL_FORMAT_RGB888``, and the modes read
   back are checked.
 * Registration is off: depth-to-colour registration is required (checked supported,
-  then set), so one pinhole model serves both images.
+  then set and read back), so one pinhole model serves both images: the colour
+  camera's, from the colour stream's field of view (``get_horizontal_fov``,
+  ``get_vertical_fov``) unless the cell file gives calibrated ``camera_intrinsics``.
+* Mirroring is on: the device's Mirror property defaults to on (``XnDeviceBase.cpp``)
+  and new streams inherit it (the driver's ini comment says otherwise). A mirrored
+  image decodes no ArUco tag or ChArUco board and its cloud does not fuse, so each
+  stream is set unmirrored and read back, and the camera refuses to start if it stays on.
 * Frames are unsynchronised: depth/colour sync is enabled, and a pair whose timestamps
   differ by more than :data:`MAX_PAIR_SKEW_S` is read again.
+* ``read_frame`` blocks until a frame comes, forever: each read first waits for its
+  stream with ``wait_for_any_stream`` and a bound (``timeout_s``), and a camera that
+  stays silent raises :class:`~bearchair.hardware.real.bounded.DeviceTimeout`.
 * A frame's buffer belongs to the frame object: it is copied while the frame is alive.
 * Debian's ``libopenni2-0`` puts ``libOpenNI2.so`` in ``/usr/lib/<triplet>/``, which the
   binding does not search: the folder is given by the cell file (``openni_library_dir``).
@@ -18,6 +27,7 @@ about it:
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -25,10 +35,15 @@ import numpy as np
 from bearchair.core.errors import BackendUnavailable
 from bearchair.hardware.interfaces import CameraIntrinsics
 from bearchair.hardware.real import import_sdk
+from bearchair.hardware.real.bounded import DeviceTimeout
 
-# The Carmine 1.09's factory depth intrinsics at 640x480 (replace with a calibration).
 CARMINE_INTRINSICS = CameraIntrinsics(640, 480, 570.3, 570.3, 319.5, 239.5)
+"""The Carmine 1.09's nominal *depth* intrinsics at 640x480: for synthetic images only.
+The backend takes the registered (colour) geometry from the stream or the cell file."""
+WIDTH, HEIGHT = 640, 480
 FPS = 30
+READ_TIMEOUT_S = 2.0
+"""Bound on waiting for one frame (seconds): 60 frame periods at 30 fps."""
 MAX_PAIR_SKEW_S = 1.0 / 60.0
 """Half a frame period: a depth and colour pair further apart is not one moment."""
 PAIR_ATTEMPTS = 5
@@ -40,22 +55,25 @@ class CarmineCamera:
     Args:
         openni2: the ``openni.openni2`` module (tests pass a fake with its signatures).
         library_dir: folder of ``libOpenNI2.so``; None for the binding's search path.
-        intrinsics: the pinhole model of the registered 640x480 images.
+        intrinsics: the calibrated pinhole model of the registered 640x480 images (the
+            cell file's ``camera_intrinsics``); None: from the colour stream's field of view.
+        timeout_s: bound on waiting for one frame.
 
     Raises:
-        BackendUnavailable: no library, no device, a missing stream, no registration, or
-            the driver refuses the 640x480 modes (each says which).
+        BackendUnavailable: no library, no device, a missing stream, no registration,
+            mirroring that stays on, or the driver refuses the 640x480 modes (each says which).
     """
 
     def __init__(
         self,
         openni2: Any | None = None,
         library_dir: str | None = None,
-        intrinsics: CameraIntrinsics = CARMINE_INTRINSICS,
+        intrinsics: CameraIntrinsics | None = None,
+        timeout_s: float = READ_TIMEOUT_S,
     ) -> None:
         ni = openni2 or import_sdk("openni.openni2", "bearchair[carmine]")
         self._ni = ni
-        self.intrinsics = intrinsics
+        self._timeout_s = timeout_s
         try:
             if library_dir is None:
                 ni.initialize()
@@ -79,38 +97,38 @@ class CarmineCamera:
         registration = ni.IMAGE_REGISTRATION_DEPTH_TO_COLOR
         if not self._device.is_image_registration_mode_supported(registration):
             raise BackendUnavailable("the OpenNI2 camera cannot register depth to colour")
-        self._depth.configure_mode(
-            intrinsics.width, intrinsics.height, FPS, ni.PIXEL_FORMAT_DEPTH_1_MM
-        )
-        self._colour.configure_mode(
-            intrinsics.width, intrinsics.height, FPS, ni.PIXEL_FORMAT_RGB888
-        )
         for name, stream, pixel_format in (
             ("depth", self._depth, ni.PIXEL_FORMAT_DEPTH_1_MM),
             ("colour", self._colour, ni.PIXEL_FORMAT_RGB888),
         ):
-            mode = stream.get_video_mode()
-            if (mode.resolutionX, mode.resolutionY, mode.pixelFormat) != (
-                intrinsics.width,
-                intrinsics.height,
-                pixel_format,
-            ):
-                raise BackendUnavailable(
-                    f"the OpenNI2 {name} stream runs at {mode.resolutionX}x{mode.resolutionY} "
-                    f"format {mode.pixelFormat}, not {intrinsics.width}x{intrinsics.height}"
-                )
+            _configure(stream, name, pixel_format)
         self._device.set_image_registration_mode(registration)
+        if self._device.get_image_registration_mode() != registration:
+            raise BackendUnavailable("the OpenNI2 camera did not keep depth-to-colour registration")
         self._device.set_depth_color_sync_enabled(True)
+        self.intrinsics = intrinsics or intrinsics_from_fov(
+            self._colour.get_horizontal_fov(), self._colour.get_vertical_fov()
+        )
+        self.intrinsics_source = "cell file" if intrinsics else "colour stream's field of view"
         self._depth.start()
         self._colour.start()
 
     def mode(self) -> dict[str, Any]:
-        """The streams' modes, for check-hardware."""
+        """The streams' modes, mirroring and intrinsics, for check-hardware (read back)."""
         depth, colour = self._depth.get_video_mode(), self._colour.get_video_mode()
+        mirrored = [
+            n
+            for n, s in (("depth", self._depth), ("colour", self._colour))
+            if s.get_mirroring_enabled()
+        ]
+        k = self.intrinsics
         return {
             "depth": f"{depth.resolutionX}x{depth.resolutionY}@{depth.fps} DEPTH_1_MM",
             "colour": f"{colour.resolutionX}x{colour.resolutionY}@{colour.fps} RGB888",
             "registration": "depth to colour",
+            "mirroring": ("ON for " + ", ".join(mirrored)) if mirrored else "off",
+            "intrinsics": f"fx {k.fx:.1f} fy {k.fy:.1f} cx {k.cx:.1f} cy {k.cy:.1f} px "
+            f"({self.intrinsics_source})",
         }
 
     def read(self) -> tuple[np.ndarray, np.ndarray]:
@@ -134,6 +152,10 @@ class CarmineCamera:
 
     def _copy(self, stream: Any, dtype: type, channels: int) -> tuple[np.ndarray, int]:
         h, w = self.intrinsics.height, self.intrinsics.width
+        # read_frame blocks until a frame comes: wait for one with a bound first.
+        if self._ni.wait_for_any_stream([stream], self._timeout_s) is None:
+            name = "depth" if stream is self._depth else "colour"
+            raise DeviceTimeout(f"the Carmine sent no {name} frame in {self._timeout_s:g} s")
         frame = stream.read_frame()
         if (frame.width, frame.height) != (w, h):
             raise RuntimeError(
@@ -146,6 +168,40 @@ class CarmineCamera:
         del frame
         shape = (h, w) if channels == 1 else (h, w, channels)
         return pixels.reshape(shape), stamp_us
+
+
+def _configure(stream: Any, name: str, pixel_format: int) -> None:
+    """Sets a stream to 640x480 at :data:`FPS` in ``pixel_format``, unmirrored, and reads
+    both back.
+
+    Raises:
+        BackendUnavailable: the mode or the mirroring did not take.
+    """
+    stream.configure_mode(WIDTH, HEIGHT, FPS, pixel_format)
+    mode = stream.get_video_mode()
+    if (mode.resolutionX, mode.resolutionY, mode.pixelFormat) != (WIDTH, HEIGHT, pixel_format):
+        raise BackendUnavailable(
+            f"the OpenNI2 {name} stream runs at {mode.resolutionX}x{mode.resolutionY} "
+            f"format {mode.pixelFormat}, not {WIDTH}x{HEIGHT}"
+        )
+    stream.set_mirroring_enabled(False)
+    if stream.get_mirroring_enabled():
+        raise BackendUnavailable(
+            f"the Carmine's {name} stream stays mirrored after set_mirroring_enabled(False): "
+            "mirrored images decode no tag or board; not starting"
+        )
+
+
+def intrinsics_from_fov(horizontal_rad: float, vertical_rad: float) -> CameraIntrinsics:
+    """The 640x480 pinhole model of a stream's fields of view (radians), centred."""
+    if not (0.0 < horizontal_rad < math.pi and 0.0 < vertical_rad < math.pi):
+        raise BackendUnavailable(
+            f"the camera reports fields of view {horizontal_rad:.3f} x {vertical_rad:.3f} rad: "
+            "set camera_intrinsics in the cell file"
+        )
+    fx = 0.5 * WIDTH / math.tan(0.5 * horizontal_rad)
+    fy = 0.5 * HEIGHT / math.tan(0.5 * vertical_rad)
+    return CameraIntrinsics(WIDTH, HEIGHT, fx, fy, (WIDTH - 1) / 2.0, (HEIGHT - 1) / 2.0)
 
 
 class RealSenseCamera:
@@ -171,7 +227,7 @@ class RealSenseCamera:
         sdk = rs or import_sdk("pyrealsense2", "bearchair[realsense]")
         self._rs = sdk
         self._timeout_ms = int(timeout_s * 1000)
-        width, height = CARMINE_INTRINSICS.width, CARMINE_INTRINSICS.height
+        width, height = WIDTH, HEIGHT
         config = sdk.config()
         if serial is not None:
             config.enable_device(serial)
@@ -199,7 +255,13 @@ class RealSenseCamera:
 
     def read(self) -> tuple[np.ndarray, np.ndarray]:
         """One aligned (rgb uint8 HxWx3, depth metres float32 HxW, 0 = missing) pair."""
-        frames = self._align.process(self._pipeline.wait_for_frames(self._timeout_ms))
+        try:
+            frameset = self._pipeline.wait_for_frames(self._timeout_ms)
+        except RuntimeError as error:  # "Frame didn't arrive within ..."
+            raise DeviceTimeout(
+                f"the RealSense sent no frameset in {self._timeout_ms / 1000:g} s ({error})"
+            ) from error
+        frames = self._align.process(frameset)
         depth, colour = frames.get_depth_frame(), frames.get_color_frame()
         if not depth or not colour:
             raise RuntimeError("the RealSense frameset lacks depth or colour")

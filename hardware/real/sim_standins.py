@@ -27,6 +27,8 @@ from bearchair.hardware.real.standins import (
     FakePanda,
     JointKeyframes,
     NaoqiStandin,
+    sdk_openni2,
+    sdk_panda,
 )
 
 T_FLANGE_HAND = make_transform(rot_z(-math.pi / 4), np.zeros(3))
@@ -165,14 +167,16 @@ def robot_over_standins(world: Any, standin: NaoqiStandin) -> tuple[Robot, Any]:
     session = connect(standin.url)
     start = world.nao.pose()
     arm = PandaArm(
-        SimulatedPanda(world),
-        CarmineCamera(simulated_carmine(world), intrinsics=world.panda.intrinsics),
+        sdk_panda(SimulatedPanda(world)),
+        CarmineCamera(sdk_openni2(simulated_carmine(world)), intrinsics=world.panda.intrinsics),
         T_world_base=np.eye(4),
         T_flange_camera=T_FLANGE_HAND @ _t_hand_camera(),
     )
     robot = Robot(
         arm=arm,
-        humanoid=NaoHumanoid(session, odom_origin=SE2Pose(start.x, start.y, start.theta)),
+        humanoid=NaoHumanoid(
+            session, odom_origin=SE2Pose(start.x, start.y, start.theta), clock=world.clock
+        ),
         speaker=NaoSpeaker(session),
         clock=world.clock,
         helper=world.helper,

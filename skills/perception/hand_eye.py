@@ -22,9 +22,9 @@ by SVD, which stays a proper rotation even from only three views, where Park's
 pairs alike, and in published comparisons (Tsai, Park, Horaud, Andreff, Daniilidis on
 noisy data) it is as accurate as the best; Andreff's linear form can return a matrix that
 is not a rotation, and Daniilidis' dual quaternions need consistent quaternion signs.
-The installed OpenCV (5.0.0.93) wheel does not bind ``cv2.calibrateHandEye``
-(opencv/opencv#29565, fixed after that release by #29584), so the same method is written
-here in numpy: one code path on every OpenCV version. ``tests/test_hand_eye.py`` compares
+OpenCV 5.0.0.93's wheel did not bind ``cv2.calibrateHandEye`` (opencv/opencv#29565; 5.1
+binds it) and the pinned range admits it, so the same method is written here in numpy:
+one code path on every OpenCV version. ``tests/test_hand_eye.py`` compares
 it with ``cv2.calibrateHandEye(..., method=cv2.CALIB_HAND_EYE_PARK)`` where a wheel has it.
 
 Checks (:class:`~skills.perception.errors.HandEyeError`, one line each): fewer than

@@ -1,0 +1,233 @@
+"""``check-hardware`` against devices that accept a connection and never answer.
+
+A peer that accepts TCP and stays silent is what a half-open Wi-Fi link or a hung
+controller looks like: each device in turn (the NAO at its qi port, the Panda at
+libfranka's port 1337, the camera as an OpenNI device that never streams) must be named
+within ``--timeout`` and the command exit 1; Ctrl-C and SIGTERM must end it within 1 s
+(run as a real process, as an operator would).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import json
+import os
+import queue
+import random
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+
+from bearchair.executive.cli import main
+
+pytest.importorskip("qi")
+
+TIMEOUT_S = 0.5
+"""The ``--timeout`` the tests give each device."""
+STARTUP_S = 20.0
+"""How long a subprocess may take to import bearchair (a loaded 2-core machine)."""
+
+
+@contextlib.contextmanager
+def silent_peer(host: str = "127.0.0.1", port: int = 0) -> Iterator[tuple[str, int]]:
+    """A TCP listener that accepts every connection and never sends a byte."""
+    server = socket.socket()
+    server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    server.bind((host, port))
+    server.listen(16)
+    held: list[socket.socket] = []
+    closing = threading.Event()
+
+    def accept() -> None:
+        while not closing.is_set():
+            try:
+                connection, _ = server.accept()
+            except OSError:
+                return
+            held.append(connection)
+
+    threading.Thread(target=accept, daemon=True).start()
+    try:
+        yield server.getsockname()
+    finally:
+        closing.set()
+        server.close()
+        for connection in held:
+            connection.close()
+
+
+@contextlib.contextmanager
+def silent_panda() -> Iterator[str]:
+    """A silent peer on libfranka's port 1337 at a free loopback address."""
+    for _ in range(20):
+        host = f"127.0.{random.randrange(1, 255)}.{random.randrange(2, 255)}"
+        try:
+            with silent_peer(host, 1337):
+                yield host
+                return
+        except OSError:
+            continue
+    pytest.skip("no free loopback address for a silent Panda")
+
+
+def _cell(tmp_path, nao_url: str, panda_host: str = "standin"):
+    path = tmp_path / "cell.json"
+    path.write_text(
+        json.dumps(
+            {
+                "nao_url": nao_url,
+                "panda_host": panda_host,
+                "T_world_base": np.eye(4).tolist(),
+                "T_flange_camera": np.eye(4).tolist(),
+                "nao_start_x_m": 1.9,
+                "nao_start_y_m": 0.0,
+                "nao_start_yaw_rad": 3.14159,
+            }
+        )
+    )
+    return path
+
+
+def _check_hardware(cell, timeout_s: float) -> subprocess.Popen:
+    command = "import sys; from bearchair.executive.cli import main; sys.exit(main())"
+    return subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            command,
+            "check-hardware",
+            "--robots",
+            str(cell),
+            "--timeout",
+            f"{timeout_s:g}",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
+
+
+def _wait_for_line(
+    process: subprocess.Popen, prefix: str, within_s: float = STARTUP_S
+) -> list[str]:
+    """Reads stdout until a line starting with ``prefix`` (the lines read), for at most
+    ``within_s``: a process that hangs fails the test instead of hanging it."""
+    assert process.stdout is not None
+    lines: queue.Queue[str] = getattr(process, "lines", None) or queue.Queue()
+    if not hasattr(process, "lines"):
+        process.lines = lines  # type: ignore[attr-defined]
+        stdout = process.stdout
+        threading.Thread(target=lambda: [lines.put(line) for line in stdout], daemon=True).start()
+    seen: list[str] = []
+    deadline = time.monotonic() + within_s
+    while (remaining := deadline - time.monotonic()) > 0.0:
+        try:
+            line = lines.get(timeout=remaining)
+        except queue.Empty:
+            break
+        seen.append(line)
+        if line.startswith(prefix):
+            return seen
+    process.kill()
+    raise AssertionError(f"no line {prefix!r} within {within_s:g} s after {seen}")
+
+
+def test_a_silent_nao_is_named_within_its_timeout(tmp_path):
+    with silent_peer() as (host, port):
+        process = _check_hardware(_cell(tmp_path, f"tcp://{host}:{port}"), TIMEOUT_S)
+        _wait_for_line(process, "[  ok] sdk pyrealsense2")  # the last line before the NAO
+        started = time.monotonic()
+        failed = _wait_for_line(process, "[FAIL] nao", within_s=TIMEOUT_S + 5.0)[-1]
+        took_s = time.monotonic() - started
+        rest = _wait_for_line(process, "check-hardware:")
+        process.wait(timeout=STARTUP_S)
+    assert process.returncode == 1
+    assert f"cannot reach the NAO at tcp://{host}:{port}: no answer in 0.5 s" in failed
+    assert took_s < TIMEOUT_S + 0.5
+    assert rest[-1].strip() == "check-hardware: FAILED: nao"
+
+
+def test_a_silent_panda_is_named_within_its_timeout(tmp_path):
+    from bearchair.hardware.real.standins import NaoqiStandin
+
+    _run_in_process(tmp_path / "none.json", TIMEOUT_S)  # imports done
+    with NaoqiStandin() as naoqi, silent_panda() as host:
+        started = time.monotonic()
+        status = _run_in_process(_cell(tmp_path, naoqi.url, host), TIMEOUT_S)
+        took_s = time.monotonic() - started
+    out = status[1]
+    assert status[0] == 1
+    assert f"[FAIL] panda: the Panda at {host}: no answer in 0.5 s" in out
+    assert took_s < 3 * TIMEOUT_S + 2.0
+    assert out.strip().splitlines()[-1] == "check-hardware: FAILED: panda"
+
+
+def _run_in_process(cell, timeout_s: float) -> tuple[int, str]:
+    """check-hardware in this process, its perception imports (seconds, not device time)
+    done before the clock starts."""
+    import io
+    from contextlib import redirect_stdout
+
+    import bearchair.skills.perception.tags
+    import bearchair.skills.perception.views  # noqa: F401
+
+    buffer = io.StringIO()
+    with redirect_stdout(buffer):
+        status = main(["check-hardware", "--robots", str(cell), "--timeout", f"{timeout_s:g}"])
+    return status, buffer.getvalue()
+
+
+def test_a_silent_camera_is_named_within_its_timeout(tmp_path, monkeypatch):
+    from bearchair.hardware.real import robots
+    from bearchair.hardware.real.standins import FakeOpenNI2, NaoqiStandin
+
+    monkeypatch.setattr(robots, "FakeOpenNI2", functools.partial(FakeOpenNI2, silent=True))
+    _run_in_process(tmp_path / "none.json", TIMEOUT_S)  # imports done
+    with NaoqiStandin() as naoqi:
+        started = time.monotonic()
+        status, out = _run_in_process(_cell(tmp_path, naoqi.url), TIMEOUT_S)
+        took_s = time.monotonic() - started
+    assert status == 1
+    assert "[FAIL] camera: the Carmine sent no depth frame in 0.5 s" in out
+    assert took_s < 2 * TIMEOUT_S + 3.0
+    assert out.strip().splitlines()[-1] == "check-hardware: FAILED: camera"
+
+
+@pytest.mark.parametrize(("signum", "status"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+@pytest.mark.parametrize("device", ["nao", "panda"])
+def test_a_stop_signal_ends_check_hardware_within_a_second(tmp_path, signum, status, device):
+    from bearchair.hardware.real.standins import NaoqiStandin
+
+    with contextlib.ExitStack() as stack:
+        if device == "nao":
+            host, port = stack.enter_context(silent_peer())
+            cell = _cell(tmp_path, f"tcp://{host}:{port}")
+        else:
+            naoqi = stack.enter_context(NaoqiStandin())
+            cell = _cell(tmp_path, naoqi.url, stack.enter_context(silent_panda()))
+        process = _check_hardware(cell, 60.0)
+        # Waiting on the silent device from here: NAO first, then the Panda.
+        _wait_for_line(
+            process, "[  ok] nao arm swing" if device == "panda" else "[  ok] sdk pyrealsense2"
+        )
+        time.sleep(0.3)
+        sent = time.monotonic()
+        process.send_signal(signum)
+        try:
+            process.wait(timeout=5.0)
+        finally:
+            process.kill()
+        took_s = time.monotonic() - sent
+        err = process.stderr.read() if process.stderr else ""
+    assert took_s < 1.0, f"{signal.Signals(signum).name} took {took_s:.2f} s"
+    assert process.returncode == status, err
+    assert "Traceback" not in err

@@ -1,0 +1,421 @@
+"""The second look at the real-robot backends (issue 30): each defect has its test here
+or in test_real_backends / test_emergency_stop / test_check_hardware_silent.
+
+Camera mirroring and intrinsics, Panda timeouts, collision thresholds, payload and FR3
+limits, a move stopped by Ctrl-C, monitoring during a run, HeadYaw in the tag's heading,
+simulation-only options refused with ``--robots``, NAOqi's missing services as one line,
+the SDK doubles and NAOqi's documented method table, and ``check-hardware --walk``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from bearchair.core.errors import BackendUnavailable
+from bearchair.core.se2 import SE2Pose
+from bearchair.executive.cli import main
+from bearchair.hardware.real.camera import CARMINE_INTRINSICS, CarmineCamera
+from bearchair.hardware.real.panda import COLLISION_TORQUE_NM, PandaArm, into_walls
+from bearchair.hardware.real.standins import FakeOpenNI2, FakePanda, sdk_openni2, sdk_panda
+
+
+def _arm(panda: FakePanda, **options) -> PandaArm:
+    camera = CarmineCamera(sdk_openni2(FakeOpenNI2()))
+    return PandaArm(sdk_panda(panda), camera, np.eye(4), np.eye(4), **options)
+
+
+# --- the camera ---------------------------------------------------------------------------
+
+
+def test_the_carmine_turns_mirroring_off_reads_it_back_and_refuses_a_mirrored_stream():
+    openni = FakeOpenNI2()
+    camera = CarmineCamera(sdk_openni2(openni))
+    assert camera.mode()["mirroring"] == "off"
+    with pytest.raises(BackendUnavailable, match="stays mirrored"):
+        CarmineCamera(sdk_openni2(FakeOpenNI2(mirroring_stuck=True)))
+
+
+def test_carmine_frames_are_not_mirrored():
+    def render(width, height):
+        rgb = np.zeros((height, width, 3), np.uint8)
+        rgb[:, : width // 4] = 255  # a white band on the left
+        return rgb, np.full((height, width), 1000, np.uint16)
+
+    rgb, _ = CarmineCamera(sdk_openni2(FakeOpenNI2(render=render))).read()
+    assert rgb[:, :10].min() == 255 and rgb[:, -10:].max() == 0
+
+
+def test_carmine_intrinsics_come_from_the_stream_or_the_cell_file():
+    from bearchair.hardware.real.standins.openni import COLOUR_FOV_RAD
+
+    camera = CarmineCamera(sdk_openni2(FakeOpenNI2()))
+    expected = 320.0 / math.tan(COLOUR_FOV_RAD[0] / 2.0)
+    assert camera.intrinsics.fx == pytest.approx(expected) and camera.intrinsics.fx != 570.3
+    assert "field of view" in camera.mode()["intrinsics"]
+    calibrated = CARMINE_INTRINSICS._replace(fx=561.2, fy=560.8, cx=322.0, cy=241.5)
+    camera = CarmineCamera(sdk_openni2(FakeOpenNI2()), intrinsics=calibrated)
+    assert camera.intrinsics == calibrated and "cell file" in camera.mode()["intrinsics"]
+
+
+def test_the_cell_file_takes_checked_camera_intrinsics():
+    from bearchair.executive.cell_config import CellConfigError, parse_cell_config
+
+    raw = {
+        "nao_url": "tcp://nao.local:9559",
+        "panda_host": "standin",
+        "T_world_base": np.eye(4).tolist(),
+        "T_flange_camera": np.eye(4).tolist(),
+        "nao_start_x_m": 1.9,
+        "nao_start_y_m": 0.0,
+        "nao_start_yaw_rad": 3.14,
+    }
+    intrinsics = {"fx_px": 561.2, "fy_px": 560.8, "cx_px": 322.0, "cy_px": 241.5}
+    cell = parse_cell_config({**raw, "camera_intrinsics": intrinsics})
+    assert cell.camera_intrinsics is not None and cell.camera_intrinsics.fx == 561.2
+    assert cell.to_json()["camera_intrinsics"] == intrinsics
+    with pytest.raises(CellConfigError, match="fx_px"):
+        parse_cell_config({**raw, "camera_intrinsics": {**intrinsics, "fx_px": 5612.0}})
+
+
+def test_dropping_the_realsense_alignment_is_seen():
+    from bearchair.hardware.real.camera import RealSenseCamera
+    from bearchair.hardware.real.standins import FakeRealSense, sdk_realsense
+
+    def render(width, height):
+        rgb = np.zeros((height, width, 3), np.uint8)
+        rgb[:, width // 2 :] = 255
+        depth = np.full((height, width), 800, np.uint16)
+        depth[:, width // 2 :] = 1200  # the depth edge is the colour edge
+        return rgb, depth
+
+    camera = RealSenseCamera(sdk_realsense(FakeRealSense(render=render)))
+    rgb, depth_m = camera.read()
+    edge = int(np.argmax(rgb[0, :, 0] > 0))
+    assert depth_m[0, edge - 1] == pytest.approx(0.8) and depth_m[0, edge] == pytest.approx(1.2)
+
+
+# --- the Panda ----------------------------------------------------------------------------
+
+
+class _FastClock:
+    """Robot time twenty times the wall's (the fake arm runs as fast)."""
+
+    def now(self) -> float:
+        return time.monotonic() * 20.0
+
+
+def test_a_slow_move_gets_the_time_its_planned_duration_needs():
+    panda = FakePanda("standin")
+    panda.time_scale = 20.0
+    arm = _arm(panda, speed_factor=0.1, clock=_FastClock())
+    target = np.asarray(panda.q) + np.array([2.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    assert arm.planned_duration_s(target) > 10.0  # the old fixed timeout would stop it
+    arm.move_to(target)
+    np.testing.assert_allclose(arm.joint_positions(), target, atol=1e-9)
+
+
+def test_activation_sets_collision_thresholds_and_the_camera_payload():
+    panda = FakePanda("standin")
+    T_flange_camera = np.eye(4)
+    T_flange_camera[:3, 3] = [0.065, 0.0, 0.02]
+    arm = PandaArm(sdk_panda(panda), CarmineCamera(FakeOpenNI2()), np.eye(4), T_flange_camera)
+    arm.activate()
+    assert panda.collision_thresholds is not None
+    assert panda.collision_thresholds[0] == list(COLLISION_TORQUE_NM)
+    assert panda.load is not None
+    mass, centre, inertia = panda.load
+    assert mass == pytest.approx(0.16) and centre == pytest.approx([0.065, 0.0, 0.02])
+    assert len(inertia) == 9 and inertia[0] > 0.0
+
+
+def test_the_fr3s_limits_come_from_the_robot():
+    panda = FakePanda("standin")
+    panda.model = "fr3"
+    arm = _arm(panda)
+    assert arm.joint_limits[0][5] == pytest.approx(0.5445)
+    target = np.array([0.0, 0.0, 0.0, -1.5, 0.0, 0.3, 0.0])  # fine on the FER
+    into_walls(target)
+    with pytest.raises(ValueError, match="joint 6"):
+        arm.move_to(target)
+
+
+def test_ctrl_c_during_a_move_stops_the_arm():
+    panda = FakePanda("standin")
+    panda.time_scale = 0.2  # a move of many seconds
+    arm = _arm(panda)
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        arm.move_to(np.asarray(panda.q) + 1.0)
+    assert ("Robot.stop", ()) in panda.calls
+
+
+def test_a_backend_line_reading_what_only_the_fake_has_fails():
+    arm = _arm(FakePanda("standin"))
+    with pytest.raises(AttributeError, match="the SDK lacks it"):
+        arm._robot.stop_motion()  # the fake's own hook, not panda-py's
+    with pytest.raises(TypeError, match="the SDK takes"):
+        arm._robot.move_to_joint_position(arm.joint_positions(), speedfactor=0.1)
+    with pytest.raises(AttributeError, match="the SDK lacks it"):
+        _ = arm._robot.get_state().mode  # RobotState has robot_mode, not mode
+
+
+# --- the NAO ------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def naoqi():
+    pytest.importorskip("qi")
+    from bearchair.hardware.real.standins import NaoqiStandin
+
+    with NaoqiStandin(time_scale=4.0) as standin:
+        yield standin
+
+
+def _nao(naoqi):
+    from bearchair.hardware.real.nao import NaoHumanoid, connect
+
+    return NaoHumanoid(connect(naoqi.url), odom_origin=SE2Pose(1.9, 0.0, math.pi))
+
+
+def test_head_yaw_is_read_back_into_the_tags_heading(naoqi):
+    from bearchair.behaviours.tracking import locate_torso
+    from bearchair.hardware.interfaces import Robot
+
+    nao = _nao(naoqi)
+    naoqi.body.joints["HeadYaw"] = 0.2  # the head turned (a bump, low stiffness)
+    assert nao.head_yaw_rad() == pytest.approx(0.2)
+
+    class Skills:
+        def locate_humanoid(self, arm):
+            return SE2Pose(1.0, 0.5, 1.0)  # the tag, on the head, reads 1.0 rad
+
+    robot = Robot(arm=None, humanoid=nao, speaker=None, clock=None)  # type: ignore[arg-type]
+    torso = locate_torso(Skills(), robot)  # type: ignore[arg-type]
+    assert torso is not None and torso.theta == pytest.approx(0.8)
+
+
+@pytest.mark.parametrize(
+    ("fault", "reason"),
+    [
+        ("battery", "battery is at 5 %"),
+        ("fall", "no longer standing"),
+        ("hot", "LKneePitch is hot"),
+    ],
+)
+def test_monitoring_stops_the_robots_and_names_the_reason(naoqi, fault, reason):
+    from bearchair.hardware.interfaces import Robot
+    from bearchair.hardware.real import RobotFault
+    from bearchair.hardware.real.monitor import RobotMonitor
+
+    nao = _nao(naoqi)
+    nao.activate()
+    panda = FakePanda("standin")
+    robot = Robot(arm=_arm(panda), humanoid=nao, speaker=None, clock=None)  # type: ignore[arg-type]
+    monitor = RobotMonitor(robot, period_s=0.05).start()
+    time.sleep(0.2)
+    monitor.check()  # healthy so far
+    if fault == "battery":
+        naoqi.battery_percent = 5
+    elif fault == "fall":
+        naoqi.posture_family = "LyingBelly"
+    else:
+        naoqi.memory["Device/SubDeviceList/LKneePitch/Temperature/Sensor/Status"] = 1
+    deadline = time.monotonic() + 3.0
+    while monitor.reason is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    monitor.close()
+    with pytest.raises(RobotFault, match=reason):
+        monitor.check()
+    assert not naoqi.called("stopMove")  # the runner stops the robots, at the next tick
+
+
+def test_the_panda_in_reflex_stops_a_run(naoqi):
+    from bearchair.hardware.interfaces import Robot
+    from bearchair.hardware.real.monitor import RobotMonitor
+
+    panda = FakePanda("standin")
+    robot = Robot(arm=_arm(panda), humanoid=_nao(naoqi), speaker=None, clock=None)  # type: ignore[arg-type]
+    monitor = RobotMonitor(robot, period_s=0.05).start()
+    panda.inject_reflex("cartesian_reflex")
+    deadline = time.monotonic() + 3.0
+    while monitor.reason is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    monitor.close()
+    assert monitor.reason is not None and "kReflex" in monitor.reason
+
+
+def test_a_missing_naoqi_service_is_one_line_naming_it():
+    pytest.importorskip("qi")
+    from bearchair.hardware.real.nao import NaoHumanoid, connect
+    from bearchair.hardware.real.standins import NaoqiStandin
+
+    with NaoqiStandin(without=("ALBattery",)) as naoqi:
+        nao = NaoHumanoid(connect(naoqi.url))
+        with pytest.raises(BackendUnavailable, match="ALBattery") as caught:
+            nao.state()
+    assert "\n" not in str(caught.value)
+
+
+def test_the_naoqi_standin_serves_only_documented_methods_with_the_naos_joints(naoqi):
+    from bearchair.hardware.real.nao import connect
+    from bearchair.hardware.real.standins.naoqi_model import documented, naoqi_api
+
+    api = naoqi_api()
+    assert "doc.aldebaran.com/2-8" in api["source"]
+    assert api["services"]["ALMotion"]["moveTo"]["blocking"] is True
+    assert api["services"]["ALMotion"]["move"]["blocking"] is False
+    with pytest.raises(KeyError, match=r"not in NAOqi 2\.8"):
+        documented("ALMotion", "walkTo")
+    session = connect(naoqi.url)
+    motion = session.service("ALMotion")
+    motion.wakeUp()
+    with pytest.raises(RuntimeError, match="not a NAO joint"):
+        motion.angleInterpolation(["LKnee"], [[0.5]], [[1.0]], True)
+    with pytest.raises(RuntimeError, match="outside"):
+        motion.angleInterpolation(["LKneePitch"], [[57.3]], [[1.0]], True)  # degrees
+    with pytest.raises(RuntimeError):
+        motion.moveTo(0.1, 0.0)  # NAOqi's signature has three floats
+
+
+def test_naoqis_moveto_blocks_and_a_second_motion_on_held_joints_is_postponed(naoqi):
+    from bearchair.hardware.real.nao import connect
+
+    session = connect(naoqi.url)
+    motion = session.service("ALMotion")
+    motion.wakeUp()
+    started = time.monotonic()
+    motion.moveTo(0.04, 0.0, 0.0)  # 0.4 s of robot time at 0.1 m/s, 4x faster
+    assert time.monotonic() - started >= 0.09
+    sent = time.monotonic()
+    first = motion.angleInterpolation(["HeadYaw"], [[0.3]], [[0.8]], True, _async=True)
+    while not naoqi.called("angleInterpolation"):  # arrived, then holds HeadYaw
+        time.sleep(0.005)
+    time.sleep(0.05)
+    second = motion.angleInterpolation(["HeadYaw"], [[-0.3]], [[0.8]], True, _async=True)
+    first.wait()
+    second.wait()
+    # 0.2 s of wall time each: one after the other, not together.
+    assert time.monotonic() - sent >= 0.39
+    assert naoqi.motion.joints["HeadYaw"] == pytest.approx(-0.3)
+
+
+# --- the command line -----------------------------------------------------------------------
+
+
+def _cell(tmp_path, nao_url):
+    path = tmp_path / "cell.json"
+    path.write_text(
+        json.dumps(
+            {
+                "nao_url": nao_url,
+                "panda_host": "standin",
+                "T_world_base": np.eye(4).tolist(),
+                "T_flange_camera": np.eye(4).tolist(),
+                "nao_start_x_m": 1.9,
+                "nao_start_y_m": 0.0,
+                "nao_start_yaw_rad": 3.14159,
+            }
+        )
+    )
+    return path
+
+
+@pytest.mark.parametrize("option", [["--placement", "inaccessible"], ["--helper", "obeys"]])
+def test_simulation_options_with_robots_are_refused(tmp_path, capsys, option):
+    cell = _cell(tmp_path, "tcp://127.0.0.1:9")
+    status = main(["run", "--robots", str(cell), *option, "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert status == 2 and f"{option[0]} is for the simulated world" in err
+
+
+def test_mute_with_robots_keeps_the_nao_silent(naoqi):
+    from bearchair.executive.cell_config import parse_cell_config
+    from bearchair.hardware.real.robots import connect_robots
+    from bearchair.hardware.speech import TextToSpeech
+
+    raw = json.loads(_cell_text(naoqi.url))
+    robot = connect_robots(parse_cell_config(raw), mute=True)
+    assert isinstance(robot.speaker, TextToSpeech)
+    robot.speaker.say("hello")
+    assert not naoqi.called("say")
+
+
+def test_run_with_robots_passes_mute_on(tmp_path, capsys, monkeypatch):
+    from bearchair.hardware.real import robots
+
+    asked: list[bool] = []
+
+    def connect_robots(cell, mute=False):
+        asked.append(mute)
+        raise BackendUnavailable("no robots in this test")
+
+    monkeypatch.setattr(robots, "connect_robots", connect_robots)
+    cell = _cell(tmp_path, "tcp://127.0.0.1:9")
+    status = main(["run", "--robots", str(cell), "--mute", "--out", str(tmp_path / "out")])
+    assert status == 2 and asked == [True], capsys.readouterr().err
+
+
+def _cell_text(nao_url: str) -> str:
+    return json.dumps(
+        {
+            "nao_url": nao_url,
+            "panda_host": "standin",
+            "T_world_base": np.eye(4).tolist(),
+            "T_flange_camera": np.eye(4).tolist(),
+            "nao_start_x_m": 1.9,
+            "nao_start_y_m": 0.0,
+            "nao_start_yaw_rad": 3.14159,
+        }
+    )
+
+
+@pytest.mark.parametrize(
+    ("runout_s", "queue_s", "failed"),
+    [(0.0, 0.0, ""), (1.0, 0.0, "run-out"), (0.0, 1.5, "commands: queue")],
+)
+def test_check_hardware_walk_measures_the_run_out_and_refuses_an_unsafe_one(
+    tmp_path, capsys, monkeypatch, runout_s, queue_s, failed
+):
+    pytest.importorskip("qi")
+    from bearchair.executive import walk_check
+    from bearchair.hardware.real.standins import NaoqiStandin
+
+    monkeypatch.setattr(walk_check, "WALK_S", 0.5)
+    monkeypatch.setattr(walk_check, "REPLACE_WAIT_S", 0.3)
+    monkeypatch.setattr(walk_check, "DISCONNECT_WAIT_S", 0.3)
+    monkeypatch.setattr(walk_check, "MAX_RUNOUT_S", 0.8)  # heartbeat 0.45 s, a quick stop
+    with NaoqiStandin(stop_runout_s=runout_s, move_queue_s=queue_s) as naoqi:
+        code = main(
+            ["check-hardware", "--robots", str(_cell(tmp_path, naoqi.url)), "--move", "--walk"]
+        )
+        out = capsys.readouterr().out
+    assert "] nao walk run-out:" in out and "] nao walk commands:" in out
+    assert "] nao walk disconnect:" in out
+    assert code == (1 if failed else 0), out
+    if failed:
+        assert f"[FAIL] nao walk {failed}" in out
+
+
+def test_a_run_on_robots_stops_when_the_monitor_sees_a_fault(tmp_path, capsys):
+    pytest.importorskip("qi")
+    from bearchair.hardware.real.standins import NaoqiStandin
+
+    with NaoqiStandin(time_scale=20.0) as naoqi:
+        naoqi.battery_percent = 9
+        out = tmp_path / "run"
+        status = main(
+            ["run", "--robots", str(_cell(tmp_path, naoqi.url)), "--yes", "--out", str(out)]
+        )
+        capsys.readouterr()
+    summary = json.loads((out / "summary.json").read_text())
+    assert status == 1 and summary["outcome"] == "failure"
+    assert "battery is at 9 %" in summary["reason"], summary["reason"]
