@@ -20,8 +20,10 @@ from typing import Any, cast
 import numpy as np
 import trimesh
 from scipy import ndimage
+from scipy.spatial import QhullError
 
 from bearchair.core.errors import MeshError, one_line
+from bearchair.core.posture import posture_warning
 
 logger = logging.getLogger(__name__)
 
@@ -100,36 +102,6 @@ MAX_CHAIR_SIZE_M = 20.0
 is 800 or 80 units): refused, the simulated arena is a few metres wide."""
 TALL_CHAIR_M = 2.0
 """Taller than this: warned (the paper's chairs are for children, 0.45-0.62 m)."""
-UP_AXIS_RATIO = 0.5
-"""Warn of a mesh lying on its side when the area of its surfaces facing ±z in the
-middle of its height is below this fraction of another axis's. Measured over the 69
-calibration meshes (``tests/test_faults.py`` reruns it when they are present): none of
-the 55 upright chairs, sofa and stool is warned (the lowest, a reclined chair, scores
-0.71); the same meshes turned x-up or y-up are warned in 103 of 110 cases; 4 of the 14
-upright tables are warned (a table is not a chair)."""
-
-
-def up_axis_scores(mesh: trimesh.Trimesh) -> np.ndarray:
-    """For each axis (x, y, z): the area (m²) of faces facing along it in its middle band.
-
-    A chair's seat is a large surface facing up at 20-90 % of its height; lying on its
-    side, that surface faces a horizontal axis instead. Faces count when their normal
-    is within 20 degrees of the axis (either sign) and their centre lies between 20 %
-    and 90 % of the mesh's extent along it.
-    """
-    triangles = np.asarray(mesh.triangles, dtype=float)
-    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
-    double_area = np.linalg.norm(normals, axis=1)
-    keep = double_area > 0
-    triangles, normals, double_area = triangles[keep], normals[keep], double_area[keep]
-    normals = normals / double_area[:, None]
-    centres = triangles.mean(axis=1)
-    lower = np.asarray(mesh.bounds[0], dtype=float)
-    extents = np.maximum(np.asarray(mesh.extents, dtype=float), 1e-9)
-    heights = (centres - lower) / extents
-    facing = np.abs(normals) > np.cos(np.radians(20.0))
-    in_band = (heights > 0.2) & (heights < 0.9)
-    return np.array([0.5 * double_area[facing[:, a] & in_band[:, a]].sum() for a in range(3)])
 
 
 def check_chair_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike = "mesh") -> list[str]:
@@ -150,29 +122,42 @@ def check_chair_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike = "mesh") ->
             "scale it to metres (z up)"
         )
     if float(extents.max()) > MAX_CHAIR_SIZE_M:
-        unit = "millimetres" if float(extents.max()) > 200.0 else "centimetres"
-        factor = "0.001" if unit == "millimetres" else "0.01"
         raise MeshLoadError(
-            f"{path}: {size} (x, y, z) is not a chair in metres; it looks like {unit}: "
-            f"scale it by {factor}"
+            f"{path}: {size} (x, y, z) is not a chair in metres; {_unit_hint(extents)}"
         )
     if float(np.sort(extents)[1]) < 1e-3:
         raise MeshLoadError(f"{path}: {size} (x, y, z) is a line or a point, not a chair")
+    if float(extents.min()) < 1e-3:
+        raise MeshLoadError(f"{path}: {size} (x, y, z) is flat (a sheet), not a chair")
     found: list[str] = []
     if extents[2] > TALL_CHAIR_M:
         found.append(
             f"{path}: {extents[2]:.2f} m tall, taller than any chair ({TALL_CHAIR_M:.0f} m); "
             "check its units (metres) and up axis (z)"
         )
-    scores = up_axis_scores(mesh)
-    horizontal = int(np.argmax(scores[:2]))
-    if scores[horizontal] > 0 and scores[2] < UP_AXIS_RATIO * scores[horizontal]:
-        axis = "xy"[horizontal]
-        found.append(
-            f"{path}: seems to lie on its side: its large flat surfaces face ±{axis}, not ±z "
-            f"(is the file {axis}-up? bearchair expects z up: re-export it with z up)"
-        )
-    return found
+    try:
+        posture = posture_warning(mesh, path)
+    except QhullError as error:  # coplanar or degenerate beyond the checks above
+        raise MeshLoadError(f"{path}: {size} (x, y, z) has no volume, not a chair") from error
+    return [*found, posture] if posture else found
+
+
+def _unit_hint(extents: np.ndarray) -> str:
+    """What unit a mesh far too large for metres seems to be in, from its largest extent.
+
+    A chair is 0.2-2 m in its largest direction (the paper's are 0.45-0.62 m): in
+    centimetres that is 20-200 units, in millimetres 200-2000 (and up to 20000 for any
+    furniture). Beyond, no length unit makes it a chair.
+    """
+    largest = float(extents.max())
+    if largest <= 200.0:
+        return "it looks like centimetres: scale it by 0.01"
+    if largest <= 20000.0:
+        return "it looks like millimetres: scale it by 0.001"
+    return (
+        f"its largest extent, {largest:.3g} units, is no chair in any length unit "
+        "(a broken export?); check the file"
+    )
 
 
 def load_chair_mesh(path: str | os.PathLike) -> trimesh.Trimesh:
