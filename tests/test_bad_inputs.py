@@ -352,14 +352,14 @@ BAD_CHAIR_SETS = [
         "front NaN",
         b'{"meshes": [{"file": "a.obj", "front_yaw_deg": NaN}]}',
         None,
-        "front_yaw_deg is NaN",
+        "NaN is not a number",
     ),
     ("kind a number", {"meshes": [entry("a.obj", kind=3)]}, None, "kind is 3, not a string"),
     (
         "no front anywhere",
         {"meshes": [entry("a.obj", front_yaw_deg=None)]},
         None,
-        "has a usable front",
+        "takes part (a.obj: chair without a front (front_yaw_deg null)",
     ),
     (
         "garbage mesh",
