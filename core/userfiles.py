@@ -127,7 +127,9 @@ def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     found: dict[str, Any] = {}
     for key, value in pairs:
         if key in found:
-            raise ValueError(f"the key {printable(json.dumps(key), 60)} appears twice in one object")
+            raise ValueError(
+                f"the key {printable(json.dumps(key), 60)} appears twice in one object"
+            )
         found[key] = value
     return found
 

@@ -299,9 +299,7 @@ def _rigid(raw: dict[str, Any], key: str, max_translation_m: float) -> np.ndarra
 def _number(raw: dict[str, Any], key: str, default: float | None = None) -> float:
     value = raw.get(key, default)
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise CellConfigError(
-            f"{key}: a finite number is needed, got {printable(repr(value), 60)}"
-        )
+        raise CellConfigError(f"{key}: a finite number is needed, got {printable(repr(value), 60)}")
     return float(value)
 
 
@@ -324,8 +322,7 @@ def _password(raw: dict[str, Any]) -> str | None:
         return None
     if not isinstance(value, str):
         raise CellConfigError(
-            f"nao_password: a string is needed, not a {type(value).__name__} "
-            "(write it in quotes)"
+            f"nao_password: a string is needed, not a {type(value).__name__} (write it in quotes)"
         )
     if not value or not value.isprintable():
         raise CellConfigError("nao_password: empty or holds a control character")

@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from bearchair.core.errors import BackendUnavailable, BearchairError, InputError, one_line
+from bearchair.core.userfiles import printable
 from bearchair.executive import (
     cmd_calibrate_hand_eye,
     cmd_check_hardware,
@@ -110,7 +111,9 @@ def build_parser() -> argparse.ArgumentParser:
     tree.set_defaults(func=_tree)
 
     inspect = subparsers.add_parser("inspect", help="replay a recorded run")
-    inspect.add_argument("run_dir", type=Path)
+    # Not named run_dir: that is where an internal error's traceback would go, and
+    # inspect reads a record, it never writes one.
+    inspect.add_argument("record_dir", metavar="run_dir", type=Path)
     inspect.add_argument("--tick", type=int, help="show the tree at this tick (default: the last)")
     inspect.add_argument("--blackboard", action="store_true", help="also show the blackboard")
     inspect.add_argument("--timeline", action="store_true", help="show every status change")
@@ -166,6 +169,14 @@ def _run(args: argparse.Namespace) -> int:
     )
     check_recording_arguments("bearchair run", args)
     # Every input and the output place are checked before anything runs.
+    if args.gui:
+        from bearchair.executive.recording import has_display
+
+        if not has_display():
+            raise InputError(
+                "bearchair run: --gui needs a display (neither DISPLAY nor WAYLAND_DISPLAY "
+                "is set); run without --gui, or watch with --live web"
+            )
     if args.robots is not None:
         if args.chair is not None:
             raise InputError("bearchair run: --chair is for the simulation; not with --robots")
@@ -276,11 +287,13 @@ def _tree(args: argparse.Namespace) -> int:
 def _inspect(args: argparse.Namespace) -> int:
     from bearchair.executive.inspect_run import RecordedRun
 
-    run = RecordedRun(args.run_dir)
+    run = RecordedRun(args.record_dir)
     state = run.at(args.tick)
-    print(f"{args.run_dir}: tick {state['tick']} of {run.last_tick}, t = {state['t']:.2f} s")
+    print(
+        f"{printable(args.record_dir)}: tick {state['tick']} of {run.last_tick}, t = {state['t']:.2f} s"
+    )
     for note in run.notes:
-        print(f"note: {note}")
+        print(f"note: {printable(note, 1000)}")
     print(run.tree_text(args.tick))
     if args.blackboard:
         print("\nblackboard:")
@@ -305,24 +318,28 @@ class _TolerantStream:
     def __init__(self, stream: TextIO) -> None:
         self._stream = stream
         self.broken = False
+        self.lost: OSError | None = None
+        """The write error that lost output, when the reader did not just go away."""
 
     def write(self, text: str) -> int:
         if not self.broken:
             try:
                 return self._stream.write(text)
-            except (OSError, ValueError):
-                self._break()
+            except (OSError, ValueError) as error:
+                self._break(error)
         return len(text)
 
     def flush(self) -> None:
         if not self.broken:
             try:
                 self._stream.flush()
-            except (OSError, ValueError):
-                self._break()
+            except (OSError, ValueError) as error:
+                self._break(error)
 
-    def _break(self) -> None:
+    def _break(self, error: Exception) -> None:
         self.broken = True
+        if isinstance(error, OSError) and not isinstance(error, BrokenPipeError):
+            self.lost = error  # a full device, an I/O error: the output is lost
         # Python flushes the real stream at exit; point it at /dev/null first.
         with contextlib.suppress(OSError, ValueError, AttributeError):
             devnull = os.open(os.devnull, os.O_WRONLY)
@@ -346,7 +363,7 @@ def _error_line(error: BaseException) -> str:
     elif isinstance(error, sqlite3.Error):
         text = f"database error: {one_line(error)}"
     else:
-        text = one_line(error)
+        text = printable(str(error).strip() or type(error).__name__, 600)
     return text if text.startswith("bearchair") else f"bearchair: {text}"
 
 
@@ -386,7 +403,7 @@ def _report_internal_error(error: BaseException, args: argparse.Namespace | None
     except OSError:
         where = "the traceback could not be written"
     print(
-        f"bearchair: internal error ({type(error).__name__}: {one_line(error, 200)}); "
+        f"bearchair: internal error ({type(error).__name__}: {printable(one_line(error), 200)}); "
         f"this is a bug, please report it; {where}",
         file=sys.stderr,
     )
@@ -401,10 +418,12 @@ def main(argv: list[str] | None = None) -> int:
     """
     console = argv is None  # the console script (tests pass their argv)
     saved = sys.stdout, sys.stderr
-    sys.stdout, sys.stderr = _TolerantStream(sys.stdout), _TolerantStream(sys.stderr)
+    out, err = _TolerantStream(sys.stdout), _TolerantStream(sys.stderr)
+    sys.stdout, sys.stderr = out, err
     try:
         with handling_signals():
             status = _main(argv)
+            status = _lost_output_status(out, err, status)
             if console and received() is not None:
                 _exit_now(status)
             return status
@@ -413,6 +432,23 @@ def main(argv: list[str] | None = None) -> int:
             sys.stdout.flush()
             sys.stderr.flush()
         sys.stdout, sys.stderr = saved
+
+
+def _lost_output_status(out: _TolerantStream, err: _TolerantStream, status: int) -> int:
+    """``status``, or 2 with one line on stderr when standard output could not be written
+    (a full device, an I/O error): a command whose answer is lost must not report success.
+    A reader that went away (``| head``) is not an error."""
+    from bearchair.executive.outputs import describe_os_error
+
+    out.flush()
+    if out.lost is None:
+        return status
+    err.write(
+        f"bearchair: cannot write to standard output ({describe_os_error(out.lost)}); "
+        "the output is lost\n"
+    )
+    err.flush()
+    return EXIT_BAD_INPUT if status == EXIT_SUCCESS else status
 
 
 def _exit_now(status: int) -> None:

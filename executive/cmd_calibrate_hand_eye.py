@@ -192,7 +192,7 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     """Connects, asks, moves through the views and captures; always ends at HOME."""
     from bearchair.executive.cell_config import load_cell_config
     from bearchair.executive.cmd_check_hardware import MOVE_SPEED_FACTOR, _within
-    from bearchair.executive.operator import ask_operator
+    from bearchair.executive.operator import ask_operator, not_asked_because
     from bearchair.hardware.real import robots
     from bearchair.skills.perception.hand_eye import (
         BOARD_CENTRE_BASE_XY_M,
@@ -220,7 +220,10 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
         flush=True,
     )
     if not args.yes and not ask_operator("The Panda will move now. Go on? [y/N] "):
-        raise _error("the operator did not confirm: nothing moved")
+        reason = not_asked_because()
+        raise _error(
+            "the operator did not confirm: nothing moved" + (f" ({reason})" if reason else "")
+        )
     arm._speed_factor = MOVE_SPEED_FACTOR  # as check-hardware --move: slow, near a person
     return _visit_views(arm, cell, board, CALIBRATION_CONFIGURATIONS[:count], args.timeout)
 

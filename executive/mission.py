@@ -219,7 +219,7 @@ def run_on_robots(
     robot = connect_robots(cell)
     if confirm is not None and not confirm("The NAO and the Panda will move now. Go on? [y/N] "):
         robot.close()
-        raise BackendUnavailable("the operator did not confirm: nothing moved")
+        raise BackendUnavailable(f"the operator did not confirm: nothing moved{_why_not_asked()}")
     try:
         activate(robot)
     except Exception as error:
@@ -383,3 +383,10 @@ def default_out_dir(config: RunConfig) -> Path:
     from bearchair.executive.outputs import default_run_dir
 
     return default_run_dir(config.seed)
+
+
+def _why_not_asked() -> str:
+    from bearchair.executive.operator import not_asked_because
+
+    reason = not_asked_because()
+    return f" ({reason})" if reason else ""
