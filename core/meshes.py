@@ -1,29 +1,33 @@
 """Chair meshes: loading, checking, hashing, the solid under a surface, and a box chair.
 
 Every mesh here is z up, in metres. Caches of what is derived from a mesh are ``.npz``
-files under :func:`cache_dir`, named by the mesh's digest.
+files under :func:`cache_dir` (``bearchair.core.cache``), named by the mesh's digest.
 """
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import logging
 import math
 import os
-import tempfile
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, cast
+from typing import cast
 
 import numpy as np
 import trimesh
 from scipy import ndimage
 from scipy.spatial import QhullError
 
+from bearchair.core.cache import (  # noqa: F401 - their home before bearchair.core.cache
+    cache_dir,
+    read_cached_arrays,
+    write_cached_arrays,
+)
 from bearchair.core.errors import MeshError, one_line
 from bearchair.core.posture import posture_warning
+from bearchair.core.userfiles import open_regular_file, printable
 
 logger = logging.getLogger(__name__)
 
@@ -34,11 +38,9 @@ class MeshLoadError(MeshError, ValueError):
     """A mesh file is missing, empty, unreadable or not a surface mesh."""
 
 
-def cache_dir() -> Path:
-    """The on-disk cache: ``$BEARCHAIR_CACHE`` or ``~/.cache/bearchair``."""
-    root = Path(os.environ.get("BEARCHAIR_CACHE", Path.home() / ".cache" / "bearchair"))
-    root.mkdir(parents=True, exist_ok=True)
-    return root
+MAX_MESH_BYTES = 512 * 1024 * 1024
+"""Largest mesh file read (bytes): the largest calibration mesh is a few MB; a scan of a
+chair at 2 mm is about 50 MB as OBJ."""
 
 
 def load_mesh(path: str | os.PathLike) -> trimesh.Trimesh:
@@ -54,20 +56,21 @@ def load_mesh(path: str | os.PathLike) -> trimesh.Trimesh:
         MeshLoadError: with one line saying what is wrong with the file.
     """
     path = Path(path)
-    if not path.exists():
-        raise MeshLoadError(f"{path}: no such file")
-    if path.is_dir():
-        raise MeshLoadError(f"{path}: is a directory, not a mesh file")
-    if not path.is_file():  # a FIFO or a device would block or never end
-        raise MeshLoadError(f"{path}: not a regular file (a pipe or a device); give a mesh file")
-    if path.suffix.lower() not in SUPPORTED_SUFFIXES:
+    shown = printable(path)
+    if path.suffix.lower() not in SUPPORTED_SUFFIXES and not path.is_dir():
         raise MeshLoadError(
-            f"{path}: unsupported format '{path.suffix}' (use {', '.join(SUPPORTED_SUFFIXES)})"
+            f"{shown}: unsupported format '{printable(path.suffix)}' "
+            f"(use {', '.join(SUPPORTED_SUFFIXES)})"
         )
-    if not os.access(path, os.R_OK):
-        raise MeshLoadError(f"{path}: not readable (permission denied)")
-    if path.stat().st_size == 0:
-        raise MeshLoadError(f"{path}: empty file")
+    os.close(open_regular_file(path, "mesh file", MeshLoadError))  # a FIFO would block
+    size = path.stat().st_size
+    if size == 0:
+        raise MeshLoadError(f"{shown}: empty file")
+    if size > MAX_MESH_BYTES:
+        raise MeshLoadError(
+            f"{shown}: {size / 1e6:.0f} MB, larger than any chair mesh bearchair reads "
+            f"({MAX_MESH_BYTES / 1e6:.0f} MB); simplify it"
+        )
     kind = path.suffix.lower().lstrip(".").upper()
     try:
         with warnings.catch_warnings():
@@ -75,20 +78,20 @@ def load_mesh(path: str | os.PathLike) -> trimesh.Trimesh:
             loaded = trimesh.load(path, force="mesh", process=False)
     except Exception as error:
         raise MeshLoadError(
-            f"{path}: not a readable {kind} file ({one_line(error, 160)}); "
+            f"{shown}: not a readable {kind} file ({one_line(error, 160)}); "
             "check that it is a mesh and re-export it"
         ) from error
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise MeshLoadError(
-            f"{path}: contains no triangles (a point cloud or an empty scene?); give a surface mesh"
+            f"{shown}: contains no triangles (a point cloud or an empty scene?); give a surface mesh"
         )
     faces = np.asarray(loaded.faces)
     if faces.min() < 0 or faces.max() >= len(loaded.vertices):
-        raise MeshLoadError(f"{path}: faces refer to vertices that do not exist; re-export it")
+        raise MeshLoadError(f"{shown}: faces refer to vertices that do not exist; re-export it")
     bad = int(np.count_nonzero(~np.all(np.isfinite(loaded.vertices), axis=1)))
     if bad:
         raise MeshLoadError(
-            f"{path}: has non-finite vertex coordinates ({bad} of {len(loaded.vertices)} "
+            f"{shown}: has non-finite vertex coordinates ({bad} of {len(loaded.vertices)} "
             "vertices are NaN or infinite); repair or re-export the mesh"
         )
     return loaded
@@ -178,48 +181,6 @@ def mesh_digest(mesh: trimesh.Trimesh) -> str:
     digest.update(np.round(np.asarray(mesh.vertices, dtype=np.float64), 4).tobytes())
     digest.update(np.asarray(mesh.faces, dtype=np.int64).tobytes())
     return digest.hexdigest()
-
-
-def read_cached_arrays(path: Path) -> dict[str, np.ndarray] | None:
-    """The arrays of a cache entry written by :func:`write_cached_arrays`.
-
-    Cache entries are ``.npz`` files read without pickle: whoever can write the cache
-    cannot make this process run code. A missing entry gives None; a damaged one
-    (truncated, not npz, holding objects) is deleted and gives None, so the caller
-    rebuilds it.
-    """
-    if not path.is_file():
-        return None
-    try:
-        with np.load(path, allow_pickle=False) as stored:
-            return {name: stored[name] for name in stored.files}
-    except Exception as error:  # zipfile, ValueError (pickled objects), OSError, ...
-        logger.info("rebuilding damaged cache entry %s: %s", path, one_line(error))
-        with contextlib.suppress(OSError):
-            path.unlink()
-        return None
-
-
-def write_cached_arrays(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    """Writes a cache entry atomically (a temporary file renamed over it).
-
-    Object arrays are refused (they would need pickle). A failed write (full disk,
-    read-only cache) is logged and skipped: a cache is never worth failing a run for.
-    """
-    plain = {name: np.asarray(value) for name, value in arrays.items()}
-    if any(value.dtype == object for value in plain.values()):
-        raise ValueError("cache arrays must be numbers or strings, not Python objects")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        descriptor, scratch = tempfile.mkstemp(dir=path.parent, suffix=".tmp.npz")
-        with os.fdopen(descriptor, "wb") as stream:
-            # As Any: numpy's stubs match the keys against savez's allow_pickle flag too.
-            np.savez(stream, **cast(dict[str, Any], plain))
-        os.replace(scratch, path)
-    except OSError as error:
-        logger.warning("could not write cache entry %s: %s", path, one_line(error))
-        with contextlib.suppress(OSError, UnboundLocalError):
-            os.unlink(scratch)
 
 
 def solid_below_surface_boxes(

@@ -67,7 +67,7 @@ def open_regular_file(path: Path, what: str, error: type[BearchairError]) -> int
     if not stat.S_ISREG(kind):
         os.close(descriptor)
         if stat.S_ISDIR(kind):
-            raise error(f"{shown}: is a folder, not a {what}")
+            raise error(f"{shown}: is a directory, not a {what}")
         raise error(f"{shown}: not a regular file (a pipe or a device); give a {what}")
     return descriptor
 

@@ -25,7 +25,7 @@ import py_trees
 from bearchair.core.errors import OutputError, RunRecordError
 from bearchair.core.userfiles import open_regular_file, parse_json, printable
 from bearchair.executive.jsonable import to_jsonable
-from bearchair.executive.outputs import describe_os_error, write_text_atomic
+from bearchair.executive.outputs import describe_os_error, open_new_file, write_text_atomic
 
 TICKS_FILE = "ticks.jsonl"
 TREE_FILE = "tree.json"
@@ -102,7 +102,7 @@ class RunRecorder:
         try:
             self.out_dir.mkdir(parents=True, exist_ok=True)
             write_text_atomic(self.out_dir / TREE_FILE, json.dumps(tree_shape(root), indent=1))
-            self._ticks = open(self.out_dir / TICKS_FILE, "w")  # noqa: SIM115 - see close()
+            self._ticks = open_new_file(self.out_dir / TICKS_FILE)
         except (OSError, OutputError) as error:
             raise RecordWriteError(
                 f"cannot start the run record in {self.out_dir}: {_why(error)}"
