@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -43,12 +44,26 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
+def check_workers(workers: int) -> None:
+    """Refuses more drop workers than the machine has processors (one line): the result
+    is the same for any number, and 10000 processes would only exhaust the machine."""
+    from bearchair.core.errors import InputError
+
+    processors = os.cpu_count() or 1
+    if workers > processors:
+        raise InputError(
+            f"bearchair imagine: --workers {workers}: more than this machine's {processors} "
+            f"processors; give at most {processors} (the result is the same for any number)"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     """Runs the imagination on ``args.mesh``; returns the exit status."""
     from bearchair.core.meshes import load_chair_mesh
     from bearchair.executive.outputs import check_output_file
     from bearchair.skills.imagination import imagine_sitting
 
+    check_workers(args.workers)
     mesh = load_chair_mesh(args.mesh)
     if args.image is not None:  # before the minutes of simulation, not after
         check_output_file(args.image, "--image", (".png",))
