@@ -64,11 +64,7 @@ def run_campaign(
     Returns:
         What ran; ``interrupted`` when Ctrl-C stopped it (finished trials are kept).
     """
-    if Path(runs_dir).is_symlink():
-        raise OutputError(
-            f"{printable(runs_dir)} is a symbolic link; bearchair writes trial records only "
-            "inside --out: remove the link"
-        )
+    check_runs_dir(runs_dir, specs)
     runs_dir = Path(runs_dir).resolve()  # records stay valid from any working directory
     finished = store.finished_keys()
     todo = [spec for spec in specs if spec.key not in finished]
@@ -123,6 +119,22 @@ def _jobs(
             )
         )
     return jobs
+
+
+def check_runs_dir(runs_dir: Path, specs: list[TrialSpec]) -> None:
+    """Refuses a runs folder that is a symbolic link, or holds one where a trial's run
+    folder goes (see :func:`check_inside`): checked before anything is deleted or run.
+
+    Raises:
+        OutputError: one line naming the link.
+    """
+    if Path(runs_dir).is_symlink():
+        raise OutputError(
+            f"{printable(runs_dir)} is a symbolic link; bearchair writes trial records only "
+            "inside --out: remove the link"
+        )
+    for spec in specs:
+        check_inside(Path(runs_dir), Path(runs_dir) / spec.run_dir_name())
 
 
 def check_inside(folder: Path, path: Path) -> None:

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from bearchair.core.errors import BackendUnavailable, BearchairError, InputError, one_line
-from bearchair.core.userfiles import printable
+from bearchair.core.userfiles import open_regular_file, printable
 from bearchair.executive import (
     cmd_calibrate_hand_eye,
     cmd_check_hardware,
@@ -180,8 +180,10 @@ def _run(args: argparse.Namespace) -> int:
     if args.robots is not None:
         if args.chair is not None:
             raise InputError("bearchair run: --chair is for the simulation; not with --robots")
-        if not args.robots.is_file():
-            raise InputError(f"bearchair run: --robots {args.robots}: no such file")
+        try:  # a regular file: a FIFO would block, a folder is no cell file
+            os.close(open_regular_file(args.robots, "cell file", InputError))
+        except InputError as error:
+            raise InputError(f"bearchair run: --robots {error}") from None
     elif args.chair is not None:
         load_chair_mesh(args.chair)
     if args.out is not None:
