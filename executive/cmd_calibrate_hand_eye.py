@@ -409,7 +409,6 @@ def _load_views(path: Path) -> tuple[Any, list[View]]:
     """The board and views of a ``--out`` file (exact matrices, as written)."""
     from bearchair.core.errors import InputError
     from bearchair.core.userfiles import load_user_json, printable
-    from bearchair.skills.perception.hand_eye import BoardDetection, BoardSpec
 
     try:
         record = load_user_json(path, "calibration file", InputError)
@@ -424,6 +423,8 @@ def _load_views(path: Path) -> tuple[Any, list[View]]:
             f"--from {printable(path)}: {len(record['views'])} views, more than the "
             f"{MAX_VIEWS} a calibration uses (A X = X B pairs grow as the square of the views)"
         )
+    from bearchair.skills.perception.hand_eye import BoardDetection, BoardSpec
+
     try:
         board = BoardSpec(**record["board"])
         views = []
