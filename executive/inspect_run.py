@@ -54,7 +54,7 @@ class RecordedRun:
         try:
             summary = load_user_json(path, "run summary", RunRecordError)
         except RunRecordError as error:
-            self.notes.append(f"{SUMMARY_FILE} ignored: {printable(error)}")
+            self.notes.append(f"{SUMMARY_FILE} ignored: unreadable ({printable(error)})")
             return None
         if not isinstance(summary, dict):
             self.notes.append(f"{SUMMARY_FILE} ignored: not a JSON object")
