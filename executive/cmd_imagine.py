@@ -20,6 +20,7 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from bearchair.core.userfiles import printable
 from bearchair.executive import interrupts
 from bearchair.executive.cli_types import positive_int, seed_value
 
@@ -80,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     _print_report(result)
     if args.image is not None:
-        print(f"image:            {args.image}")
+        print(f"image:            {printable(args.image)}")
     return 0
 
 
@@ -126,7 +127,7 @@ def _print_report(result: ImaginationResult) -> None:
         print(f"sitting position: x={x:.3f} y={y:.3f} z={z:.3f} m (mesh frame)")
         print(f"sitting yaw:      {math.degrees(result.sitting_pose.yaw):.1f} deg from +x about +z")
     else:
-        print(f"no sitting pose: {result.reason}")
+        print(f"no sitting pose: {printable(result.reason, 400)}")
     print(f"correct sittings: {result.n_correct} of {result.n_drops} drops")
     if result.vote is not None:
         print(f"rotation vote:    {result.vote.describe()}")

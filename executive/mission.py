@@ -16,9 +16,10 @@ from typing import TYPE_CHECKING, Any, TextIO
 from bearchair.core.errors import one_line
 from bearchair.core.geometry import wrap_angle
 from bearchair.core.meshes import load_mesh
+from bearchair.core.userfiles import printable
 from bearchair.executive.config import RunConfig, front_yaw_from_manifest
 from bearchair.executive.interrupts import raise_if_received, signal_name
-from bearchair.executive.outputs import atomic_path
+from bearchair.executive.outputs import atomic_path, write_text_atomic
 from bearchair.executive.record import RecordWriteError, RunRecorder
 from bearchair.executive.recording import open_recording
 from bearchair.executive.runner import MissionRunner, summarise
@@ -46,7 +47,10 @@ class StageProgress:
             if stage.status == "RUNNING":
                 line = f"[{runner.elapsed():7.1f} s] {stage.name} ..."
             else:
-                line = f"[{runner.elapsed():7.1f} s] {stage.name}: {stage.status} ({stage.seconds:.1f} s) {stage.feedback}"
+                line = (
+                    f"[{runner.elapsed():7.1f} s] {stage.name}: {stage.status} "
+                    f"({stage.seconds:.1f} s) {printable(stage.feedback, 400)}"
+                )
             try:
                 print(line, file=self._stream or sys.stderr, flush=True)
             except (OSError, ValueError):  # nobody reads stderr any more: the run goes on
@@ -230,7 +234,7 @@ def run_on_robots(
         raise
     root = create_tree()
     recorder = RunRecorder(config.out_dir, root)
-    (config.out_dir / "cell.json").write_text(json.dumps(cell.to_json(), indent=2))
+    write_text_atomic(config.out_dir / "cell.json", json.dumps(cell.to_json(), indent=2))
     run_info = {
         "chair": "real",
         "placement": "real",
@@ -375,7 +379,7 @@ def format_summary(summary: dict[str, Any]) -> str:
         lines.append(f"outcome: {outcome} in {summary['wall_seconds']:.1f} s")
     else:
         lines.append(f"outcome: {outcome} at {summary['failed_stage']}: {summary['reason']}")
-    return "\n".join(lines)
+    return "\n".join(printable(line, 1000) for line in lines)
 
 
 def default_out_dir(config: RunConfig) -> Path:

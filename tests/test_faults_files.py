@@ -452,3 +452,29 @@ def test_an_out_that_is_a_dangling_link_is_refused(tmp_path, capsys):
     (tmp_path / "run").symlink_to(tmp_path / "nowhere")
     with pytest.raises(OutputError, match="symbolic link to nothing"):
         outputs.prepare_run_dir(tmp_path / "run")
+
+
+def test_the_run_summary_prints_a_hostile_chair_name_escaped():
+    from bearchair.executive.mission import format_summary
+
+    summary = {
+        "chair": "\x1b]0;owned\x07chair.obj",
+        "placement": "accessible",
+        "helper": "obeys",
+        "seed": 0,
+        "stages": [
+            {
+                "name": "ScanChair",
+                "status": "FAILURE",
+                "seconds": 1.0,
+                "message": "no chair\n[  ok] forged",
+            }
+        ],
+        "instructions": [],
+        "outcome": "failure",
+        "failed_stage": "ScanChair",
+        "reason": "\x1b[2J",
+    }
+    text = format_summary(summary)
+    assert "\x1b" not in text and "\x07" not in text
+    assert not any(line.startswith("[  ok] forged") for line in text.splitlines())
