@@ -117,6 +117,7 @@ def check_chair_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike = "mesh") ->
         MeshLoadError: when nothing sensible can be done with it (far too small or too
             large for any chair in metres, or flat in every direction).
     """
+    path = printable(path)  # a name as the terminal may show it
     extents = np.asarray(mesh.extents, dtype=float)
     size = " x ".join(f"{value:.3g}" for value in extents)
     if float(extents.max()) < MIN_CHAIR_SIZE_M:

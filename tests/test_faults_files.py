@@ -266,6 +266,32 @@ def test_inspect_on_a_full_device_is_exit_2_with_one_line(tmp_path, capsys):
     assert "the output is lost" in line
 
 
+def test_imagine_json_on_a_full_device_is_exit_2_with_one_line(tmp_path, capsys, monkeypatch):
+    import types
+
+    import bearchair.skills.imagination as imagination
+    from bearchair.core.meshes import box_chair_mesh
+
+    not_found = types.SimpleNamespace(
+        found=False,
+        sitting_pose=None,
+        n_correct=0,
+        n_drops=24,
+        seconds={"total": 1.0},
+        vote=None,
+        backrest=None,
+        reason="no drop sat",
+    )
+    monkeypatch.setattr(imagination, "imagine_sitting", lambda mesh, **kw: not_found)
+    path = tmp_path / "chair.obj"
+    box_chair_mesh().export(path)
+    with stdout_on_a_full_device():
+        status = cli.main(["imagine", str(path), "--json", "--workers", "1"])
+    assert status == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "cannot write to standard output" in line
+
+
 def test_the_console_to_dev_full_exits_2(tmp_path):
     with open("/dev/full", "w") as full:
         done = subprocess.run(
