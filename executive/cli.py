@@ -434,6 +434,9 @@ def main(argv: list[str] | None = None) -> int:
             sys.stdout.flush()
             sys.stderr.flush()
         sys.stdout, sys.stderr = saved
+        outputs = sys.modules.get("bearchair.executive.outputs")
+        if outputs is not None:  # the run folder is written: another run may replace it
+            outputs.release_run_dir_locks()
 
 
 def _lost_output_status(out: _TolerantStream, err: _TolerantStream, status: int) -> int:

@@ -156,16 +156,20 @@ def prepare_run_dir(folder: Path, overwrite: bool = False) -> Path:
     return folder
 
 
-_held_locks: list[int] = []
-"""Descriptors of the run-folder locks this process holds (released when it ends)."""
+_held_locks: dict[str, int] = {}
+"""The run-folder locks this process holds, by resolved folder: descriptors."""
 
 
 def lock_run_dir(folder: Path) -> None:
-    """Holds an ``flock`` on ``folder/RUN_LOCK_NAME`` for the rest of this process.
+    """Holds an ``flock`` on ``folder/RUN_LOCK_NAME`` until :func:`release_run_dir_locks`
+    (the command's end) or this process's end, however it ends.
 
     Raises:
         OutputError: another process holds it (a run still writing the folder).
     """
+    key = str(Path(folder).resolve())
+    if key in _held_locks:
+        return
     path = Path(folder) / RUN_LOCK_NAME
     try:
         descriptor = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666)
@@ -181,7 +185,15 @@ def lock_run_dir(folder: Path) -> None:
             f"run folder {folder} is being written by another bearchair run; wait for it "
             "to finish or choose another --out"
         ) from None
-    _held_locks.append(descriptor)
+    _held_locks[key] = descriptor
+
+
+def release_run_dir_locks() -> None:
+    """Releases every run-folder lock of this process (the command has finished)."""
+    while _held_locks:
+        _, descriptor = _held_locks.popitem()
+        with contextlib.suppress(OSError):
+            os.close(descriptor)
 
 
 def _remove(folder: Path, name: str) -> None:

@@ -153,6 +153,18 @@ def test_overwrite_of_a_folder_another_run_writes_is_refused(tmp_path, capsys):
     assert (folder / "summary.json").read_text() == "{}"
 
 
+def test_a_finished_run_releases_its_folder_for_the_next_overwrite(tmp_path, monkeypatch, capsys):
+    from bearchair.executive import mission
+    from tests.test_faults import FakeMission
+
+    monkeypatch.setattr(mission, "run_in_simulation", FakeMission())
+    out = tmp_path / "run"
+    assert cli.main(["run", "--mute", "--out", str(out)]) == 0
+    assert outputs._held_locks == {}
+    assert cli.main(["run", "--mute", "--out", str(out), "--overwrite"]) == 0
+    assert (out / "summary.json").is_file() and "Traceback" not in capsys.readouterr().err
+
+
 def test_overwrite_accepts_the_projects_own_records_and_removes_links_as_links(tmp_path):
     folder = tmp_path / "run"
     folder.mkdir()
