@@ -423,6 +423,19 @@ def test_a_piped_yes_is_not_the_operators_yes(monkeypatch):
     assert "pass --yes" in operator.not_asked_because()
 
 
+def test_run_on_robots_with_a_piped_yes_moves_nothing(tmp_path, capsys, monkeypatch):
+    from bearchair.hardware.real.standins import NaoqiStandin
+    from tests.test_check_hardware import _cell
+
+    monkeypatch.setattr(sys, "stdin", _Stdin("y\n", tty=False))
+    monkeypatch.setattr("builtins.input", lambda prompt: "y")
+    with NaoqiStandin(time_scale=20.0) as naoqi:
+        cell = _cell(tmp_path, naoqi.url)
+        line = refused(["run", "--robots", str(cell), "--out", str(tmp_path / "run")], capsys)
+        assert not naoqi.called("wakeUp") and not naoqi.called("moveTo")
+    assert "did not confirm: nothing moved" in line and "pass --yes" in line
+
+
 @pytest.mark.parametrize("stdin", ["closed", "none", "eof"])
 def test_a_closed_or_ended_stdin_is_no(monkeypatch, stdin):
     monkeypatch.setattr(operator, "is_terminal", lambda stream: stream is not None)
