@@ -24,7 +24,7 @@ import time
 import traceback
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any
 
 from bearchair.core.errors import BackendUnavailable, BearchairError, InputError, one_line
 from bearchair.core.userfiles import open_regular_file, printable
@@ -37,6 +37,7 @@ from bearchair.executive import (
 )
 from bearchair.executive.cli_types import positive_seconds, seed_value
 from bearchair.executive.config import RunConfig
+from bearchair.executive.console import TolerantStream, lost_output_status
 from bearchair.executive.interrupts import exit_status, handling_signals, received, signal_name
 from bearchair.executive.operator import ask_operator
 
@@ -310,48 +311,6 @@ def _inspect(args: argparse.Namespace) -> int:
     return 0
 
 
-class _TolerantStream:
-    """A text stream that survives its reader going away (``| head``, a closed terminal).
-
-    After the first failed write it drops everything: a campaign or a mission must not
-    die because nobody reads its progress; its results are in files.
-    """
-
-    def __init__(self, stream: TextIO) -> None:
-        self._stream = stream
-        self.broken = False
-        self.lost: OSError | None = None
-        """The write error that lost output, when the reader did not just go away."""
-
-    def write(self, text: str) -> int:
-        if not self.broken:
-            try:
-                return self._stream.write(text)
-            except (OSError, ValueError) as error:
-                self._break(error)
-        return len(text)
-
-    def flush(self) -> None:
-        if not self.broken:
-            try:
-                self._stream.flush()
-            except (OSError, ValueError) as error:
-                self._break(error)
-
-    def _break(self, error: Exception) -> None:
-        self.broken = True
-        if isinstance(error, OSError) and not isinstance(error, BrokenPipeError):
-            self.lost = error  # a full device, an I/O error: the output is lost
-        # Python flushes the real stream at exit; point it at /dev/null first.
-        with contextlib.suppress(OSError, ValueError, AttributeError):
-            devnull = os.open(os.devnull, os.O_WRONLY)
-            os.dup2(devnull, self._stream.fileno())
-            os.close(devnull)
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._stream, name)
-
-
 def _error_line(error: BaseException) -> str:
     """One line for a user-facing error, prefixed ``bearchair:`` unless it names itself."""
     from bearchair.executive.outputs import describe_os_error
@@ -420,12 +379,12 @@ def main(argv: list[str] | None = None) -> int:
     """
     console = argv is None  # the console script (tests pass their argv)
     saved = sys.stdout, sys.stderr
-    out, err = _TolerantStream(sys.stdout), _TolerantStream(sys.stderr)
+    out, err = TolerantStream(sys.stdout), TolerantStream(sys.stderr)
     sys.stdout, sys.stderr = out, err
     try:
         with handling_signals():
             status = _main(argv)
-            status = _lost_output_status(out, err, status)
+            status = lost_output_status(out, err, status, EXIT_BAD_INPUT)
             if console and received() is not None:
                 _exit_now(status)
             return status
@@ -437,23 +396,6 @@ def main(argv: list[str] | None = None) -> int:
         outputs = sys.modules.get("bearchair.executive.outputs")
         if outputs is not None:  # the run folder is written: another run may replace it
             outputs.release_run_dir_locks()
-
-
-def _lost_output_status(out: _TolerantStream, err: _TolerantStream, status: int) -> int:
-    """``status``, or 2 with one line on stderr when standard output could not be written
-    (a full device, an I/O error): a command whose answer is lost must not report success.
-    A reader that went away (``| head``) is not an error."""
-    from bearchair.executive.outputs import describe_os_error
-
-    out.flush()
-    if out.lost is None:
-        return status
-    err.write(
-        f"bearchair: cannot write to standard output ({describe_os_error(out.lost)}); "
-        "the output is lost\n"
-    )
-    err.flush()
-    return EXIT_BAD_INPUT if status == EXIT_SUCCESS else status
 
 
 def _exit_now(status: int) -> None:

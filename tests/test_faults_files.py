@@ -15,7 +15,6 @@ import sqlite3
 import stat
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -26,6 +25,7 @@ from bearchair.executive import cli, operator, outputs
 from bearchair.executive.record import RecordWriteError, RunRecorder
 from bearchair.trees.mission import create_tree
 from tests.test_bad_inputs import refused
+from tests.test_faults_inspect import recorded_run
 from tests.test_trials import FAKE_WORKER, REPO, write_chairs
 
 # --- the campaign's lock, runs folder and records -----------------------------------------
@@ -324,83 +324,6 @@ def test_a_reader_that_goes_away_is_not_an_error():
     shell = f"{sys.executable} -m bearchair.executive.cli tree --format ascii | head -c 1"
     done = subprocess.run(["bash", "-c", shell], cwd=REPO, capture_output=True, text=True)
     assert done.returncode == 0 and done.stderr == ""
-
-
-# --- inspect: read-only, escaped ------------------------------------------------------------
-
-
-def recorded_run(run: Path) -> Path:
-    """A run record of the mission tree with one tick."""
-    recorder = RunRecorder(run, create_tree())
-    recorder.record_tick(1, 0.0)
-    recorder.close()
-    return run
-
-
-def test_inspect_writes_its_crash_log_outside_the_record(tmp_path, capsys, monkeypatch):
-    from bearchair.executive import inspect_run
-
-    run = tmp_path / "run"
-    recorded_run(run)
-    before = sorted(p.name for p in run.iterdir())
-    monkeypatch.setenv("BEARCHAIR_CACHE", str(tmp_path / "cache"))
-
-    def broken(self, tick):
-        raise RuntimeError("a bug")
-
-    monkeypatch.setattr(inspect_run.RecordedRun, "tree_text", broken)
-    assert cli.main(["inspect", str(run)]) == 3
-    (line,) = capsys.readouterr().err.strip().splitlines()
-    assert "internal error" in line and str(run) not in line.split("the traceback is in ")[1]
-    assert sorted(p.name for p in run.iterdir()) == before
-
-
-def test_inspect_prints_escape_sequences_of_a_record_escaped(tmp_path, capsys):
-    run = tmp_path / "run"
-    recorder = RunRecorder(run, create_tree())
-    recorder.close()
-    shape = json.loads((run / "tree.json").read_text())
-    shape[0]["name"] = "\x1b]0;owned\x07Mission\x1b[2J"
-    (run / "tree.json").write_text(json.dumps(shape))
-    tick = {
-        "tick": 1,
-        "t": 0.0,
-        "nodes": [
-            {"path": shape[0]["path"], "status": "RUNNING", "feedback": "line one\n[  ok] forged"}
-        ],
-        "blackboard": {"\x1bkey": "\x1b[31mred"},
-    }
-    (run / "ticks.jsonl").write_text(json.dumps(tick) + "\n")
-    assert cli.main(["inspect", str(run), "--blackboard", "--timeline"]) == 0
-    out = capsys.readouterr().out
-    assert "\x1b" not in out and "\x07" not in out and "\\x1b" in out
-    assert not any(line.startswith("[  ok] forged") for line in out.splitlines())
-
-
-@pytest.mark.parametrize("content", ["[" * 100_000, '{"tick": ' + "9" * 401 + "}"])
-def test_a_hostile_tick_line_is_skipped_and_named(tmp_path, capsys, content):
-    run = tmp_path / "run"
-    recorded_run(run)
-    good = (run / "ticks.jsonl").read_text()
-    (run / "ticks.jsonl").write_text(content + "\n" + good)
-    assert cli.main(["inspect", str(run)]) == 0
-    assert "unreadable line(s) of ticks.jsonl skipped (line 1)" in capsys.readouterr().out
-
-
-def test_a_summary_that_is_a_fifo_is_noted_not_waited_for(tmp_path, capsys):
-    run = tmp_path / "run"
-    recorded_run(run)
-    os.mkfifo(run / "summary.json")
-    assert cli.main(["inspect", str(run)]) == 0
-    assert "summary.json ignored" in capsys.readouterr().out
-
-
-def test_a_deep_tree_json_is_one_line(tmp_path, capsys):
-    run = tmp_path / "run"
-    recorded_run(run)
-    (run / "tree.json").write_text("[" * 100_000 + "]" * 100_000)
-    line = refused(["inspect", str(run)], capsys)
-    assert "tree.json: not valid JSON (nested too deeply)" in line
 
 
 # --- the operator ----------------------------------------------------------------------------
