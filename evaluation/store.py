@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from bearchair.core.errors import RecordStoreError
+from bearchair.core.provenance import software_versions
 from bearchair.core.userfiles import parse_json, printable
 from bearchair.evaluation.protocol import TrialSpec
 
@@ -55,6 +56,7 @@ COLUMNS: dict[str, str] = {
     "attempts": "INTEGER",  # worker runs: 2 when a crashed or killed worker was retried
     "run_dir": "TEXT",
     "finished_at": "TEXT",
+    "software": "TEXT",  # JSON: bearchair's version, git commit, key dependencies' versions
 }
 KEY_COLUMNS = ("chair", "placement", "helper", "trial_index", "seed")
 
@@ -240,7 +242,7 @@ def _from_row(row: sqlite3.Row, db_path: Path) -> dict[str, Any]:
     one warning naming the database and the row (the trial's other columns still count)."""
     record = dict(row)
     record.pop("rowid", None)
-    for name in ("stage_seconds", "sitting_pose"):
+    for name in ("stage_seconds", "sitting_pose", "software"):
         if record.get(name):
             try:
                 record[name] = parse_json(str(record[name]), name, RecordStoreError)
@@ -295,6 +297,7 @@ def record_from_summary(
         "attempts": attempts,
         "run_dir": run_dir,
         "finished_at": _now(),
+        "software": summary.get("software") or software_versions(),
     }
 
 
@@ -317,6 +320,7 @@ def record_from_error(
         "attempts": attempts,
         "run_dir": run_dir,
         "finished_at": _now(),
+        "software": software_versions(),  # the harness's: the worker left no summary
     }
 
 
