@@ -101,11 +101,11 @@ class RecordedRun:
         from bearchair.trees.options import TreeOptions
 
         try:
-            config = json.loads((self.run_dir / "config.json").read_text(encoding="utf-8"))
+            config = load_user_json(self.run_dir / "config.json", "config", RunRecordError)
             section = config.get("tree") or config.get("tree_options") or {}
             fields = ("assistance", "max_rotations", "rescan_fallback")
             return TreeOptions(**{key: section[key] for key in fields if key in section})
-        except (OSError, ValueError, TypeError, AttributeError):
+        except (RunRecordError, ValueError, TypeError, AttributeError):
             return TreeOptions()
 
     @property

@@ -90,3 +90,18 @@ def test_a_deep_tree_json_is_one_line(tmp_path, capsys):
     (run / "tree.json").write_text("[" * 100_000 + "]" * 100_000)
     line = refused(["inspect", str(run)], capsys)
     assert "tree.json: not valid JSON (nested too deeply)" in line
+
+
+@pytest.mark.parametrize(
+    ("content", "said"),
+    [("a = " + "[" * 100_000 + "]" * 100_000, "nested too deeply"), (None, "not a regular file")],
+    ids=["deep-toml", "fifo"],
+)
+def test_a_hostile_mission_configuration_is_one_line(tmp_path, capsys, content, said):
+    path = tmp_path / "mission.toml"
+    if content is None:
+        os.mkfifo(path)
+    else:
+        path.write_text(content)
+    line = refused(["run", "--config", str(path), "--out", str(tmp_path / "run")], capsys)
+    assert said in line and not (tmp_path / "run").exists()
