@@ -1,27 +1,33 @@
 """Chair meshes: loading, checking, hashing, the solid under a surface, and a box chair.
 
 Every mesh here is z up, in metres. Caches of what is derived from a mesh are ``.npz``
-files under :func:`cache_dir`, named by the mesh's digest.
+files under :func:`cache_dir` (``bearchair.core.cache``), named by the mesh's digest.
 """
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import logging
 import math
 import os
-import tempfile
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, cast
+from typing import cast
 
 import numpy as np
 import trimesh
 from scipy import ndimage
+from scipy.spatial import QhullError
 
+from bearchair.core.cache import (  # noqa: F401 - their home before bearchair.core.cache
+    cache_dir,
+    read_cached_arrays,
+    write_cached_arrays,
+)
 from bearchair.core.errors import MeshError, one_line
+from bearchair.core.posture import posture_warning
+from bearchair.core.userfiles import open_regular_file, printable
 
 logger = logging.getLogger(__name__)
 
@@ -32,11 +38,9 @@ class MeshLoadError(MeshError, ValueError):
     """A mesh file is missing, empty, unreadable or not a surface mesh."""
 
 
-def cache_dir() -> Path:
-    """The on-disk cache: ``$BEARCHAIR_CACHE`` or ``~/.cache/bearchair``."""
-    root = Path(os.environ.get("BEARCHAIR_CACHE", Path.home() / ".cache" / "bearchair"))
-    root.mkdir(parents=True, exist_ok=True)
-    return root
+MAX_MESH_BYTES = 512 * 1024 * 1024
+"""Largest mesh file read (bytes): the largest calibration mesh is a few MB; a scan of a
+chair at 2 mm is about 50 MB as OBJ."""
 
 
 def load_mesh(path: str | os.PathLike) -> trimesh.Trimesh:
@@ -52,20 +56,21 @@ def load_mesh(path: str | os.PathLike) -> trimesh.Trimesh:
         MeshLoadError: with one line saying what is wrong with the file.
     """
     path = Path(path)
-    if not path.exists():
-        raise MeshLoadError(f"{path}: no such file")
-    if path.is_dir():
-        raise MeshLoadError(f"{path}: is a directory, not a mesh file")
-    if not path.is_file():  # a FIFO or a device would block or never end
-        raise MeshLoadError(f"{path}: not a regular file (a pipe or a device); give a mesh file")
-    if path.suffix.lower() not in SUPPORTED_SUFFIXES:
+    shown = printable(path)
+    if path.suffix.lower() not in SUPPORTED_SUFFIXES and not path.is_dir():
         raise MeshLoadError(
-            f"{path}: unsupported format '{path.suffix}' (use {', '.join(SUPPORTED_SUFFIXES)})"
+            f"{shown}: unsupported format '{printable(path.suffix)}' "
+            f"(use {', '.join(SUPPORTED_SUFFIXES)})"
         )
-    if not os.access(path, os.R_OK):
-        raise MeshLoadError(f"{path}: not readable (permission denied)")
-    if path.stat().st_size == 0:
-        raise MeshLoadError(f"{path}: empty file")
+    os.close(open_regular_file(path, "mesh file", MeshLoadError))  # a FIFO would block
+    size = path.stat().st_size
+    if size == 0:
+        raise MeshLoadError(f"{shown}: empty file")
+    if size > MAX_MESH_BYTES:
+        raise MeshLoadError(
+            f"{shown}: {size / 1e6:.0f} MB, larger than any chair mesh bearchair reads "
+            f"({MAX_MESH_BYTES / 1e6:.0f} MB); simplify it"
+        )
     kind = path.suffix.lower().lstrip(".").upper()
     try:
         with warnings.catch_warnings():
@@ -73,20 +78,20 @@ def load_mesh(path: str | os.PathLike) -> trimesh.Trimesh:
             loaded = trimesh.load(path, force="mesh", process=False)
     except Exception as error:
         raise MeshLoadError(
-            f"{path}: not a readable {kind} file ({one_line(error, 160)}); "
+            f"{shown}: not a readable {kind} file ({one_line(error, 160)}); "
             "check that it is a mesh and re-export it"
         ) from error
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise MeshLoadError(
-            f"{path}: contains no triangles (a point cloud or an empty scene?); give a surface mesh"
+            f"{shown}: contains no triangles (a point cloud or an empty scene?); give a surface mesh"
         )
     faces = np.asarray(loaded.faces)
     if faces.min() < 0 or faces.max() >= len(loaded.vertices):
-        raise MeshLoadError(f"{path}: faces refer to vertices that do not exist; re-export it")
+        raise MeshLoadError(f"{shown}: faces refer to vertices that do not exist; re-export it")
     bad = int(np.count_nonzero(~np.all(np.isfinite(loaded.vertices), axis=1)))
     if bad:
         raise MeshLoadError(
-            f"{path}: has non-finite vertex coordinates ({bad} of {len(loaded.vertices)} "
+            f"{shown}: has non-finite vertex coordinates ({bad} of {len(loaded.vertices)} "
             "vertices are NaN or infinite); repair or re-export the mesh"
         )
     return loaded
@@ -100,36 +105,6 @@ MAX_CHAIR_SIZE_M = 20.0
 is 800 or 80 units): refused, the simulated arena is a few metres wide."""
 TALL_CHAIR_M = 2.0
 """Taller than this: warned (the paper's chairs are for children, 0.45-0.62 m)."""
-UP_AXIS_RATIO = 0.5
-"""Warn of a mesh lying on its side when the area of its surfaces facing ±z in the
-middle of its height is below this fraction of another axis's. Measured over the 69
-calibration meshes (``tests/test_faults.py`` reruns it when they are present): none of
-the 55 upright chairs, sofa and stool is warned (the lowest, a reclined chair, scores
-0.71); the same meshes turned x-up or y-up are warned in 103 of 110 cases; 4 of the 14
-upright tables are warned (a table is not a chair)."""
-
-
-def up_axis_scores(mesh: trimesh.Trimesh) -> np.ndarray:
-    """For each axis (x, y, z): the area (m²) of faces facing along it in its middle band.
-
-    A chair's seat is a large surface facing up at 20-90 % of its height; lying on its
-    side, that surface faces a horizontal axis instead. Faces count when their normal
-    is within 20 degrees of the axis (either sign) and their centre lies between 20 %
-    and 90 % of the mesh's extent along it.
-    """
-    triangles = np.asarray(mesh.triangles, dtype=float)
-    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
-    double_area = np.linalg.norm(normals, axis=1)
-    keep = double_area > 0
-    triangles, normals, double_area = triangles[keep], normals[keep], double_area[keep]
-    normals = normals / double_area[:, None]
-    centres = triangles.mean(axis=1)
-    lower = np.asarray(mesh.bounds[0], dtype=float)
-    extents = np.maximum(np.asarray(mesh.extents, dtype=float), 1e-9)
-    heights = (centres - lower) / extents
-    facing = np.abs(normals) > np.cos(np.radians(20.0))
-    in_band = (heights > 0.2) & (heights < 0.9)
-    return np.array([0.5 * double_area[facing[:, a] & in_band[:, a]].sum() for a in range(3)])
 
 
 def check_chair_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike = "mesh") -> list[str]:
@@ -142,6 +117,7 @@ def check_chair_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike = "mesh") ->
         MeshLoadError: when nothing sensible can be done with it (far too small or too
             large for any chair in metres, or flat in every direction).
     """
+    path = printable(path)  # a name as the terminal may show it
     extents = np.asarray(mesh.extents, dtype=float)
     size = " x ".join(f"{value:.3g}" for value in extents)
     if float(extents.max()) < MIN_CHAIR_SIZE_M:
@@ -150,29 +126,42 @@ def check_chair_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike = "mesh") ->
             "scale it to metres (z up)"
         )
     if float(extents.max()) > MAX_CHAIR_SIZE_M:
-        unit = "millimetres" if float(extents.max()) > 200.0 else "centimetres"
-        factor = "0.001" if unit == "millimetres" else "0.01"
         raise MeshLoadError(
-            f"{path}: {size} (x, y, z) is not a chair in metres; it looks like {unit}: "
-            f"scale it by {factor}"
+            f"{path}: {size} (x, y, z) is not a chair in metres; {_unit_hint(extents)}"
         )
     if float(np.sort(extents)[1]) < 1e-3:
         raise MeshLoadError(f"{path}: {size} (x, y, z) is a line or a point, not a chair")
+    if float(extents.min()) < 1e-3:
+        raise MeshLoadError(f"{path}: {size} (x, y, z) is flat (a sheet), not a chair")
     found: list[str] = []
     if extents[2] > TALL_CHAIR_M:
         found.append(
             f"{path}: {extents[2]:.2f} m tall, taller than any chair ({TALL_CHAIR_M:.0f} m); "
             "check its units (metres) and up axis (z)"
         )
-    scores = up_axis_scores(mesh)
-    horizontal = int(np.argmax(scores[:2]))
-    if scores[horizontal] > 0 and scores[2] < UP_AXIS_RATIO * scores[horizontal]:
-        axis = "xy"[horizontal]
-        found.append(
-            f"{path}: seems to lie on its side: its large flat surfaces face ±{axis}, not ±z "
-            f"(is the file {axis}-up? bearchair expects z up: re-export it with z up)"
-        )
-    return found
+    try:
+        posture = posture_warning(mesh, path)
+    except QhullError as error:  # coplanar or degenerate beyond the checks above
+        raise MeshLoadError(f"{path}: {size} (x, y, z) has no volume, not a chair") from error
+    return [*found, posture] if posture else found
+
+
+def _unit_hint(extents: np.ndarray) -> str:
+    """What unit a mesh far too large for metres seems to be in, from its largest extent.
+
+    A chair is 0.2-2 m in its largest direction (the paper's are 0.45-0.62 m): in
+    centimetres that is 20-200 units, in millimetres 200-2000 (and up to 20000 for any
+    furniture). Beyond, no length unit makes it a chair.
+    """
+    largest = float(extents.max())
+    if largest <= 200.0:
+        return "it looks like centimetres: scale it by 0.01"
+    if largest <= 20000.0:
+        return "it looks like millimetres: scale it by 0.001"
+    return (
+        f"its largest extent, {largest:.3g} units, is no chair in any length unit "
+        "(a broken export?); check the file"
+    )
 
 
 def load_chair_mesh(path: str | os.PathLike) -> trimesh.Trimesh:
@@ -193,48 +182,6 @@ def mesh_digest(mesh: trimesh.Trimesh) -> str:
     digest.update(np.round(np.asarray(mesh.vertices, dtype=np.float64), 4).tobytes())
     digest.update(np.asarray(mesh.faces, dtype=np.int64).tobytes())
     return digest.hexdigest()
-
-
-def read_cached_arrays(path: Path) -> dict[str, np.ndarray] | None:
-    """The arrays of a cache entry written by :func:`write_cached_arrays`.
-
-    Cache entries are ``.npz`` files read without pickle: whoever can write the cache
-    cannot make this process run code. A missing entry gives None; a damaged one
-    (truncated, not npz, holding objects) is deleted and gives None, so the caller
-    rebuilds it.
-    """
-    if not path.is_file():
-        return None
-    try:
-        with np.load(path, allow_pickle=False) as stored:
-            return {name: stored[name] for name in stored.files}
-    except Exception as error:  # zipfile, ValueError (pickled objects), OSError, ...
-        logger.info("rebuilding damaged cache entry %s: %s", path, one_line(error))
-        with contextlib.suppress(OSError):
-            path.unlink()
-        return None
-
-
-def write_cached_arrays(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    """Writes a cache entry atomically (a temporary file renamed over it).
-
-    Object arrays are refused (they would need pickle). A failed write (full disk,
-    read-only cache) is logged and skipped: a cache is never worth failing a run for.
-    """
-    plain = {name: np.asarray(value) for name, value in arrays.items()}
-    if any(value.dtype == object for value in plain.values()):
-        raise ValueError("cache arrays must be numbers or strings, not Python objects")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        descriptor, scratch = tempfile.mkstemp(dir=path.parent, suffix=".tmp.npz")
-        with os.fdopen(descriptor, "wb") as stream:
-            # As Any: numpy's stubs match the keys against savez's allow_pickle flag too.
-            np.savez(stream, **cast(dict[str, Any], plain))
-        os.replace(scratch, path)
-    except OSError as error:
-        logger.warning("could not write cache entry %s: %s", path, one_line(error))
-        with contextlib.suppress(OSError, UnboundLocalError):
-            os.unlink(scratch)
 
 
 def solid_below_surface_boxes(

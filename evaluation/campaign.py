@@ -7,11 +7,14 @@ run straight through with the same seed.
 
 from __future__ import annotations
 
+import os
 import shutil
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from bearchair.core.errors import OutputError
+from bearchair.core.userfiles import printable
 from bearchair.evaluation.backends import Backend, Job
 from bearchair.evaluation.progress import Progress
 from bearchair.evaluation.protocol import TrialSpec
@@ -64,6 +67,7 @@ def run_campaign(
     Returns:
         What ran; ``interrupted`` when Ctrl-C stopped it (finished trials are kept).
     """
+    check_runs_dir(runs_dir, specs)
     runs_dir = Path(runs_dir).resolve()  # records stay valid from any working directory
     finished = store.finished_keys()
     todo = [spec for spec in specs if spec.key not in finished]
@@ -107,6 +111,7 @@ def _jobs(
     jobs = []
     for spec in todo:
         run_dir = runs_dir / spec.run_dir_name()
+        check_inside(runs_dir, run_dir)
         if run_dir.exists():  # left by an interrupted run: start clean
             shutil.rmtree(run_dir)
         payload = spec.to_payload(
@@ -118,12 +123,55 @@ def _jobs(
     return jobs
 
 
-def _row(spec: TrialSpec, outcome: WorkerOutcome, run_dir: str) -> dict[str, Any]:
-    """The record of a finished trial: from its summary, else from its error."""
-    if outcome.summary is not None:
-        return record_from_summary(
-            spec, outcome.summary, outcome.wall_seconds, run_dir, outcome.attempts
+def check_runs_dir(runs_dir: Path, specs: list[TrialSpec]) -> None:
+    """Refuses a runs folder that is a symbolic link, or holds one where a trial's run
+    folder goes (see :func:`check_inside`): checked before anything is deleted or run.
+
+    Raises:
+        OutputError: one line naming the link.
+    """
+    if Path(runs_dir).is_symlink():
+        raise OutputError(
+            f"{printable(runs_dir)} is a symbolic link; bearchair writes trial records only "
+            "inside --out: remove the link"
         )
+    for spec in specs:
+        check_inside(Path(runs_dir), Path(runs_dir) / spec.run_dir_name())
+
+
+def check_inside(folder: Path, path: Path) -> None:
+    """Refuses ``path`` unless every part of it below ``folder`` is a real folder or
+    missing: a symbolic link there (``OUT/runs/<chair>`` pointing elsewhere) would make the
+    campaign delete and write outside its ``--out``.
+
+    Raises:
+        OutputError: one line naming the link and where it points.
+    """
+    current = folder
+    for part in path.relative_to(folder).parts:
+        current = current / part
+        if current.is_symlink():
+            raise OutputError(
+                f"{printable(current)} is a symbolic link (to {printable(os.readlink(current))}); "
+                "bearchair writes trial records only inside --out: remove the link"
+            )
+        if current.exists() and not current.is_dir():
+            raise OutputError(f"{printable(current)} is a file where a run folder goes: remove it")
+
+
+def _row(spec: TrialSpec, outcome: WorkerOutcome, run_dir: str) -> dict[str, Any]:
+    """The record of a finished trial: from its summary, else from its error. A summary
+    of the wrong shape is this trial's failure, named, not the campaign's."""
+    if outcome.summary is not None:
+        try:
+            return record_from_summary(
+                spec, outcome.summary, outcome.wall_seconds, run_dir, outcome.attempts
+            )
+        except (TypeError, ValueError, KeyError, AttributeError, OverflowError) as error:
+            reason = f"the worker's summary is malformed ({type(error).__name__}: {error})"
+            return record_from_error(
+                spec, printable(reason, 300), outcome.wall_seconds, run_dir, outcome.attempts
+            )
     return record_from_error(
         spec,
         outcome.error or "unknown error",

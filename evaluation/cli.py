@@ -148,6 +148,7 @@ def run(args: argparse.Namespace) -> int:
     manifest entry (one line per bad one; ``--skip-bad`` goes on without them), the
     output folder and the database (readable, of this schema, writable, not in use).
     """
+    from bearchair.evaluation.campaign import check_runs_dir
     from bearchair.evaluation.protocol import expand_protocol
     from bearchair.evaluation.store import TrialStore, campaign_lock
     from bearchair.executive.interrupts import exit_status
@@ -163,6 +164,7 @@ def run(args: argparse.Namespace) -> int:
     db_path = _db_path(args)
     ensure_writable_dir(args.out, "--out")
     ensure_writable_dir(db_path.parent, "folder of --db")
+    check_runs_dir(args.out / "runs", specs)  # no link out of --out, before any work
     with campaign_lock(db_path), TrialStore(db_path) as store:
         done_before = len(store.finished_keys() & {spec.key for spec in specs})
         print(

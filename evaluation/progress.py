@@ -11,6 +11,8 @@ import sys
 import time
 from typing import Any, TextIO
 
+from bearchair.core.userfiles import printable
+
 BAR_WIDTH = 24
 
 
@@ -84,7 +86,7 @@ class Progress:
             self.failures += 1
         what = record.get("failed_stage") or ("error" if record.get("error") else "")
         last = (
-            f"{record['chair']} #{record['trial_index']} {record['outcome']}"
+            f"{printable(record['chair'])} #{record['trial_index']} {record['outcome']}"
             + (f" at {what}" if record.get("outcome") != "success" and what else "")
             + f" ({record.get('wall_seconds') or 0:.0f} s)"
         )

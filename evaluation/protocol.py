@@ -17,6 +17,7 @@ from typing import Any, NamedTuple
 
 from bearchair.core.errors import ChairSetError
 from bearchair.core.meshes import SUPPORTED_SUFFIXES
+from bearchair.core.userfiles import load_user_json, printable
 from bearchair.skills.imagination import DEFAULT_WORKERS
 
 EXPERIMENTS = ("accessible", "inaccessible_obeys", "inaccessible_disobeys")
@@ -136,27 +137,29 @@ def read_manifest(chairs_dir: Path) -> dict[str, dict[str, Any]] | None:
             name); entries' values are checked by :func:`manifest_entry_problem`.
     """
     manifest_path = chairs_dir / "manifest.json"
-    if not manifest_path.exists():
+    if not manifest_path.exists() and not manifest_path.is_symlink():
         return None
-    try:
-        document = json.loads(manifest_path.read_text(encoding="utf-8"))
-    except OSError as error:
-        raise ChairSetError(f"{manifest_path}: unreadable ({error.strerror or error})") from error
-    except ValueError as error:  # JSON or UTF-8
-        reason = error.msg if isinstance(error, json.JSONDecodeError) else "not UTF-8 text"
-        raise ChairSetError(f"{manifest_path}: not valid JSON ({reason})") from error
+    document = load_user_json(manifest_path, "manifest", ChairSetError)
+    where = printable(manifest_path)
     entries = document.get("meshes") if isinstance(document, dict) else None
     if not isinstance(entries, list):
         raise ChairSetError(
-            f'{manifest_path}: expected an object with a "meshes" list, as in ../shared/chairs'
+            f'{where}: expected an object with a "meshes" list, as in ../shared/chairs'
         )
+    if not entries:
+        raise ChairSetError(f'{where}: its "meshes" list is empty; list each mesh of the folder')
     by_name: dict[str, dict[str, Any]] = {}
+    numbers: dict[str, int] = {}
     for number, entry in enumerate(entries):
         if not isinstance(entry, dict) or not isinstance(entry.get("file"), str):
+            raise ChairSetError(f'{where}: meshes[{number}] is not an object with a "file" name')
+        name = entry["file"]
+        if name in by_name:
             raise ChairSetError(
-                f'{manifest_path}: meshes[{number}] is not an object with a "file" name'
+                f"{where}: meshes[{numbers[name]}] and meshes[{number}] both list "
+                f"{printable(name)}; keep one"
             )
-        by_name[entry["file"]] = entry
+        by_name[name], numbers[name] = entry, number
     return by_name
 
 
@@ -226,7 +229,12 @@ def discover_chairs(
     if problems:
         raise BadChairsError(problems)
     if not chosen:
-        raise ChairSetError(f"{chairs_dir}: none of its {len(meshes)} meshes has a usable front")
+        reasons = "; ".join(f"{printable(s.name)}: {s.reason}" for s in skipped[:3])
+        more = f"; and {len(skipped) - 3} more" if len(skipped) > 3 else ""
+        raise ChairSetError(
+            f"{printable(chairs_dir)}: none of its {len(meshes)} meshes takes part "
+            f"({reasons}{more})"
+        )
     return chosen, skipped
 
 
@@ -268,7 +276,9 @@ def _verdict(
     from bearchair.core.meshes import MeshLoadError, load_chair_mesh
 
     if path.name not in manifest:
-        return SkippedChair(path.name, "not in manifest.json")
+        same = [name for name in manifest if name.casefold() == path.name.casefold()]
+        hint = f" (it lists {printable(same[0])}: the names differ in case)" if same else ""
+        return SkippedChair(path.name, f"not in manifest.json{hint}")
     info = manifest[path.name]
     problem = manifest_entry_problem(info)
     if problem is not None:

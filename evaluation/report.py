@@ -16,8 +16,10 @@ import statistics
 from collections import Counter
 from pathlib import Path
 from typing import Any, NamedTuple
+from urllib.parse import quote
 
 from bearchair.behaviours.accessibility import REFUSED
+from bearchair.core.userfiles import printable
 from bearchair.evaluation.pictures import trial_picture_name
 from bearchair.evaluation.protocol import EXPERIMENT_LABELS, EXPERIMENTS, SkippedChair
 from bearchair.trees.mission import STAGES
@@ -192,14 +194,17 @@ def format_table(table: TrialsTable) -> str:
             f"Refused (no stance reaches the seat): {trials} trial(s) on "
             f"{len(table.refusals)} chair(s)",
         ]
-        lines += [f"  {chair} ({n}): {reason}" for chair, reason, n in table.refusals]
+        lines += [
+            f"  {printable(chair)} ({n}): {printable(reason)}"
+            for chair, reason, n in table.refusals
+        ]
     lines += ["", "Causes of failure"]
     if not table.failure_causes:
         lines.append("  none")
     else:
         lines.append("  by stage: " + ", ".join(f"{s} {n}" for s, n in table.failure_stages))
     for kind, count in table.failure_kinds:
-        lines.append(f"  {count:>3} x {kind}")
+        lines.append(f"  {count:>3} x {printable(kind)}")
     if table.failure_causes:
         lines.append("  (every cause with its numbers: report.md)")
     return "\n".join(lines)
@@ -216,17 +221,17 @@ def markdown_report(
     """The campaign report in Markdown: Table 1, stage medians, failures, every trial."""
     out = [f"# {title}", ""]
     if settings:
-        out += [", ".join(f"{k}: {v}" for k, v in settings.items()), ""]
+        out += [", ".join(f"{k}: {_md(v)}" for k, v in settings.items()), ""]
     out += _md_table_1(table)
     out += _md_stage_medians(table, len(records))
     out += _md_failures(table)
     if skipped:
         out += ["", "## Meshes not in the campaign", ""]
-        out += [f"- {s.name}: {s.reason}" for s in skipped]
+        out += [f"- {_md(s.name)}: {_md(s.reason)}" for s in skipped]
     out += _md_trials(records)
     if chair_pictures:
         out += ["", "## Imagined sitting poses", ""]
-        out += [f"![{chair}]({path})" for chair, path in sorted(chair_pictures.items())]
+        out += [f"![{_md(chair)}]({_link(path)})" for chair, path in sorted(chair_pictures.items())]
     return "\n".join(out) + "\n"
 
 
@@ -280,13 +285,15 @@ def _md_failures(table: TrialsTable) -> list[str]:
     out: list[str] = []
     if table.refusals:
         out += ["", "## Refused chairs (no stance reaches the seat)", ""]
-        out += [f"- {chair} ({n} trials): {_md(reason)}" for chair, reason, n in table.refusals]
+        out += [
+            f"- {_md(chair)} ({n} trials): {_md(reason)}" for chair, reason, n in table.refusals
+        ]
     out += ["", "## Causes of failure", ""]
     if not table.failure_causes:
         out.append("None.")
     else:
         out += ["| Failed stage | Trials |", "|---|---:|"]
-        out += [f"| {s} | {n} |" for s, n in table.failure_stages]
+        out += [f"| {_md(s)} | {n} |" for s, n in table.failure_stages]
         out.append("")
     if table.failure_kinds:
         out += ["By kind (numbers replaced by #):", ""]
@@ -309,13 +316,15 @@ def _md_trials(records: list[dict[str, Any]]) -> list[str]:
     for r in records:
         scene = Path(r.get("run_dir") or "") / "final_scene.png"
         picture = (
-            f"[png](trials/{trial_picture_name(r)})" if r.get("run_dir") and scene.is_file() else ""
+            f"[png]({_link('trials/' + trial_picture_name(r))})"
+            if r.get("run_dir") and scene.is_file()
+            else ""
         )
         facing = r.get("facing_error_deg")
         after = r.get("accessible_after_assistance")
         out.append(
-            f"| {r['chair']} | {r['trial_index']} | {r['experiment']} | {r['seed']} | "
-            f"{r['outcome']} | {_md(r.get('failed_stage') or ('error' if r.get('error') else ''))} | "
+            f"| {_md(r['chair'])} | {r['trial_index']} | {_md(r['experiment'])} | {r['seed']} | "
+            f"{_md(r['outcome'])} | {_md(r.get('failed_stage') or ('error' if r.get('error') else ''))} | "
             f"{'' if r.get('rotations') is None else r['rotations']} | "
             f"{'' if after is None else ('yes' if after else 'no')} | "
             f"{'' if facing is None else f'{facing:.1f}'} | {r.get('wall_seconds') or 0:.1f} | "
@@ -324,5 +333,17 @@ def _md_trials(records: list[dict[str, Any]]) -> list[str]:
     return out
 
 
-def _md(text: str) -> str:
-    return text.replace("|", "\\|").replace("\n", " ")
+def _md(text: object) -> str:
+    """``text`` safe inside a Markdown table cell or list item, and as HTML: no control
+    character, no live tag (``<img onerror=...>`` stays text), no ``|`` splitting a row,
+    no ``[`` or ``]`` closing a link's text."""
+    shown = printable(str(text).replace("\n", " "), 400)
+    shown = shown.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    for special in ("\\", "|", "[", "]"):
+        shown = shown.replace(special, "\\" + special)
+    return shown
+
+
+def _link(path: str) -> str:
+    """A relative link target: each character outside a plain file name percent-quoted."""
+    return quote(path, safe="/._-")

@@ -9,10 +9,13 @@ rerun skip what is already there.
 from __future__ import annotations
 
 import contextlib
+import errno
 import fcntl
 import json
+import logging
 import os
 import sqlite3
+import stat
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -20,7 +23,10 @@ from typing import Any
 
 from bearchair.core.errors import RecordStoreError
 from bearchair.core.provenance import software_versions
+from bearchair.core.userfiles import parse_json, printable
 from bearchair.evaluation.protocol import TrialSpec
+
+logger = logging.getLogger(__name__)
 
 COLUMNS: dict[str, str] = {
     "chair": "TEXT NOT NULL",
@@ -158,8 +164,8 @@ class TrialStore:
         Args:
             specs: keep only the rows of these trials (the current campaign), if given.
         """
-        rows = self._db.execute("SELECT * FROM trials ORDER BY chair, trial_index, seed")
-        records = [_from_row(row) for row in rows]
+        rows = self._db.execute("SELECT rowid, * FROM trials ORDER BY chair, trial_index, seed")
+        records = [_from_row(row, self.path) for row in rows]
         if specs is not None:
             wanted = {spec.key for spec in specs}
             records = [r for r in records if tuple(r[k] for k in KEY_COLUMNS) in wanted]
@@ -187,20 +193,29 @@ def campaign_lock(db_path: Path) -> Iterator[None]:
     Raises:
         RecordStoreError: another process holds it.
     """
-    lock_path = Path(f"{db_path}.lock")
+    lock_path = Path(f"{Path(db_path).resolve()}.lock")  # one lock per database, however named
     try:
         lock_path.parent.mkdir(parents=True, exist_ok=True)
-        stream = open(lock_path, "a+")  # noqa: SIM115 - held for the whole block
+        descriptor = os.open(
+            lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK, 0o666
+        )
     except OSError as error:
-        raise RecordStoreError(
-            f"cannot make the lock file {lock_path}: {error.strerror or error}"
-        ) from error
+        reason = (
+            "it is a symbolic link (bearchair does not write through one): remove it"
+            if error.errno == errno.ELOOP
+            else error.strerror or str(error)
+        )
+        raise RecordStoreError(f"cannot make the lock file {lock_path}: {reason}") from error
+    stream = os.fdopen(descriptor, "r+")
     try:
+        if not stat.S_ISREG(os.fstat(descriptor).st_mode):
+            raise RecordStoreError(
+                f"the lock file {lock_path} is not a regular file (a pipe or a device): remove it"
+            )
         try:
-            fcntl.flock(stream.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+            fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            stream.seek(0)
-            holder = stream.read().strip() or "another process"
+            holder = printable(stream.read(80).strip() or "another process")
             raise RecordStoreError(
                 f"database {db_path} is in use by another bearchair trials ({holder}); "
                 "wait for it to finish or give another --db"
@@ -222,11 +237,25 @@ def _to_sql(value: Any) -> Any:
     return value
 
 
-def _from_row(row: sqlite3.Row) -> dict[str, Any]:
+def _from_row(row: sqlite3.Row, db_path: Path) -> dict[str, Any]:
+    """A stored row as a record, its JSON columns decoded; a damaged one is left out with
+    one warning naming the database and the row (the trial's other columns still count)."""
     record = dict(row)
+    record.pop("rowid", None)
     for name in ("stage_seconds", "sitting_pose", "software"):
         if record.get(name):
-            record[name] = json.loads(record[name])
+            try:
+                record[name] = parse_json(str(record[name]), name, RecordStoreError)
+            except RecordStoreError as error:
+                logger.warning(
+                    "database %s: row %s (%s #%s): %s; left out",
+                    db_path,
+                    row["rowid"],
+                    printable(record.get("chair"), 80),
+                    printable(record.get("trial_index"), 20),
+                    printable(error, 120),
+                )
+                record[name] = None
     return record
 
 

@@ -26,6 +26,9 @@ import time
 from pathlib import Path
 from typing import IO, Any, NamedTuple, Protocol
 
+from bearchair.core.errors import RecordStoreError
+from bearchair.core.userfiles import parse_json
+
 RESULT_MARKER = "BEARCHAIR-TRIAL-RESULT "
 LOG_NAME = "worker.log"
 """The worker's stderr, in its run folder."""
@@ -279,9 +282,9 @@ def run_worker_with_retry(
 def _last_result(stdout: str) -> dict[str, Any] | None:
     for line in reversed(stdout.splitlines()):
         if line.startswith(RESULT_MARKER):
-            try:
-                message = json.loads(line[len(RESULT_MARKER) :])
-            except json.JSONDecodeError:
+            try:  # bounded: a worker's output is data like any other
+                message = parse_json(line[len(RESULT_MARKER) :], "result", RecordStoreError)
+            except RecordStoreError:
                 return None
             return message if isinstance(message, dict) else None
     return None

@@ -43,7 +43,6 @@ the arena, headings are radians in [-pi, pi].
 from __future__ import annotations
 
 import difflib
-import json
 import math
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -55,6 +54,7 @@ from bearchair.core.arena import DEFAULT_ARENA, Arena
 from bearchair.core.errors import BackendUnavailable
 from bearchair.core.geometry import yaw_of
 from bearchair.core.se2 import SE2Pose
+from bearchair.core.userfiles import parse_json, parse_yaml, printable, read_user_text
 from bearchair.hardware.interfaces import CameraIntrinsics
 
 ROTATION_TOLERANCE = 1e-3
@@ -178,30 +178,21 @@ def load_cell_config(path: Path, arena: Arena = DEFAULT_ARENA) -> CellConfig:
             message is one line naming the file and the field.
     """
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as error:
-        raise CellConfigError(f"{path}: cannot read the cell file ({error.strerror})") from error
-    try:
-        if path.suffix.lower() in (".yaml", ".yml"):
-            try:
-                import yaml
-            except ImportError as error:
-                raise CellConfigError(
-                    f"{path}: YAML cell files need PyYAML (pip install pyyaml), or write JSON"
-                ) from error
-            raw = yaml.safe_load(text)
-        else:
-            raw = json.loads(text)
-    except CellConfigError:
-        raise
-    except Exception as error:  # JSON and YAML parsers raise their own types
-        first_line = str(error).splitlines()[0] if str(error) else type(error).__name__
-        raise CellConfigError(f"{path}: not valid JSON/YAML ({first_line})") from error
+    text = read_user_text(path, "cell file", CellConfigError)
+    where = printable(path)
+    if path.suffix.lower() in (".yaml", ".yml"):
+        try:
+            raw = parse_yaml(text, where, CellConfigError)
+        except ImportError as error:
+            raise CellConfigError(
+                f"{where}: YAML cell files need PyYAML (pip install pyyaml), or write JSON"
+            ) from error
+    else:
+        raw = parse_json(text, where, CellConfigError)
     try:
         return parse_cell_config(raw, arena, source=path)
     except CellConfigError as error:
-        raise CellConfigError(f"{path}: {error}") from None
+        raise CellConfigError(f"{where}: {error}") from None
 
 
 def parse_cell_config(
@@ -215,7 +206,7 @@ def parse_cell_config(
     nao_url, nao_user, nao_password = _nao_connection(raw) if needs_nao else (None, None, None)
     camera = _text(raw, "camera", "carmine")
     if camera not in CAMERAS:
-        raise CellConfigError(f"camera: {camera!r} is not one of {', '.join(CAMERAS)}")
+        raise CellConfigError(f"camera: {camera} is not one of {', '.join(CAMERAS)}")
     speed = _number(raw, "panda_speed_factor", 0.2)
     if not SPEED_FACTOR_RANGE[0] <= speed <= SPEED_FACTOR_RANGE[1]:
         raise CellConfigError(
@@ -301,7 +292,9 @@ def _check_fields(raw: Any) -> None:
         if key not in _KNOWN:
             near = difflib.get_close_matches(str(key), _KNOWN, n=1, cutoff=0.6)
             hint = f" (did you mean {near[0]}?)" if near else ""
-            raise CellConfigError(f"unknown field {key!r}{hint}; known: {', '.join(_KNOWN)}")
+            raise CellConfigError(
+                f"unknown field {printable(repr(key), 60)}{hint}; known: {', '.join(_KNOWN)}"
+            )
 
 
 def _check_required(raw: dict[str, Any], needs_panda: bool, needs_nao: bool) -> None:
@@ -347,9 +340,11 @@ def _nao_connection(raw: dict[str, Any]) -> tuple[str, str | None, str | None]:
     """(nao_url, nao_user, nao_password), checked: credentials go together, over tcps only."""
     nao_url = _text(raw, "nao_url")
     if not nao_url.startswith(("tcp://", "tcps://")):
-        raise CellConfigError(f"nao_url: {nao_url!r} must start with tcp:// or tcps://")
+        raise CellConfigError(
+            f"nao_url: {printable(repr(nao_url), 80)} must start with tcp:// or tcps://"
+        )
     nao_user = _optional_text(raw, "nao_user")
-    nao_password = _optional_text(raw, "nao_password")
+    nao_password = _password(raw)
     if (nao_user is None) != (nao_password is None):
         raise CellConfigError("nao_user and nao_password go together")
     if nao_user is not None and not nao_url.startswith("tcps://"):
@@ -428,15 +423,39 @@ def _rigid(raw: dict[str, Any], key: str, max_translation_m: float) -> np.ndarra
 def _number(raw: dict[str, Any], key: str, default: float | None = None) -> float:
     value = raw.get(key, default)
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise CellConfigError(f"{key}: a finite number is needed, got {value!r}")
+        raise CellConfigError(f"{key}: a finite number is needed, got {printable(repr(value), 60)}")
     return float(value)
 
 
 def _text(raw: dict[str, Any], key: str, default: str | None = None) -> str:
+    """A non-empty string without control characters, its edge spaces stripped."""
     value = raw.get(key, default)
     if not isinstance(value, str) or not value.strip():
-        raise CellConfigError(f"{key}: a non-empty string is needed, got {value!r}")
+        raise CellConfigError(
+            f"{key}: a non-empty string is needed, got {printable(repr(value), 60)}"
+        )
+    if not value.isprintable():
+        raise CellConfigError(f"{key}: {printable(value, 60)} holds a control character")
     return value.strip()
+
+
+def _password(raw: dict[str, Any]) -> str | None:
+    """``nao_password`` exactly as written (never printed, never stripped)."""
+    value = raw.get("nao_password")
+    if value is None:
+        return None
+    if not isinstance(value, str):
+        raise CellConfigError(
+            f"nao_password: a string is needed, not a {type(value).__name__} (write it in quotes)"
+        )
+    if not value or not value.isprintable():
+        raise CellConfigError("nao_password: empty or holds a control character")
+    if value != value.strip():
+        raise CellConfigError(
+            "nao_password: begins or ends with a space; bearchair sends a password as "
+            "written, so remove the spaces if they are not part of it"
+        )
+    return value
 
 
 def _optional_text(raw: dict[str, Any], key: str) -> str | None:

@@ -25,10 +25,11 @@ import time
 import traceback
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any
 
 from bearchair.core.errors import BackendUnavailable, BearchairError, InputError, one_line
 from bearchair.core.provenance import version_line
+from bearchair.core.userfiles import printable
 from bearchair.executive import (
     cmd_calibrate_hand_eye,
     cmd_check_hardware,
@@ -43,6 +44,7 @@ from bearchair.executive.cmd_config import (
     check_run_inputs,
     mission_from_args,
 )
+from bearchair.executive.console import TolerantStream, lost_output_status
 from bearchair.executive.interrupts import exit_status, handling_signals, received, signal_name
 from bearchair.executive.operator import ask_operator
 
@@ -154,7 +156,9 @@ def build_parser() -> argparse.ArgumentParser:
     tree.set_defaults(func=_tree)
 
     inspect = subparsers.add_parser("inspect", help="replay a recorded run")
-    inspect.add_argument("run_dir", type=Path)
+    # Not named run_dir: that is where an internal error's traceback would go, and
+    # inspect reads a record, it never writes one.
+    inspect.add_argument("record_dir", metavar="run_dir", type=Path)
     inspect.add_argument("--tick", type=int, help="show the tree at this tick (default: the last)")
     inspect.add_argument("--blackboard", action="store_true", help="also show the blackboard")
     inspect.add_argument("--timeline", action="store_true", help="show every status change")
@@ -353,11 +357,13 @@ def _tree(args: argparse.Namespace) -> int:
 def _inspect(args: argparse.Namespace) -> int:
     from bearchair.executive.inspect_run import RecordedRun
 
-    run = RecordedRun(args.run_dir)
+    run = RecordedRun(args.record_dir)
     state = run.at(args.tick)
-    print(f"{args.run_dir}: tick {state['tick']} of {run.last_tick}, t = {state['t']:.2f} s")
+    print(
+        f"{printable(args.record_dir)}: tick {state['tick']} of {run.last_tick}, t = {state['t']:.2f} s"
+    )
     for note in run.notes:
-        print(f"note: {note}")
+        print(f"note: {printable(note, 1000)}")
     if args.tree is not None:
         print(f"tree: {run.compare_tree(args.tree)}")
     print(run.tree_text(args.tick))
@@ -374,44 +380,6 @@ def _inspect(args: argparse.Namespace) -> int:
     return 0
 
 
-class _TolerantStream:
-    """A text stream that survives its reader going away (``| head``, a closed terminal).
-
-    After the first failed write it drops everything: a campaign or a mission must not
-    die because nobody reads its progress; its results are in files.
-    """
-
-    def __init__(self, stream: TextIO) -> None:
-        self._stream = stream
-        self.broken = False
-
-    def write(self, text: str) -> int:
-        if not self.broken:
-            try:
-                return self._stream.write(text)
-            except (OSError, ValueError):
-                self._break()
-        return len(text)
-
-    def flush(self) -> None:
-        if not self.broken:
-            try:
-                self._stream.flush()
-            except (OSError, ValueError):
-                self._break()
-
-    def _break(self) -> None:
-        self.broken = True
-        # Python flushes the real stream at exit; point it at /dev/null first.
-        with contextlib.suppress(OSError, ValueError, AttributeError):
-            devnull = os.open(os.devnull, os.O_WRONLY)
-            os.dup2(devnull, self._stream.fileno())
-            os.close(devnull)
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._stream, name)
-
-
 def _error_line(error: BaseException) -> str:
     """One line for a user-facing error, prefixed ``bearchair:`` unless it names itself."""
     from bearchair.executive.outputs import describe_os_error
@@ -425,7 +393,7 @@ def _error_line(error: BaseException) -> str:
     elif isinstance(error, sqlite3.Error):
         text = f"database error: {one_line(error)}"
     else:
-        text = one_line(error)
+        text = printable(str(error).strip() or type(error).__name__, 600)
     return text if text.startswith("bearchair") else f"bearchair: {text}"
 
 
@@ -465,7 +433,7 @@ def _report_internal_error(error: BaseException, args: argparse.Namespace | None
     except OSError:
         where = "the traceback could not be written"
     print(
-        f"bearchair: internal error ({type(error).__name__}: {one_line(error, 200)}); "
+        f"bearchair: internal error ({type(error).__name__}: {printable(one_line(error), 200)}); "
         f"this is a bug, please report it; {where}",
         file=sys.stderr,
     )
@@ -480,10 +448,12 @@ def main(argv: list[str] | None = None) -> int:
     """
     console = argv is None  # the console script (tests pass their argv)
     saved = sys.stdout, sys.stderr
-    sys.stdout, sys.stderr = _TolerantStream(sys.stdout), _TolerantStream(sys.stderr)
+    out, err = TolerantStream(sys.stdout), TolerantStream(sys.stderr)
+    sys.stdout, sys.stderr = out, err
     try:
         with handling_signals():
             status = _main(argv)
+            status = lost_output_status(out, err, status, EXIT_BAD_INPUT)
             if console and received() is not None:
                 _exit_now(status)
             return status
@@ -492,6 +462,9 @@ def main(argv: list[str] | None = None) -> int:
             sys.stdout.flush()
             sys.stderr.flush()
         sys.stdout, sys.stderr = saved
+        outputs = sys.modules.get("bearchair.executive.outputs")
+        if outputs is not None:  # the run folder is written: another run may replace it
+            outputs.release_run_dir_locks()
 
 
 def _exit_now(status: int) -> None:

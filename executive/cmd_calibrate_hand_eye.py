@@ -192,7 +192,7 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
     """Connects, asks, moves through the views and captures; always ends at HOME."""
     from bearchair.executive.cell_config import load_cell_config
     from bearchair.executive.cmd_check_hardware import MOVE_SPEED_FACTOR
-    from bearchair.executive.operator import ask_operator
+    from bearchair.executive.operator import ask_operator, not_asked_because
     from bearchair.hardware.real import robots
     from bearchair.hardware.real.bounded import call_within
     from bearchair.skills.perception.hand_eye import (
@@ -221,7 +221,10 @@ def _capture(args: argparse.Namespace, board: Any) -> list[View]:
         flush=True,
     )
     if not args.yes and not ask_operator("The Panda will move now. Go on? [y/N] "):
-        raise _error("the operator did not confirm: nothing moved")
+        reason = not_asked_because()
+        raise _error(
+            "the operator did not confirm: nothing moved" + (f" ({reason})" if reason else "")
+        )
     arm.speed_factor = MOVE_SPEED_FACTOR  # as check-hardware --move: slow, near a person
     return _visit_views(arm, cell, board, CALIBRATION_CONFIGURATIONS[:count], args.timeout)
 
@@ -393,13 +396,40 @@ def _write_views(path: Path, views: list[View], board: Any, result: Any) -> None
     write_text_atomic(path, json.dumps(record, indent=2) + "\n")
 
 
+MAX_VIEWS = 200
+"""Most views a ``--from`` file may hold: a calibration takes 9 to a few dozen, and
+solving A X = X B over every pair of 200 views (19900 pairs) takes seconds."""
+
+
+def _what_is_wrong(error: Exception) -> str:
+    """A recorded file's defect in words, not a Python repr."""
+    from bearchair.core.userfiles import printable
+
+    if isinstance(error, KeyError):
+        return f"a view or the board lacks the field {printable(error.args[0] if error.args else '', 40)}"
+    return printable(str(error) or type(error).__name__, 120)
+
+
 def _load_views(path: Path) -> tuple[Any, list[View]]:
     """The board and views of a ``--out`` file (exact matrices, as written)."""
+    from bearchair.core.errors import InputError
+    from bearchair.core.userfiles import load_user_json, printable
+
+    try:
+        record = load_user_json(path, "calibration file", InputError)
+    except InputError as error:
+        raise _error(f"--from {error}") from None
+    if not isinstance(record, dict) or not isinstance(record.get("views"), list):
+        raise _error(
+            f'--from {printable(path)}: not a calibrate-hand-eye --out file (no "views" list)'
+        )
+    if len(record["views"]) > MAX_VIEWS:
+        raise _error(
+            f"--from {printable(path)}: {len(record['views'])} views, more than the "
+            f"{MAX_VIEWS} a calibration uses (A X = X B pairs grow as the square of the views)"
+        )
     from bearchair.skills.perception.hand_eye import BoardDetection, BoardSpec
 
-    if not path.is_file():
-        raise _error(f"--from {path}: no such file")
-    record = json.loads(path.read_text(encoding="utf-8"))
     try:
         board = BoardSpec(**record["board"])
         views = []
@@ -421,6 +451,9 @@ def _load_views(path: Path) -> tuple[Any, list[View]]:
                     None if entry.get("depth_ratio") is None else float(entry["depth_ratio"]),
                 )
             )
-    except (KeyError, TypeError, ValueError) as error:
-        raise _error(f"--from {path}: not a calibrate-hand-eye --out file ({error!r})") from None
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as error:
+        raise _error(
+            f"--from {printable(path)}: not a calibrate-hand-eye --out file "
+            f"({_what_is_wrong(error)})"
+        ) from None
     return board, views

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from bearchair.core.userfiles import printable
 from bearchair.hardware.real.bounded import call_within
 
 MOVE_SPEED_FACTOR = 0.1
@@ -34,7 +35,7 @@ class _Report:
         self.failed: list[str] = []
 
     def line(self, status: str, device: str, detail: str) -> None:
-        print(f"[{status:>4}] {device}: {detail}", flush=True)
+        print(f"[{status:>4}] {printable(device)}: {printable(detail, 1000)}", flush=True)
         if status == "FAIL" and device not in self.failed:
             self.failed.append(device)
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -137,17 +138,29 @@ def check_run_inputs(config: Any) -> Any:
         PluginError, InputError, MeshError: one line naming what is wrong.
     """
     from bearchair.core.meshes import load_chair_mesh
+    from bearchair.core.userfiles import open_regular_file
     from bearchair.executive.tree_source import load_tree_factory
     from bearchair.skills.plugins import check_skill_plugins
 
     factory = load_tree_factory(config.tree.factory)
     check_skill_plugins(config.skills.plugins)
+    if config.run.gui:
+        from bearchair.executive.recording import has_display
+
+        if not has_display():
+            raise InputError(
+                "bearchair run: --gui needs a display (neither DISPLAY nor WAYLAND_DISPLAY "
+                "is set); run without --gui, or watch with --live web"
+            )
     cell_file = config.robots.cell_file
     if config.robots.used:
         if config.run.chair is not None:
             raise InputError("bearchair run: --chair is for the simulation; not with --robots")
-        if cell_file is not None and not cell_file.is_file():
-            raise InputError(f"bearchair run: --robots {cell_file}: no such file")
+        if cell_file is not None:
+            try:  # a regular file: a FIFO would block, a folder is no cell file
+                os.close(open_regular_file(cell_file, "cell file", InputError))
+            except InputError as error:
+                raise InputError(f"bearchair run: --robots {error}") from None
     elif config.run.chair is not None:
         load_chair_mesh(config.run.chair)
     return factory

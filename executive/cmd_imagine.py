@@ -16,9 +16,11 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from bearchair.core.userfiles import printable
 from bearchair.executive import interrupts
 from bearchair.executive.cli_types import positive_int, seed_value
 
@@ -43,12 +45,26 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
+def check_workers(workers: int) -> None:
+    """Refuses more drop workers than the machine has processors (one line): the result
+    is the same for any number, and 10000 processes would only exhaust the machine."""
+    from bearchair.core.errors import InputError
+
+    processors = os.cpu_count() or 1
+    if workers > processors:
+        raise InputError(
+            f"bearchair imagine: --workers {workers}: more than this machine's {processors} "
+            f"processors; give at most {processors} (the result is the same for any number)"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     """Runs the imagination on ``args.mesh``; returns the exit status."""
     from bearchair.core.meshes import load_chair_mesh
     from bearchair.executive.outputs import check_output_file
     from bearchair.skills.imagination import imagine_sitting
 
+    check_workers(args.workers)
     mesh = load_chair_mesh(args.mesh)
     if args.image is not None:  # before the minutes of simulation, not after
         check_output_file(args.image, "--image", (".png",))
@@ -65,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     _print_report(result)
     if args.image is not None:
-        print(f"image:            {args.image}")
+        print(f"image:            {printable(args.image)}")
     return 0
 
 
@@ -111,7 +127,7 @@ def _print_report(result: ImaginationResult) -> None:
         print(f"sitting position: x={x:.3f} y={y:.3f} z={z:.3f} m (mesh frame)")
         print(f"sitting yaw:      {math.degrees(result.sitting_pose.yaw):.1f} deg from +x about +z")
     else:
-        print(f"no sitting pose: {result.reason}")
+        print(f"no sitting pose: {printable(result.reason, 400)}")
     print(f"correct sittings: {result.n_correct} of {result.n_drops} drops")
     if result.vote is not None:
         print(f"rotation vote:    {result.vote.describe()}")

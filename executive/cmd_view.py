@@ -31,7 +31,10 @@ def register(subparsers: Any) -> None:
         "view", help="open a run's Rerun recording (record one with 'bearchair run --record')"
     )
     parser.add_argument(
-        "run_dir", type=Path, help=f"a run folder (with {RECORDING_FILE}) or a .rrd"
+        "record_dir",
+        metavar="run_dir",
+        type=Path,
+        help=f"a run folder (with {RECORDING_FILE}) or a .rrd",
     )
     parser.add_argument(
         "--web", action="store_true", help="serve the web viewer instead of opening a window"
@@ -99,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"bearchair view: needs rerun-sdk: {INSTALL_HINT}")
     if not 0 < args.port < 65536:
         raise InputError(f"bearchair view: --port must be 1..65535, not {args.port}")
-    path = recording_path(args.run_dir)
+    path = recording_path(args.record_dir)
     if not args.web and not has_display():
         raise InputError(
             "bearchair view: no display for the native viewer; use --web and open the "

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
@@ -10,6 +9,8 @@ from pathlib import Path
 from typing import Any, Literal
 
 from bearchair.core.arena import DEFAULT_ARENA, Arena
+from bearchair.core.errors import ChairSetError
+from bearchair.core.userfiles import load_user_json, printable
 from bearchair.skills.imagination import DEFAULT_WORKERS
 from bearchair.skills.parameters import SkillParameters
 from bearchair.trees.options import TreeOptions
@@ -117,13 +118,13 @@ def front_yaw_from_manifest(chair_path: Path) -> float | None:
     if not manifest.is_file():
         return None
     try:
-        entries = json.loads(manifest.read_text(encoding="utf-8")).get("meshes", [])
+        entries = load_user_json(manifest, "manifest", ChairSetError).get("meshes", [])
         entry = next(
             (e for e in entries if isinstance(e, dict) and e.get("file") == chair_path.name),
             None,
         )
-    except (OSError, ValueError, AttributeError, TypeError) as error:
-        logger.warning("ignoring unreadable %s: %s", manifest, error)
+    except (ChairSetError, AttributeError, TypeError) as error:
+        logger.warning("ignoring unreadable %s: %s", printable(manifest), printable(error))
         return None
     if entry is None:
         return None

@@ -10,6 +10,7 @@ import py_trees
 from py_trees.common import Status
 
 from bearchair.core.errors import RunRecordError
+from bearchair.core.userfiles import load_user_json, printable
 from bearchair.executive.record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, read_ticks
 from bearchair.executive.render import render_text
 
@@ -48,12 +49,12 @@ class RecordedRun:
         self.summary = self._read_summary(run_dir / SUMMARY_FILE)
 
     def _read_summary(self, path: Path) -> dict[str, Any] | None:
-        if not path.exists():
+        if not path.exists() and not path.is_symlink():
             return None
         try:
-            summary = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as error:  # ValueError: bad JSON or not UTF-8
-            self.notes.append(f"{SUMMARY_FILE} ignored: unreadable ({_reason(error)})")
+            summary = load_user_json(path, "run summary", RunRecordError)
+        except RunRecordError as error:
+            self.notes.append(f"{SUMMARY_FILE} ignored: unreadable ({printable(error)})")
             return None
         if not isinstance(summary, dict):
             self.notes.append(f"{SUMMARY_FILE} ignored: not a JSON object")
@@ -70,7 +71,7 @@ class RecordedRun:
             line += f" at {self.summary['failed_stage']}: {self.summary.get('reason', '')}"
         if self.summary.get("interrupted"):
             line += f" (interrupted by {self.summary.get('signal', 'the operator')})"
-        return line
+        return printable(line, 2000)
 
     def compare_tree(self, spec: str) -> str:
         """Whether the recorded tree is the one ``spec`` (``--tree``) builds with the run's
@@ -100,11 +101,11 @@ class RecordedRun:
         from bearchair.trees.options import TreeOptions
 
         try:
-            config = json.loads((self.run_dir / "config.json").read_text(encoding="utf-8"))
+            config = load_user_json(self.run_dir / "config.json", "config", RunRecordError)
             section = config.get("tree") or config.get("tree_options") or {}
             fields = ("assistance", "max_rotations", "rescan_fallback")
             return TreeOptions(**{key: section[key] for key in fields if key in section})
-        except (OSError, ValueError, TypeError, AttributeError):
+        except (RunRecordError, ValueError, TypeError, AttributeError):
             return TreeOptions()
 
     @property
@@ -137,7 +138,10 @@ class RecordedRun:
 
     def blackboard_text(self, tick: int | None) -> str:
         board = self.at(tick)["blackboard"]
-        return "\n".join(f"{key}: {json.dumps(value)}" for key, value in sorted(board.items()))
+        return "\n".join(
+            f"{printable(key)}: {printable(json.dumps(value), 2000)}"
+            for key, value in sorted(board.items())
+        )
 
     def timeline(self) -> list[tuple[float, int, str, str, str]]:
         """Every status change of every node: (t, tick, node, old status, new status)."""
@@ -153,9 +157,9 @@ class RecordedRun:
                         (
                             recorded["t"],
                             recorded["tick"],
-                            names_of(node["path"], node["path"]),
-                            old,
-                            node["status"],
+                            printable(names_of(node["path"], node["path"]), 200),
+                            printable(old, 20),
+                            printable(node["status"], 20),
                         )
                     )
                     previous[node["path"]] = node["status"]
@@ -197,7 +201,7 @@ def _recorded_node(
         py_trees.decorators, node["type"], None
     )
     kind = kind if isinstance(kind, type) else py_trees.behaviour.Behaviour
-    name, memory = node["name"], bool(node.get("memory", False))
+    name, memory = printable(node["name"], 200), bool(node.get("memory", False))
     built: py_trees.behaviour.Behaviour
     if issubclass(kind, py_trees.composites.Parallel):
         built = py_trees.composites.Parallel(
@@ -213,7 +217,7 @@ def _recorded_node(
         built = py_trees.behaviours.Dummy(name)
     status = recorded.get("status", "INVALID")
     built.status = py_trees.common.Status(status) if status in _STATUSES else Status.INVALID
-    built.feedback_message = recorded.get("feedback") or ""
+    built.feedback_message = printable(recorded.get("feedback") or "", 400)
     if isinstance(built, py_trees.composites.Composite):
         # The tip py_trees draws in bold: the last child that ran.
         active = [child for child in children if child.status != Status.INVALID]
@@ -224,20 +228,9 @@ def _recorded_node(
 _STATUSES = {status.value for status in Status}
 
 
-def _reason(error: BaseException) -> str:
-    if isinstance(error, json.JSONDecodeError):
-        return f"{error.msg} at line {error.lineno}"
-    if isinstance(error, UnicodeDecodeError):
-        return "not UTF-8 text"
-    return str(error).splitlines()[0] if str(error) else type(error).__name__
-
-
 def _read_shape(path: Path) -> list[dict[str, Any]]:
     """``tree.json``: a list of nodes, each with a str path and name, a type and a depth."""
-    try:
-        shape = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as error:
-        raise RunRecordError(f"{path}: unreadable ({_reason(error)})") from error
+    shape = load_user_json(path, "tree file", RunRecordError)
     if not isinstance(shape, list) or not shape:
         raise RunRecordError(f"{path}: not a tree (expected a non-empty JSON list of nodes)")
     for node in shape:

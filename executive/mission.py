@@ -16,9 +16,10 @@ from typing import TYPE_CHECKING, Any, TextIO
 from bearchair.core.errors import one_line
 from bearchair.core.geometry import wrap_angle
 from bearchair.core.meshes import load_mesh
+from bearchair.core.userfiles import printable
 from bearchair.executive.config import RunConfig, front_yaw_from_manifest
 from bearchair.executive.interrupts import raise_if_received, signal_name
-from bearchair.executive.outputs import atomic_path
+from bearchair.executive.outputs import atomic_path, write_text_atomic
 from bearchair.executive.record import RecordWriteError, RunRecorder
 from bearchair.executive.recording import open_recording
 from bearchair.executive.runner import MissionRunner, summarise
@@ -48,7 +49,10 @@ class StageProgress:
             if stage.status == "RUNNING":
                 line = f"[{runner.elapsed():7.1f} s] {stage.name} ..."
             else:
-                line = f"[{runner.elapsed():7.1f} s] {stage.name}: {stage.status} ({stage.seconds:.1f} s) {stage.feedback}"
+                line = (
+                    f"[{runner.elapsed():7.1f} s] {stage.name}: {stage.status} "
+                    f"({stage.seconds:.1f} s) {printable(stage.feedback, 400)}"
+                )
             try:
                 print(line, file=self._stream or sys.stderr, flush=True)
             except (OSError, ValueError):  # nobody reads stderr any more: the run goes on
@@ -303,7 +307,7 @@ def run_on_robots(
     robot = connect_robots(cell, mute=config.mute)
     if confirm is not None and not confirm("The NAO and the Panda will move now. Go on? [y/N] "):
         robot.close()
-        raise BackendUnavailable("the operator did not confirm: nothing moved")
+        raise BackendUnavailable(f"the operator did not confirm: nothing moved{_why_not_asked()}")
     try:
         activate(robot)
     except Exception as error:
@@ -320,7 +324,7 @@ def run_on_robots(
     on_tick = _both(on_tick, monitor.check)
     recorder = RunRecorder(config.out_dir, root)
     write_config(config)
-    (config.out_dir / "cell.json").write_text(json.dumps(cell.to_json(), indent=2))
+    write_text_atomic(config.out_dir / "cell.json", json.dumps(cell.to_json(), indent=2))
     run_info = {
         "chair": "real",
         "placement": "real",
@@ -500,7 +504,7 @@ def format_summary(summary: dict[str, Any]) -> str:
         lines.append(f"outcome: {outcome} in {summary['wall_seconds']:.1f} s")
     else:
         lines.append(f"outcome: {outcome} at {summary['failed_stage']}: {summary['reason']}")
-    return "\n".join(lines)
+    return "\n".join(printable(line, 1000) for line in lines)
 
 
 def default_out_dir(config: RunConfig) -> Path:
@@ -508,3 +512,10 @@ def default_out_dir(config: RunConfig) -> Path:
     from bearchair.executive.outputs import default_run_dir
 
     return default_run_dir(config.seed)
+
+
+def _why_not_asked() -> str:
+    from bearchair.executive.operator import not_asked_because
+
+    reason = not_asked_because()
+    return f" ({reason})" if reason else ""

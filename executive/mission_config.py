@@ -38,6 +38,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from bearchair.core.arena import DEFAULT_ARENA, Arena, Box2D
 from bearchair.core.errors import ConfigError
 from bearchair.core.se2 import SE2Pose
+from bearchair.core.userfiles import MAX_JSON_DEPTH, nesting_depth, printable, read_user_text
 from bearchair.executive.cli_types import MAX_SEED
 from bearchair.executive.config import RunConfig
 from bearchair.skills.imagination import DEFAULT_WORKERS
@@ -319,14 +320,15 @@ def load_mission_config(path: Path) -> MissionConfig:
             the file and the field.
     """
     path = Path(path)
+    text = read_user_text(path, "configuration", ConfigError)  # regular, bounded
     try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as error:
-        raise ConfigError(f"{path}: cannot read the configuration ({error.strerror})") from error
-    except UnicodeError as error:
-        raise ConfigError(f"{path}: not text (UTF-8): {error}") from error
+        raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
-        raise ConfigError(f"{path}: not valid TOML ({error})") from error
+        raise ConfigError(f"{printable(path)}: not valid TOML ({printable(error)})") from error
+    except RecursionError:
+        raise ConfigError(f"{printable(path)}: not valid TOML (nested too deeply)") from None
+    if nesting_depth(raw) > MAX_JSON_DEPTH:
+        raise ConfigError(f"{printable(path)}: nested deeper than {MAX_JSON_DEPTH}")
     _resolve_paths(raw, path.parent)
     return parse_mission_config(raw, str(path))
 

@@ -13,18 +13,25 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import fcntl
+import functools
 import os
 import shutil
 import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TextIO
 
 from bearchair.core.errors import OutputError
 
 MIN_FREE_BYTES = 20 * 1024 * 1024
 """Room a run needs on its file system: a mission's ticks.jsonl is a few MB, its
 pictures a few hundred kB; below this the run would fail part-way."""
+
+MIN_FREE_INODES = 64
+"""Files a run may create on its file system (a record is about ten, its snapshots a few
+dozen): with fewer left, it would run to the end and lose its record."""
 
 RUN_RECORD_NAMES = (
     "summary.json",
@@ -34,9 +41,15 @@ RUN_RECORD_NAMES = (
     "bearchair.log",
     "chair_reconstructed.ply",
     "worker.log",
+    "worker.stdout",
     "snapshots",
+    "mission.rrd",
+    "cell.json",
 )
 """What a run writes into its folder: what ``--overwrite`` removes (nothing else)."""
+RUN_LOCK_NAME = ".bearchair-run.lock"
+"""The lock a run holds on its folder while it writes there (``flock``): ``--overwrite``
+of a folder another run is still writing is refused."""
 
 
 def describe_os_error(error: OSError) -> str:
@@ -57,16 +70,24 @@ def _first_file_on_the_way(path: Path) -> Path | None:
 
 
 def check_free_space(folder: Path, what: str, min_free_bytes: int | None = None) -> None:
-    """Refuses a folder whose file system has less than ``min_free_bytes`` free."""
+    """Refuses a folder whose file system has less than ``min_free_bytes`` free, or fewer
+    than :data:`MIN_FREE_INODES` files left to create (``f_favail``)."""
     needed = MIN_FREE_BYTES if min_free_bytes is None else min_free_bytes
     try:
         free = shutil.disk_usage(folder).free
+        files = os.statvfs(folder)
     except OSError:
         return  # not measurable here (some network file systems): the writes will tell
     if free < needed:
         raise OutputError(
             f"{what} {folder}: only {free / 1e6:.1f} MB free on its file system "
             f"(needs {needed / 1e6:.0f} MB); free some space or choose another place"
+        )
+    # A file system that does not count its inodes (btrfs, some FUSE) reports 0 of 0.
+    if files.f_files > 0 and files.f_favail < MIN_FREE_INODES:
+        raise OutputError(
+            f"{what} {folder}: only {files.f_favail} files can still be created on its file "
+            f"system (needs {MIN_FREE_INODES}); delete some files or choose another place"
         )
 
 
@@ -98,41 +119,109 @@ def ensure_writable_dir(folder: Path, what: str = "output folder") -> Path:
 def prepare_run_dir(folder: Path, overwrite: bool = False) -> Path:
     """A run folder ready for a new record: new or empty, or emptied of an old record.
 
+    The folder is locked for this process (:data:`RUN_LOCK_NAME`) until it ends, so a
+    second run with ``--overwrite`` cannot empty it while this one writes. Old entries
+    are removed without following symbolic links.
+
     Raises:
         OutputError: the folder holds files and ``overwrite`` is False (or it holds
-            files that are not a run record's), or it cannot be written.
+            files that are not a run record's), another run is writing it, or it
+            cannot be written.
     """
     folder = Path(folder)
-    if folder.is_dir():
-        present = sorted(p.name for p in folder.iterdir() if not p.name.startswith(".bearchair"))
-        if present and not overwrite:
-            raise OutputError(
-                f"run folder {folder} is not empty (holds {', '.join(present[:3])}"
-                f"{', ...' if len(present) > 3 else ''}); pass --overwrite to replace its "
-                "record, or choose a new --out"
-            )
-        foreign = [name for name in present if name not in RUN_RECORD_NAMES]
-        if foreign:
-            raise OutputError(
-                f"run folder {folder} holds files that are not a run record "
-                f"({', '.join(foreign[:3])}); --overwrite only replaces run records: "
-                "choose a new --out"
-            )
+    if folder.is_symlink() and not folder.is_dir():
+        raise OutputError(f"run folder {folder}: a symbolic link to nothing; choose another --out")
+    if not folder.is_dir():
         ensure_writable_dir(folder, "run folder")
-        for name in present:
-            target = folder / name
-            try:
-                if target.is_dir():
-                    shutil.rmtree(target)
-                else:
-                    target.unlink()
-            except OSError as error:
-                raise OutputError(
-                    f"run folder {folder}: cannot remove the old {name} "
-                    f"({describe_os_error(error)})"
-                ) from error
+        lock_run_dir(folder)
         return folder
-    return ensure_writable_dir(folder, "run folder")
+    present = sorted(p.name for p in folder.iterdir() if not p.name.startswith(".bearchair"))
+    if present and not overwrite:
+        raise OutputError(
+            f"run folder {folder} is not empty (holds {', '.join(present[:3])}"
+            f"{', ...' if len(present) > 3 else ''}); pass --overwrite to replace its "
+            "record, or choose a new --out"
+        )
+    foreign = [name for name in present if name not in RUN_RECORD_NAMES]
+    if foreign:
+        raise OutputError(
+            f"run folder {folder} holds files that are not a run record "
+            f"({', '.join(foreign[:3])}); --overwrite only replaces run records: "
+            "choose a new --out"
+        )
+    ensure_writable_dir(folder, "run folder")
+    lock_run_dir(folder)
+    for name in present:
+        _remove(folder, name)
+    return folder
+
+
+_held_locks: dict[str, int] = {}
+"""The run-folder locks this process holds, by resolved folder: descriptors."""
+
+
+def lock_run_dir(folder: Path) -> None:
+    """Holds an ``flock`` on ``folder/RUN_LOCK_NAME`` until :func:`release_run_dir_locks`
+    (the command's end) or this process's end, however it ends.
+
+    Raises:
+        OutputError: another process holds it (a run still writing the folder).
+    """
+    key = str(Path(folder).resolve())
+    if key in _held_locks:
+        return
+    path = Path(folder) / RUN_LOCK_NAME
+    try:
+        descriptor = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666)
+    except OSError as error:
+        raise OutputError(
+            f"run folder {folder}: cannot lock it ({describe_os_error(error)})"
+        ) from error
+    try:
+        fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(descriptor)
+        raise OutputError(
+            f"run folder {folder} is being written by another bearchair run; wait for it "
+            "to finish or choose another --out"
+        ) from None
+    _held_locks[key] = descriptor
+
+
+def release_run_dir_locks() -> None:
+    """Releases every run-folder lock of this process (the command has finished)."""
+    while _held_locks:
+        _, descriptor = _held_locks.popitem()
+        with contextlib.suppress(OSError):
+            os.close(descriptor)
+
+
+def _remove(folder: Path, name: str) -> None:
+    """Removes ``folder/name``: a link as a link, a folder with its contents (rmtree does
+    not follow links inside it)."""
+    target = folder / name
+    try:
+        if target.is_dir() and not target.is_symlink():
+            shutil.rmtree(target)
+        else:
+            target.unlink()
+    except OSError as error:
+        raise OutputError(
+            f"run folder {folder}: cannot remove the old {name} ({describe_os_error(error)})"
+        ) from error
+
+
+def open_new_file(path: Path) -> TextIO:
+    """``path`` opened for writing text, created with the umask's modes, never through a
+    symbolic link (a link planted there is refused, not followed).
+
+    Raises:
+        OSError: as ``open`` would (ELOOP for a link).
+    """
+    descriptor = os.open(
+        path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666
+    )
+    return os.fdopen(descriptor, "w", encoding="utf-8")
 
 
 def claim_new_run_dir(parent: Path, stem: str) -> Path:
@@ -146,6 +235,7 @@ def claim_new_run_dir(parent: Path, stem: str) -> Path:
         candidate = parent / (stem if attempt == 1 else f"{stem}-{attempt}")
         try:
             candidate.mkdir()
+            lock_run_dir(candidate)
         except FileExistsError:
             continue
         except OSError as error:
@@ -194,7 +284,10 @@ def atomic_path(path: Path) -> Iterator[Path]:
     descriptor, temporary = tempfile.mkstemp(
         dir=path.parent, prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}"
     )
-    os.close(descriptor)
+    try:
+        os.fchmod(descriptor, 0o666 & ~current_umask())  # mkstemp makes 0600
+    finally:
+        os.close(descriptor)
     scratch = Path(temporary)
     try:
         yield scratch
@@ -204,6 +297,14 @@ def atomic_path(path: Path) -> Iterator[Path]:
     finally:
         with contextlib.suppress(OSError):
             scratch.unlink()
+
+
+@functools.cache
+def current_umask() -> int:
+    """This process's umask, read once (by setting it and back: there is no getter)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def write_text_atomic(path: Path, text: str) -> Path:

@@ -24,12 +24,18 @@ import py_trees
 
 from bearchair.core.errors import OutputError, RunRecordError
 from bearchair.core.provenance import software_versions
+from bearchair.core.userfiles import open_regular_file, parse_json, printable
 from bearchair.executive.jsonable import to_jsonable
-from bearchair.executive.outputs import describe_os_error, write_text_atomic
+from bearchair.executive.outputs import describe_os_error, open_new_file, write_text_atomic
 
 TICKS_FILE = "ticks.jsonl"
 TREE_FILE = "tree.json"
 SUMMARY_FILE = "summary.json"
+MAX_TICK_LINE_CHARS = 16 * 1024 * 1024
+"""A longer line of ticks.jsonl is skipped as unreadable (a tick with its blackboard is a
+few kB)."""
+MAX_TICK_LINES = 10_000_000
+"""Ticks read at most (a 900 s mission ticks at most about 10 Hz: 9000 lines)."""
 
 
 def tree_nodes(
@@ -97,7 +103,7 @@ class RunRecorder:
         try:
             self.out_dir.mkdir(parents=True, exist_ok=True)
             write_text_atomic(self.out_dir / TREE_FILE, json.dumps(tree_shape(root), indent=1))
-            self._ticks = open(self.out_dir / TICKS_FILE, "w")  # noqa: SIM115 - see close()
+            self._ticks = open_new_file(self.out_dir / TICKS_FILE)
         except (OSError, OutputError) as error:
             raise RecordWriteError(
                 f"cannot start the run record in {self.out_dir}: {_why(error)}"
@@ -226,12 +232,19 @@ def read_ticks(run_dir: Path) -> tuple[list[dict[str, Any]], list[int]]:
     ticks: list[dict[str, Any]] = []
     skipped: list[int] = []
     blackboard: dict[str, Any] = {}
+    descriptor = open_regular_file(path, "ticks file", RunRecordError)
     try:
-        with open(path, encoding="utf-8", errors="replace") as lines:
-            for number, line in enumerate(lines, start=1):
-                tick = _parse_tick(line)
+        with open(descriptor, encoding="utf-8", errors="replace") as lines:
+            for number in range(1, MAX_TICK_LINES + 1):
+                line = lines.readline(MAX_TICK_LINE_CHARS + 1)
+                if not line:
+                    break
+                runaway = len(line) > MAX_TICK_LINE_CHARS
+                if runaway:
+                    _skip_rest_of_line(lines)
+                tick = None if runaway else _parse_tick(line)
                 if tick is None or (ticks and tick["tick"] <= ticks[-1]["tick"]):
-                    if line.strip():
+                    if runaway or line.strip():
                         skipped.append(number)
                     continue
                 board = tick.get("blackboard")
@@ -239,14 +252,25 @@ def read_ticks(run_dir: Path) -> tuple[list[dict[str, Any]], list[int]]:
                 tick["blackboard"] = blackboard
                 ticks.append(tick)
     except OSError as error:
-        raise RunRecordError(f"cannot read {path}: {_why(error)}") from error
+        raise RunRecordError(f"cannot read {printable(path)}: {_why(error)}") from error
     return ticks, skipped
 
 
+def _skip_rest_of_line(lines: Any) -> None:
+    """Reads on to the end of a runaway line in bounded pieces (the file is a regular
+    file, so this ends)."""
+    while True:
+        piece = lines.readline(MAX_TICK_LINE_CHARS)
+        if not piece or piece.endswith("\n"):
+            return
+
+
 def _parse_tick(line: str) -> dict[str, Any] | None:
+    if not line.strip():
+        return None
     try:
-        tick = json.loads(line)
-    except ValueError:  # JSONDecodeError, and numbers too large to parse
+        tick = parse_json(line, TICKS_FILE, RunRecordError)
+    except RunRecordError:  # bad JSON, nested too deep, numbers too large
         return None
     if not isinstance(tick, dict):
         return None

@@ -266,8 +266,8 @@ TICK = {"tick": 1, "t": 0.0, "nodes": [{"path": "0", "status": "RUNNING", "feedb
 BAD_RECORDS = [
     ("tree.json", None, "no tree.json"),
     ("ticks.jsonl", None, "no ticks.jsonl"),
-    ("tree.json", b"{not json", "tree.json: unreadable (Expecting property name"),
-    ("tree.json", b"\xff\xfe\x00\x01binary", "tree.json: unreadable (not UTF-8 text)"),
+    ("tree.json", b"{not json", "tree.json: not valid JSON (Expecting property name"),
+    ("tree.json", b"\xff\xfe\x00\x01binary", "tree.json: not valid JSON (not UTF-8 text"),
     ("tree.json", b'{"path": "0"}', "not a tree (expected a non-empty JSON list"),
     ("tree.json", b"[]", "not a tree (expected a non-empty JSON list"),
     ("tree.json", b'[{"path": 0, "name": "x", "depth": 0}]', "a node lacks a str path"),
@@ -352,14 +352,14 @@ BAD_CHAIR_SETS = [
         "front NaN",
         b'{"meshes": [{"file": "a.obj", "front_yaw_deg": NaN}]}',
         None,
-        "front_yaw_deg is NaN",
+        "NaN is not a number",
     ),
     ("kind a number", {"meshes": [entry("a.obj", kind=3)]}, None, "kind is 3, not a string"),
     (
         "no front anywhere",
         {"meshes": [entry("a.obj", front_yaw_deg=None)]},
         None,
-        "has a usable front",
+        "takes part (a.obj: chair without a front (front_yaw_deg null)",
     ),
     (
         "garbage mesh",

@@ -618,15 +618,18 @@ def test_up_axis_warnings_over_the_calibration_meshes(shared_chairs, shared_mani
     from bearchair.core.meshes import check_chair_mesh, load_mesh
 
     turned_up = trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0])
-    upright_warned, turned_warned, turned = [], 0, 0
+    upright_warned, turned_warned, on_its_side, turned = [], 0, 0, 0
     for entry in shared_manifest:
+        mesh = load_mesh(shared_chairs / entry["file"])
+        if check_chair_mesh(mesh, entry["file"]):  # whatever its kind
+            upright_warned.append(entry["file"])
         if entry["kind"] == "table":
             continue
-        mesh = load_mesh(shared_chairs / entry["file"])
-        if any("on its side" in w for w in check_chair_mesh(mesh, entry["file"])):
-            upright_warned.append(entry["file"])
         mesh.apply_transform(turned_up)  # as a y-up file read as z-up
         turned += 1
-        turned_warned += any("on its side" in w for w in check_chair_mesh(mesh))
+        warnings = check_chair_mesh(mesh)
+        turned_warned += bool(warnings)
+        on_its_side += any("on its side" in w for w in warnings)
     assert upright_warned == []
-    assert turned_warned >= 0.85 * turned
+    assert turned_warned >= 0.9 * turned
+    assert on_its_side >= 0.75 * turned

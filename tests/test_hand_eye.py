@@ -456,7 +456,8 @@ def test_calibrate_asks_first_and_moves_nothing_without_a_yes(cell, board_arm, m
     captured = capsys.readouterr()
     assert status == 2
     assert captured.err.strip() == (
-        "bearchair calibrate-hand-eye: the operator did not confirm: nothing moved"
+        "bearchair calibrate-hand-eye: the operator did not confirm: nothing moved (not "
+        "asked: stdin or stdout is not a terminal; pass --yes to agree from a script)"
     )
     assert "lies flat on the floor" in captured.out and "9 views" in captured.out
     assert _moves(board_arm["panda"]) == []
@@ -469,6 +470,7 @@ def test_calibrate_moves_slowly_through_the_views_and_recovers_the_mount(
     from bearchair.skills.perception.views import HOME_CONFIGURATION
 
     monkeypatch.setattr("builtins.input", lambda prompt: "y")
+    monkeypatch.setattr("bearchair.executive.operator.is_terminal", lambda stream: True)
     out = tmp_path / "calibration.json"
     status = main(["calibrate-hand-eye", "--robots", str(cell), "--out", str(out)])
     captured = capsys.readouterr()

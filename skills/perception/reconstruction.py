@@ -128,6 +128,12 @@ def fuse_tsdf(
     return grid
 
 
+def open3d_seed(seed: int) -> int:
+    """open3d's seed (a signed 32-bit int) from a run's seed (0..2**32 - 1): its low 31
+    bits, the same for the same seed."""
+    return int(seed) & 0x7FFFFFFF
+
+
 def fit_floor(points: np.ndarray, config: ReconstructionConfig) -> np.ndarray:
     """The floor plane (a, b, c, d), c > 0, from RANSAC on the fused points.
 
@@ -138,7 +144,7 @@ def fit_floor(points: np.ndarray, config: ReconstructionConfig) -> np.ndarray:
     Raises:
         PerceptionError: no horizontal plane was found.
     """
-    o3d.utility.random.seed(config.seed)
+    o3d.utility.random.seed(open3d_seed(config.seed))
     remaining = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     for _ in range(3):
         if len(remaining.points) < 3 * config.min_chair_points:
