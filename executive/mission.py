@@ -212,22 +212,35 @@ def run_on_robots(
     """
     from bearchair.core.errors import BackendUnavailable
     from bearchair.executive.cell_config import load_cell_config
-    from bearchair.hardware.real import sdk_versions
     from bearchair.hardware.real.robots import activate, connect_robots
 
     cell = load_cell_config(cell_file, config.arena)
     robot = connect_robots(cell)
-    if confirm is not None and not confirm("The NAO and the Panda will move now. Go on? [y/N] "):
+    try:  # however it ends, the robots stop and the qi session closes before the exit
+        if confirm is not None and not confirm(
+            "The NAO and the Panda will move now. Go on? [y/N] "
+        ):
+            raise BackendUnavailable("the operator did not confirm: nothing moved")
+        try:
+            activate(robot)
+        except Exception as error:
+            raise BackendUnavailable(f"could not set the NAO up for carrying: {error}") from error
+        return _record_on_robots(config, cell, cell_file, robot, skills, on_tick)
+    finally:
         robot.close()
-        raise BackendUnavailable("the operator did not confirm: nothing moved")
-    try:
-        activate(robot)
-    except Exception as error:
-        robot.emergency_stop()
-        raise BackendUnavailable(f"could not set the NAO up for carrying: {error}") from error
-    except BaseException:  # Ctrl-C while setting up: stop, then let it through
-        robot.emergency_stop()
-        raise
+
+
+def _record_on_robots(
+    config: RunConfig,
+    cell: Any,
+    cell_file: Path,
+    robot: Any,
+    skills: MissionSkills | None,
+    on_tick: Callable[[MissionRunner], None] | None,
+) -> dict[str, Any]:
+    """The run record of a mission on the activated real robots."""
+    from bearchair.hardware.real import sdk_versions
+
     root = create_tree()
     recorder = RunRecorder(config.out_dir, root)
     (config.out_dir / "cell.json").write_text(json.dumps(cell.to_json(), indent=2))

@@ -246,6 +246,13 @@ class NaoHumanoid:
             except Exception as error:  # keep stopping whatever fails
                 log.error("NAO emergency stop: %s", error)
 
+    def close(self) -> None:
+        """Stops the NAO and closes the qi session (its threads must not outlive the
+        interpreter: a qi callback running while it finalises aborts the process)."""
+        self.emergency_stop()
+        with contextlib.suppress(Exception):
+            self._session.close()
+
     def stand(self, speed: float = 0.5) -> None:
         """Goes to NAOqi's StandInit posture."""
         self._refuse_if_stopped()

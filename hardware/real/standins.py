@@ -33,6 +33,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from bearchair.core.runtime import RUNTIME
 from bearchair.hardware.real import import_sdk
 
 STANDIN_HOST = "standin"
@@ -205,7 +206,7 @@ def _task(
         if not cancelled.is_set():
             promise.setValue(value)
 
-    threading.Thread(target=worker, daemon=True).start()
+    RUNTIME.start_thread(worker, name="naoqi-standin task")
     return promise.future(), cancelled
 
 
