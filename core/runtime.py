@@ -123,11 +123,16 @@ class Runtime:
                 stopped = False
             if not stopped:
                 left.append(component.name)
+        left += self.join_threads(max(deadline - time.monotonic(), 0.0))
+        return left
+
+    def join_threads(self, timeout_s: float) -> list[str]:
+        """Joins the threads started through :meth:`start_thread`, all within
+        ``timeout_s``; returns the names of those still running."""
+        deadline = time.monotonic() + timeout_s
         for thread in self.live_threads():
             thread.join(max(deadline - time.monotonic(), 0.0))
-            if thread.is_alive():
-                left.append(f"thread {thread.name!r}")
-        return left
+        return [f"thread {thread.name!r}" for thread in self.live_threads()]
 
     def kill(self) -> None:
         """Stops every component at once (SIGKILL to its processes); never raises."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import math
@@ -128,6 +129,9 @@ def run_in_simulation(
         # Interrupted (or failed) before the first tick: the record still gets a summary.
         summary = summary_before_start(root, run_info, error, "building the simulated world")
         try:
+            # Tick 0, the tree as it stood: a record `inspect` can replay.
+            with contextlib.suppress(RecordWriteError):
+                recorder.record_final(0, 0.0)
             recorder.write_summary(summary)
         finally:
             recorder.close()
@@ -292,6 +296,7 @@ def _run_tree(
             timeout_s=config.timeout_s,
             on_tick=on_tick,
             post_tick=() if recording is None else (recording,),
+            on_second_signal=lambda outcome: recorder.write_summary(summarise(outcome, run_info)),
         )
         summary = summarise(runner.run(), run_info)
         # The summary first: a SIGKILL while the picture renders must not lose it.
@@ -387,7 +392,8 @@ def format_summary(summary: dict[str, Any]) -> str:
     if summary["outcome"] == "success":
         lines.append(f"outcome: {outcome} in {summary['wall_seconds']:.1f} s")
     else:
-        lines.append(f"outcome: {outcome} at {summary['failed_stage']}: {summary['reason']}")
+        where = summary["failed_stage"] or "the start"
+        lines.append(f"outcome: {outcome} at {where}: {summary['reason']}")
     return "\n".join(lines)
 
 

@@ -1,4 +1,5 @@
-"""Shared test fixtures: the calibration chairs (skipped when absent) and a clean blackboard."""
+"""Shared test fixtures: the calibration chairs (skipped when absent), a clean blackboard
+and a fresh runtime."""
 
 from __future__ import annotations
 
@@ -9,6 +10,9 @@ import py_trees
 import pytest
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
+RUNTIME_JOIN_S = 30.0
+"""How long a test's background threads (the planner's build: 2-10 s on the loaded
+2-core machine) are waited for after it."""
 
 
 @pytest.fixture(autouse=True)
@@ -17,6 +21,18 @@ def clean_blackboard():
     py_trees.blackboard.Blackboard.clear()
     yield
     py_trees.blackboard.Blackboard.clear()
+
+
+@pytest.fixture(autouse=True)
+def fresh_runtime():
+    """The process's memos (``bearchair.core.runtime``) start empty in every test, so no
+    answer depends on which tests ran before; the threads a test started are joined
+    after it, so none runs on into the next test or the interpreter's exit."""
+    from bearchair.core.runtime import RUNTIME
+
+    RUNTIME.reset()
+    yield
+    RUNTIME.join_threads(RUNTIME_JOIN_S)
 
 
 @pytest.fixture(scope="session")
