@@ -690,7 +690,10 @@ def kill_workers() -> None:
     """SIGKILLs the worker processes now and reaps them (a second stop signal).
 
     Takes no lock: it runs in a signal handler, perhaps while this thread holds one."""
-    workers = [process for pool in list(_pools.values()) for process in _worker_processes(pool)]
+    pools = list(_pools.values())
+    _pools.clear()  # broken now: the next imagination starts a new pool
+    _pings.clear()
+    workers = [process for pool in pools for process in _worker_processes(pool)]
     for process in workers:
         process.kill()
     for process in workers:
