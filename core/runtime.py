@@ -32,6 +32,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 logger = logging.getLogger(__name__)
 
@@ -154,7 +155,7 @@ def stop_resource_tracker(timeout_s: float) -> bool:
     The tracker is multiprocessing's private state (no public API stops it); left alone,
     it outlives the process that started it for a moment, a child nobody reaps.
     """
-    tracker = multiprocessing.resource_tracker._resource_tracker  # pyright: ignore[reportAttributeAccessIssue]  # private
+    tracker: Any = multiprocessing.resource_tracker._resource_tracker  # pyright: ignore[reportAttributeAccessIssue]  # private
     if multiprocessing.active_children():
         return False
     with tracker._lock:

@@ -97,7 +97,7 @@ class MissionRunner:
         timeout_s: float = 900.0,
         on_tick: Callable[[MissionRunner], None] | None = None,
         post_tick: Sequence[Callable[[MissionRunner], None]] = (),
-        on_second_signal: Callable[[MissionOutcome], None] | None = None,
+        on_second_signal: Callable[[MissionOutcome], object] | None = None,
     ) -> None:
         self.root = root
         self.timeout = py_trees.decorators.Timeout(

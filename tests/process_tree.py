@@ -4,6 +4,7 @@ their parent dies, but keep its session). psutil when installed, else /proc."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import subprocess
 import sys
@@ -105,11 +106,8 @@ def wait_for(predicate, timeout_s: float, poll_s: float = 0.1) -> bool:
     return True
 
 
-
 def reap_all(pids: list[int]) -> None:
     """SIGKILLs what a failed test left behind (its own cleanup, never the assertion)."""
     for pid in pids:
-        try:
+        with contextlib.suppress(OSError):
             os.kill(pid, 9)
-        except OSError:
-            pass

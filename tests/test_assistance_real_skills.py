@@ -97,9 +97,7 @@ def test_one_turn_then_a_second_measured_on_the_chair_as_it_now_stands(world, fi
     assert _degrees_apart(second.yaw_rad, turned + turned_again) > 20.0
 
 
-def test_a_fit_that_fails_the_thresholds_is_rejected_also_from_the_extra_views(
-    world, first_scan
-):
+def test_a_fit_that_fails_the_thresholds_is_rejected_also_from_the_extra_views(world, first_scan):
     """No fit explains every point: a visible-overlap threshold above 1 rejects the
     right one, after the extra scan views were captured too."""
     impossible = RegistrationConfig(

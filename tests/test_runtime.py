@@ -64,8 +64,8 @@ def test_a_named_memo_is_reset_by_the_runtime_and_an_unnamed_one_is_not():
 
 
 def test_the_process_wide_memos_and_pool_are_registered():
-    import bearchair.skills.imagination.chair  # noqa: F401 - registers the memory
-    import bearchair.skills.imagination.imagine  # noqa: F401 - registers the pool
+    import bearchair.skills.imagination.chair
+    import bearchair.skills.imagination.imagine
     import bearchair.skills.planning.preplan  # noqa: F401 - registers the pre-plan memo
 
     assert {
@@ -164,8 +164,20 @@ def test_run_on_robots_over_the_standins_exits_cleanly_ten_times_in_ten(tmp_path
         for run in range(RUNS):
             out = tmp_path / f"run{run}"
             done = subprocess.run(
-                [sys.executable, "-m", "bearchair.executive.cli", "run", "--robots", str(cell)]
-                + ["--yes", "--mute", "--timeout", "120", "--out", str(out)],
+                [
+                    sys.executable,
+                    "-m",
+                    "bearchair.executive.cli",
+                    "run",
+                    "--robots",
+                    str(cell),
+                    "--yes",
+                    "--mute",
+                    "--timeout",
+                    "120",
+                    "--out",
+                    str(out),
+                ],
                 cwd=REPO,
                 stdin=subprocess.DEVNULL,
                 capture_output=True,

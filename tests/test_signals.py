@@ -137,3 +137,35 @@ def test_a_second_ctrl_c_during_a_run_still_writes_the_summary(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["interrupted"] is True and summary["signal"] == "SIGINT"
     assert survivors(process.pid) == []
+
+
+class _SlowWorld:
+    """A simulated world whose construction takes 3 s: long enough for a Ctrl-C."""
+
+    def __init__(self, config) -> None:
+        time.sleep(3.0)
+
+    def close(self) -> None:
+        pass
+
+
+def test_ctrl_c_while_the_world_is_built_leaves_a_record_inspect_replays(
+    tmp_path, monkeypatch, capsys
+):
+    import os
+    import threading
+
+    import bearchair.hardware.sim.world
+
+    monkeypatch.setattr(bearchair.hardware.sim.world, "SimWorld", _SlowWorld)
+    out = tmp_path / "run"
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        assert cli.main(["run", "--mute", "--out", str(out)]) == 130
+    finally:
+        timer.cancel()
+    capsys.readouterr()
+    assert cli.main(["inspect", str(out)]) == 0
+    shown = capsys.readouterr().out
+    assert "tick 0 of 0" in shown and "interrupted by SIGINT" in shown

@@ -3,6 +3,7 @@ campaign: the worker's exit is waited for, not the pipe's end (evaluation.worker
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
@@ -59,10 +60,8 @@ def _run(tmp_path: Path, monkeypatch, *, own_session: bool, hang: bool, timeout_
         return outcome, elapsed, grandchild
     finally:
         if pid_file.exists() and pid_file.read_text():
-            try:
+            with contextlib.suppress(ProcessLookupError):
                 os.kill(int(pid_file.read_text()), signal.SIGKILL)
-            except ProcessLookupError:
-                pass
 
 
 @pytest.mark.timeout(120)

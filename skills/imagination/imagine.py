@@ -59,6 +59,7 @@ import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from multiprocessing.process import BaseProcess
 from typing import NamedTuple
 
 import numpy as np
@@ -700,7 +701,7 @@ def kill_workers() -> None:
         process.join(2.0)
 
 
-def _worker_processes(pool: ProcessPoolExecutor) -> list[multiprocessing.process.BaseProcess]:
+def _worker_processes(pool: ProcessPoolExecutor) -> list[BaseProcess]:
     """The pool's worker processes (the executor keeps them by pid, in a private field)."""
     return list((getattr(pool, "_processes", None) or {}).values())
 
