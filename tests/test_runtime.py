@@ -189,3 +189,36 @@ def test_run_on_robots_over_the_standins_exits_cleanly_ten_times_in_ten(tmp_path
             assert json.loads((out / "summary.json").read_text())["backend"] == "real"
             assert "still running at exit" not in done.stderr
     assert len(statuses) == RUNS
+
+
+@pytest.mark.timeout(240)
+def test_the_trial_server_and_its_forks_stop_with_the_runtime():
+    """In a fresh interpreter: one forked trial, then the runtime stopped; the trial
+    server (multiprocessing's forkserver) is not left behind."""
+    script = (
+        "import io, json, sys, tempfile\n"
+        "from bearchair.core.runtime import RUNTIME\n"
+        "from bearchair.evaluation.forked_workers import PreloadedLauncher\n"
+        "from bearchair.evaluation.worker_process import run_worker\n"
+        "from tests import forked_fakes\n"
+        "out = tempfile.mkdtemp()\n"
+        "outcome = run_worker(PreloadedLauncher(forked_fakes.report), "
+        "{'out_dir': out, 'seed': 3}, 120)\n"
+        "print(outcome.summary['seed'], flush=True)\n"
+        "print(RUNTIME.shutdown(30.0), flush=True)\n"
+        "input()\n"
+    )
+    process = subprocess.Popen(
+        [sys.executable, "-c", script],
+        cwd=REPO,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert process.stdout.readline().strip() == "3"
+        assert process.stdout.readline().strip() == "[]"
+        assert descendants(process.pid) == []
+    finally:
+        process.communicate("\n", timeout=30)
+    assert process.returncode == 0
