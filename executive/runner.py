@@ -142,25 +142,26 @@ class MissionRunner:
             writer.set(key, value)
         self._start = time.monotonic()
         stopped, stop_signal, record_error = False, None, None
-        try:
-            with (
-                emergency_stop_on_second_signal(lambda: stop_robots(self.robot)),
-                emergency_stop_on_second_signal(self._last_words),
-            ):
+        # The second signal's stops cover the clean-up too: that is when it comes.
+        with (
+            emergency_stop_on_second_signal(lambda: stop_robots(self.robot)),
+            emergency_stop_on_second_signal(self._last_words),
+        ):
+            try:
                 self.tree.setup(timeout=30.0, skills=self.skills, robot=self.robot)
                 self._start = time.monotonic()
                 self._tick_until_done()
-        except KeyboardInterrupt as error:
-            stopped = True
-            stop_signal = signal_name(getattr(error, "signum", signal.SIGINT))
-            how = "the operator (Ctrl-C)" if stop_signal == "SIGINT" else stop_signal
-            self._stop(f"interrupted by {how}")
-            logger.warning("writing the run record; a second %s exits at once", stop_signal)
-        except RecordWriteError as error:
-            stopped, record_error = True, str(error)
-            self._stop(f"stopped: {error}")
-        finally:
-            record_error = self._finish(record_error)
+            except KeyboardInterrupt as error:
+                stopped = True
+                stop_signal = signal_name(getattr(error, "signum", signal.SIGINT))
+                how = "the operator (Ctrl-C)" if stop_signal == "SIGINT" else stop_signal
+                self._stop(f"interrupted by {how}")
+                logger.warning("writing the run record; a second %s exits at once", stop_signal)
+            except RecordWriteError as error:
+                stopped, record_error = True, str(error)
+                self._stop(f"stopped: {error}")
+            finally:
+                record_error = self._finish(record_error)
         return MissionOutcome(
             status=Status.FAILURE if stopped else self.timeout.status,
             stages=self.stages,

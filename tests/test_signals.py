@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import json
 import signal
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -18,7 +20,7 @@ import pytest
 
 from bearchair.core.meshes import box_chair_mesh
 from bearchair.executive import cli
-from tests.process_tree import bearchair, descendants, reap_all, survivors, wait_for
+from tests.process_tree import REPO, bearchair, descendants, reap_all, survivors, wait_for
 
 STOP_SIGNALS = [
     signal.SIGINT,
@@ -169,3 +171,107 @@ def test_ctrl_c_while_the_world_is_built_leaves_a_record_inspect_replays(
     assert cli.main(["inspect", str(out)]) == 0
     shown = capsys.readouterr().out
     assert "tick 0 of 0" in shown and "interrupted by SIGINT" in shown
+
+
+# --- the second signal, while the first one's clean-up is held up -----------------------
+# Two signals sent a moment apart may both arrive after the first one's clean-up ended
+# (it takes milliseconds): these scripts hold that clean-up (a slow robot stop, a slow
+# pool shutdown) so the second signal is sure to come in the middle of it.
+
+SECOND_SIGNAL_ON_A_POOL = """
+import sys, time
+from bearchair.executive import interrupts
+from bearchair.skills.imagination.imagine import warm_up
+warm_up(2)
+with interrupts.handling_signals():
+    try:
+        print("ready", flush=True)
+        time.sleep(120)
+    except KeyboardInterrupt:
+        print("stopping slowly", flush=True)
+        time.sleep(120)
+"""
+
+
+@pytest.mark.timeout(180)
+def test_a_second_signal_kills_and_reaps_the_pool_before_it_exits(tmp_path):
+    err = tmp_path / "stderr.txt"
+    process = subprocess.Popen(
+        [sys.executable, "-c", SECOND_SIGNAL_ON_A_POOL],
+        cwd=REPO,
+        stdout=subprocess.PIPE,
+        stderr=err.open("w"),
+        text=True,
+        start_new_session=True,
+    )
+    assert process.stdout.readline().strip() == "ready", err.read_text()
+    assert len(descendants(process.pid)) >= 3  # two workers and the resource tracker
+    process.send_signal(signal.SIGTERM)
+    assert process.stdout.readline().strip() == "stopping slowly"
+    process.send_signal(signal.SIGTERM)
+    assert process.wait(30) == 143
+    assert survivors(process.pid) == []
+
+
+SECOND_SIGNAL_ON_A_RUN = """
+import sys, threading, time
+from pathlib import Path
+from bearchair.executive import cli, mission
+from bearchair.executive.record import RunRecorder
+from bearchair.hardware.fakes import FakeJudge, fake_robot
+from bearchair.skills.scripted import ScriptedSkills
+from bearchair.trees.mission import create_tree
+
+robot = fake_robot(judge=FakeJudge())
+skills = ScriptedSkills(delays_s={"scan_chair": 60.0})
+stop = robot.emergency_stop
+stops = []
+
+def slow_stop():  # the first stop hangs, as a robot that does not answer would
+    stops.append(1)
+    stop()
+    if len(stops) == 1 and skills.calls.get("scan_chair"):
+        print("stopping slowly", flush=True)
+        time.sleep(60)
+
+robot.emergency_stop = slow_stop
+
+def fake_run(config, skills_=None, on_tick=None):
+    root = create_tree()
+    recorder = RunRecorder(config.out_dir, root)
+    info = {"chair": "stub", "placement": "accessible", "helper": "obeys", "seed": 0}
+    return mission._run_tree(root, recorder, robot, config, info, skills, None, None)
+
+mission.run_in_simulation = fake_run
+
+def ready():
+    while not skills.calls.get("scan_chair"):
+        time.sleep(0.01)
+    print("ready", flush=True)
+
+threading.Thread(target=ready, daemon=True).start()
+sys.exit(cli.main(["run", "--mute", "--out", sys.argv[1]]))
+"""
+
+
+@pytest.mark.timeout(180)
+def test_a_second_signal_during_a_slow_stop_still_writes_the_summary(tmp_path):
+    out = tmp_path / "run"
+    err = tmp_path / "stderr.txt"
+    process = subprocess.Popen(
+        [sys.executable, "-c", SECOND_SIGNAL_ON_A_RUN, str(out)],
+        cwd=REPO,
+        stdout=subprocess.PIPE,
+        stderr=err.open("w"),
+        text=True,
+        start_new_session=True,
+    )
+    assert process.stdout.readline().strip() == "ready", err.read_text()
+    process.send_signal(signal.SIGHUP)
+    assert process.stdout.readline().strip() == "stopping slowly", err.read_text()
+    process.send_signal(signal.SIGINT)
+    assert process.wait(30) == 130, err.read_text()  # the status of the signal that ended it
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["interrupted"] is True and summary["signal"] == "SIGHUP"
+    assert summary["failed_stage"] == "ScanChair"
+    assert "bearchair: second SIGINT: exiting now" in err.read_text()
