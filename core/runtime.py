@@ -13,9 +13,12 @@ memo's answers) changes what the next one sees. So:
 - tests call :meth:`Runtime.reset` between tests (``tests/conftest.py``), instead of
   replacing private module names.
 
-Modules register at import (``RUNTIME.register(...)``), threads are started through
+Modules register at import (``RUNTIME.register(...)``, or a named
+:class:`bearchair.core.memo.BoundedMemo`), threads are started through
 :meth:`Runtime.start_thread`, so a new pool or thread is one line away from being
-stopped properly.
+stopped properly. Not registered: ``functools.lru_cache`` over functions of fixed inputs
+(the parsed NAO model, the reach table, ArUco detectors, the planner's built problems),
+which answer the same whatever ran before, so forgetting them would only cost time.
 """
 
 from __future__ import annotations
@@ -37,9 +40,11 @@ from typing import Any
 logger = logging.getLogger(__name__)
 
 SHUTDOWN_TIMEOUT_S = 20.0
-"""The bound on :meth:`Runtime.shutdown` as a whole (seconds): above the 2-core machine's
-longest uninterruptible piece of work a mission leaves running, the whole-body planner's
-problem build (about 2 s alone, 5-10 s while the imagination's workers load the cores)."""
+"""The bound on :meth:`Runtime.shutdown` as a whole (seconds): well above the longest
+uninterruptible work a mission can leave running at its end, the whole-body planner's
+problem build (0.7 s alone on the 2-core machine, ``seating_problems``; a few times that
+while other processes load the cores), and the imagination's workers finishing the drops
+of their current rotation (3-7 drops of 0.2-0.5 s each, NOTES.md)."""
 
 
 @dataclass(frozen=True)

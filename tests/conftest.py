@@ -11,8 +11,8 @@ import pytest
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 RUNTIME_JOIN_S = 30.0
-"""How long a test's background threads (the planner's build: 2-10 s on the loaded
-2-core machine) are waited for after it."""
+"""How long a test's background threads (the planner's build: 0.7 s alone, a few times
+that on the loaded 2-core machine) are waited for after it."""
 
 
 @pytest.fixture(autouse=True)
