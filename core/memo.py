@@ -6,6 +6,8 @@ import threading
 from collections import OrderedDict
 from typing import Generic, TypeVar
 
+from bearchair.core.runtime import RUNTIME
+
 Key = TypeVar("Key")
 Value = TypeVar("Value")
 
@@ -13,15 +15,22 @@ Value = TypeVar("Value")
 class BoundedMemo(Generic[Key, Value]):
     """Answers by key, at most ``max_size`` of them, the least recently used dropped first.
 
+    Args:
+        max_size: answers kept.
+        name: a process-wide memo's name: it registers with the runtime
+            (``bearchair.core.runtime.RUNTIME``), whose ``reset`` clears it (between tests).
+
     Attributes:
         hits: how many ``get`` calls found an answer.
     """
 
-    def __init__(self, max_size: int) -> None:
+    def __init__(self, max_size: int, name: str | None = None) -> None:
         self._answers: OrderedDict[Key, Value] = OrderedDict()
         self._max_size = max_size
         self._lock = threading.Lock()
         self.hits = 0
+        if name is not None:
+            RUNTIME.register(name, reset=self.clear)
 
     def get(self, key: Key) -> Value | None:
         """The answer kept for ``key`` (now the most recently used), or None."""
@@ -41,8 +50,10 @@ class BoundedMemo(Generic[Key, Value]):
                 self._answers.popitem(last=False)
 
     def clear(self) -> None:
+        """Forgets every answer (and the count of hits)."""
         with self._lock:
             self._answers.clear()
+            self.hits = 0
 
     def __len__(self) -> int:
         return len(self._answers)

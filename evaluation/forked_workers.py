@@ -15,9 +15,12 @@ only its fork.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import multiprocessing
+import multiprocessing.forkserver
 import os
+import signal
 import subprocess
 import sys
 import threading
@@ -25,6 +28,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
+from bearchair.core.runtime import RUNTIME, reap
 from bearchair.evaluation.worker import main, run_guarded
 from bearchair.evaluation.worker_process import LOG_NAME, die_with_parent
 
@@ -37,13 +41,45 @@ _context: Any = None
 
 
 def _forkserver() -> Any:
-    """The process-wide forkserver context, its preload set before its first use."""
+    """The process-wide forkserver context, its preload set before its first use; the
+    server registers with the runtime, which stops it (``bearchair.core.runtime``)."""
     global _context
     with _server_lock:
         if _context is None:
             _context = multiprocessing.get_context("forkserver")
             _context.set_forkserver_preload([PRELOAD_MODULE])
+            RUNTIME.register("trial server", shutdown=stop_trial_server, kill=_kill_trial_server)
         return _context
+
+
+def stop_trial_server(timeout_s: float) -> bool:
+    """Stops the trial server once no trial runs: it ends when its "alive" pipe closes,
+    and is reaped within ``timeout_s`` (else SIGKILLed). True when it is gone.
+
+    The server is multiprocessing's private state (``multiprocessing.forkserver``, no
+    public API stops it); left alone, it outlives the harness for a moment.
+    """
+    server: Any = multiprocessing.forkserver._forkserver  # pyright: ignore[reportAttributeAccessIssue]  # private
+    if multiprocessing.active_children():
+        return False
+    with server._lock:
+        pid, alive_fd = server._forkserver_pid, server._forkserver_alive_fd
+        if pid is None:
+            return True
+        server._forkserver_pid = server._forkserver_alive_fd = None
+        with contextlib.suppress(OSError, TypeError):
+            os.close(alive_fd)
+    return reap(pid, timeout_s)
+
+
+def _kill_trial_server() -> None:
+    """SIGKILLs the trial server and reaps it (a second stop signal)."""
+    server: Any = multiprocessing.forkserver._forkserver  # pyright: ignore[reportAttributeAccessIssue]  # private
+    pid = server._forkserver_pid
+    if pid is not None:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
+        reap(pid, 2.0)
 
 
 def _run_forked(entry: Callable[[list[str]], int], payload_json: str, out_dir: str) -> None:

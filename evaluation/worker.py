@@ -135,11 +135,12 @@ def run_guarded(entry: Callable[[list[str]], int], argv: list[str]) -> int:
     A segfault leaves "Fatal Python error" in worker.log; a worker in a process group of
     its own (started by the harness) dies with the harness; the harness's SIGTERM
     (timeout, Ctrl-C) stops the mission like Ctrl-C, so the robots stop and the run
-    folder gets its summary before the SIGKILL that follows. The imagination's worker
-    processes are stopped at the end (a fork ends without the interpreter's exit hooks).
+    folder gets its summary before the SIGKILL that follows. The runtime is shut down at
+    the end (``bearchair.core.runtime``: the imagination's worker processes, the planner's
+    build thread), as a fork ends without the interpreter's exit hooks.
     """
+    from bearchair.core.runtime import RUNTIME
     from bearchair.executive.interrupts import handling_signals
-    from bearchair.skills.imagination import shutdown_workers
 
     faulthandler.enable()
     if os.getpgid(0) == os.getpid():
@@ -148,7 +149,7 @@ def run_guarded(entry: Callable[[list[str]], int], argv: list[str]) -> int:
         with handling_signals():
             return entry(argv)
     finally:
-        shutdown_workers()
+        RUNTIME.shutdown()
 
 
 if __name__ == "__main__":

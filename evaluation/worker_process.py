@@ -34,6 +34,11 @@ LOG_NAME = "worker.log"
 """The worker's stderr, in its run folder."""
 KILL_GRACE_S = 3.0
 """Time a worker gets between SIGTERM and SIGKILL."""
+EOF_GRACE_S = 2.0
+"""Time a worker's stdout gets to end after the worker exited (seconds): what the worker
+wrote is in the pipe by then; only a process it left behind keeps the pipe open longer."""
+STDOUT_POLL_S = 0.5
+"""How often the wait for a worker's output checks whether the worker has exited."""
 
 
 class WorkerOutcome(NamedTuple):
@@ -227,10 +232,11 @@ def run_worker(
         if process is None:
             return WorkerOutcome(None, "not started: the harness is stopping", 0.0, cancelled=True)
         try:
-            stdout, _ = process.communicate(timeout=timeout_s)
+            stdout = _stdout_of(process, timeout_s)
         except subprocess.TimeoutExpired:
             kill_process_group(process)
-            process.communicate()
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                _stdout_of(process, EOF_GRACE_S)  # a pipe held by what escaped is given up
             group.finished(process)
             elapsed = time.monotonic() - start
             if group.stopping:
@@ -252,6 +258,44 @@ def run_worker(
     returncode = process.returncode
     assert returncode is not None  # communicate() returned: the worker has exited
     return WorkerOutcome(None, _crash_description(returncode, log_path), elapsed, crashed=True)
+
+
+def _stdout_of(process: WorkerHandle, timeout_s: float) -> str:
+    """What the worker printed, once it has exited and its stdout ended.
+
+    The worker's exit is waited for, not its stdout's end alone: a grandchild that keeps
+    the pipe open (one daemonised into a session of its own escapes the group's kill)
+    would otherwise hold the campaign forever. Once the worker has exited, its group is
+    killed and the pipe given :data:`EOF_GRACE_S` to end; then what was read is taken.
+
+    Raises:
+        subprocess.TimeoutExpired: the worker itself still runs after ``timeout_s``.
+    """
+    deadline = time.monotonic() + timeout_s
+    exited_at: float | None = None
+    while True:
+        now = time.monotonic()
+        step = min(STDOUT_POLL_S, max(deadline - now, 0.0))
+        try:
+            stdout, _ = process.communicate(timeout=step)
+            return stdout or ""
+        except subprocess.TimeoutExpired as expired:
+            partial = expired.output
+        if exited_at is None and process.returncode is None:
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                process.wait(timeout=0)
+        if process.returncode is not None:
+            exited_at = exited_at or now
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(process.pid, signal.SIGKILL)  # what it left in its group
+            if now - exited_at >= EOF_GRACE_S:
+                with contextlib.suppress(OSError, AttributeError):
+                    process.stdout.close()  # pyright: ignore[reportAttributeAccessIssue]  # Popen's
+                if isinstance(partial, bytes):
+                    return partial.decode(errors="replace")
+                return partial or ""
+        elif now >= deadline:
+            raise subprocess.TimeoutExpired(f"trial worker {process.pid}", timeout_s)
 
 
 def run_worker_with_retry(

@@ -442,9 +442,11 @@ def _report_internal_error(error: BaseException, args: argparse.Namespace | None
 def main(argv: list[str] | None = None) -> int:
     """The console script.
 
-    Exit status: 0 success, 1 mission failure, 2 bad input or an unusable place (one
-    line on stderr), 3 internal error (one line; the traceback in the run folder's
-    ``bearchair.log``), 130 / 143 stopped by SIGINT / SIGTERM (the record is kept).
+    Exit status (``docs/exit-status.md``): 0 success, 1 mission failure, 2 bad input or
+    an unusable place (one line on stderr), 3 internal error (one line; the traceback in
+    the run folder's ``bearchair.log``), 128 + the signal's number when a stop signal
+    ended it (129 SIGHUP, 130 SIGINT, 131 SIGQUIT, 138 SIGUSR1, 140 SIGUSR2, 143 SIGTERM;
+    the record is kept).
     """
     console = argv is None  # the console script (tests pass their argv)
     saved = sys.stdout, sys.stderr
@@ -456,6 +458,8 @@ def main(argv: list[str] | None = None) -> int:
             status = lost_output_status(out, err, status, EXIT_BAD_INPUT)
             if console and received() is not None:
                 _exit_now(status)
+            if console:
+                _stop_the_runtime(status)
             return status
     finally:
         with contextlib.suppress(Exception):
@@ -467,17 +471,32 @@ def main(argv: list[str] | None = None) -> int:
             outputs.release_run_dir_locks()
 
 
+def _stop_the_runtime(status: int) -> None:
+    """Stops the pools and joins the threads the command started, before the interpreter
+    tears itself down (a thread still in casadi or qi then crashes it: SIGABRT, SIGSEGV).
+
+    What does not stop within its bound is named on stderr, and the process leaves with
+    ``os._exit(status)``, its records already written, rather than crash at exit.
+    """
+    from bearchair.core.runtime import RUNTIME
+
+    left = RUNTIME.shutdown()
+    if left:
+        print(f"bearchair: still running at exit: {', '.join(left)}", file=sys.stderr)
+        _exit_now(status)
+
+
 def _exit_now(status: int) -> None:
     """Leaves the process at once after a stop signal, its records already written.
 
     The imagination's worker processes ignore SIGINT and would finish their batch of
     drops before the interpreter's exit could join them (12 s measured on
     ``imagine``); terminating them under a live ``ProcessPoolExecutor`` makes its
-    management thread print a traceback. So: flush, silence stderr, SIGKILL the
-    children, and ``os._exit``.
+    management thread print a traceback. So: flush, silence stderr, SIGKILL and reap the
+    children (the runtime's ``kill``: pool workers and the resource tracker), and
+    ``os._exit``.
     """
-    import multiprocessing
-    import multiprocessing.util
+    from bearchair.core.runtime import RUNTIME
 
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):
@@ -485,13 +504,7 @@ def _exit_now(status: int) -> None:
     with contextlib.suppress(OSError):
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, 2)
-    for child in multiprocessing.active_children():
-        with contextlib.suppress(Exception):
-            child.kill()
-    # Release the pool's semaphores (multiprocessing's own exit finalizers), so its
-    # resource tracker has nothing to warn about.
-    with contextlib.suppress(Exception):
-        multiprocessing.util._run_finalizers(0)  # pyright: ignore[reportAttributeAccessIssue]  # private, not in typeshed
+    RUNTIME.kill()
     os._exit(status)
 
 

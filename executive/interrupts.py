@@ -1,13 +1,19 @@
-"""SIGINT and SIGTERM: the first stops the work in order, a second one exits at once.
+"""The signals that end the process: the first stops the work in order, a second one
+exits at once.
 
-The first signal raises :class:`Interrupted` (a ``KeyboardInterrupt``, so every
+Handled: SIGINT (Ctrl-C), SIGTERM (``kill``, a scheduler), SIGHUP (the terminal or the
+ssh session closing), SIGQUIT (Ctrl-\\), SIGUSR1 and SIGUSR2 (their default would kill
+the process with no record). The first signal raises :class:`Interrupted` (a ``KeyboardInterrupt``, so every
 ``except KeyboardInterrupt`` that already stops a tree, cancels a skill or stops a
 campaign's workers handles SIGTERM the same way). The mission runner then stops the
 tree and the robots and writes the summary with ``interrupted: true``; the CLI exits
-with 128 + the signal's number (130 for Ctrl-C, 143 for SIGTERM).
+with 128 + the signal's number (129 SIGHUP, 130 SIGINT, 131 SIGQUIT, 138 SIGUSR1,
+140 SIGUSR2, 143 SIGTERM; ``docs/exit-status.md``).
 
 A second signal while that is going on does not wait: it calls the registered
-emergency stops (the robots'), writes one line and leaves with ``os._exit``.
+emergency stops (the robots'), SIGKILLs and reaps the child processes (the runtime's
+``kill``: the imagination's workers and the resource tracker), writes one line and
+leaves with ``os._exit``.
 """
 
 from __future__ import annotations
@@ -19,7 +25,17 @@ import threading
 from collections.abc import Callable, Iterator
 from typing import Any
 
-HANDLED_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+from bearchair.core.runtime import RUNTIME
+
+HANDLED_SIGNALS = (
+    signal.SIGINT,
+    signal.SIGTERM,
+    signal.SIGHUP,
+    signal.SIGQUIT,
+    signal.SIGUSR1,
+    signal.SIGUSR2,
+)
+"""The signals that stop a command with its record written (exit status 128 + number)."""
 
 _first_signal: int | None = None
 _emergency_stops: list[Callable[[], None]] = []
@@ -31,7 +47,7 @@ so they end within their polling period even when a library swallowed the except
 
 
 class Interrupted(KeyboardInterrupt):
-    """The operator (Ctrl-C) or the system (SIGTERM) asked the process to stop."""
+    """The operator (Ctrl-C) or the system (SIGTERM, SIGHUP, ...) asked the process to stop."""
 
     def __init__(self, signum: int = signal.SIGINT) -> None:
         super().__init__(signal.Signals(signum).name)
@@ -66,7 +82,7 @@ def raise_if_received() -> None:
 
 
 def signal_name(signum: int | None = None) -> str:
-    """``SIGINT`` / ``SIGTERM`` of ``signum`` (default: the first received)."""
+    """``SIGINT``, ``SIGHUP``, ... of ``signum`` (default: the first received)."""
     signum = signum if signum is not None else (_first_signal or signal.SIGINT)
     return signal.Signals(signum).name
 
@@ -82,6 +98,8 @@ def _handle(signum: int, frame: Any) -> None:
     for stop in list(_emergency_stops):
         with contextlib.suppress(BaseException):
             stop()
+    with contextlib.suppress(BaseException):
+        RUNTIME.kill()
     with contextlib.suppress(OSError):
         os.write(2, f"bearchair: second {signal_name(signum)}: exiting now\n".encode())
     os._exit(128 + signum)

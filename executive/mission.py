@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import math
@@ -198,6 +199,9 @@ def run_in_simulation(
         # Interrupted (or failed) before the first tick: the record still gets a summary.
         summary = summary_before_start(root, run_info, error, "building the simulated world")
         try:
+            # Tick 0, the tree as it stood: a record `inspect` can replay.
+            with contextlib.suppress(RecordWriteError):
+                recorder.record_final(0, 0.0)
             recorder.write_summary(summary)
         finally:
             recorder.close()
@@ -296,7 +300,6 @@ def run_on_robots(
     """
     from bearchair.core.errors import BackendUnavailable
     from bearchair.executive.cell_config import load_cell_config, parse_cell_config
-    from bearchair.hardware.real import sdk_versions
     from bearchair.hardware.real.robots import activate, connect_robots
 
     if isinstance(cell_file, Mapping):
@@ -305,17 +308,37 @@ def run_on_robots(
         cell = load_cell_config(cell_file, config.arena)
     root = build_tree(tree or create_tree, config.tree_options, config.tree_spec)
     robot = connect_robots(cell, mute=config.mute)
-    if confirm is not None and not confirm("The NAO and the Panda will move now. Go on? [y/N] "):
+    try:  # however it ends, the robots stop and the qi session closes before the exit
+        if confirm is not None and not confirm(
+            "The NAO and the Panda will move now. Go on? [y/N] "
+        ):
+            raise BackendUnavailable(
+                f"the operator did not confirm: nothing moved{_why_not_asked()}"
+            )
+        try:
+            activate(robot)
+        except Exception as error:
+            robot.emergency_stop()
+            raise BackendUnavailable(f"could not set the NAO up for carrying: {error}") from error
+        except BaseException:  # Ctrl-C while setting up: stop, then let it through
+            robot.emergency_stop()
+            raise
+        return _record_on_robots(config, cell, cell_file, root, robot, skills, on_tick)
+    finally:
         robot.close()
-        raise BackendUnavailable(f"the operator did not confirm: nothing moved{_why_not_asked()}")
-    try:
-        activate(robot)
-    except Exception as error:
-        robot.emergency_stop()
-        raise BackendUnavailable(f"could not set the NAO up for carrying: {error}") from error
-    except BaseException:  # Ctrl-C while setting up: stop, then let it through
-        robot.emergency_stop()
-        raise
+
+
+def _record_on_robots(
+    config: RunConfig,
+    cell: Any,
+    cell_file: Path | Mapping[str, Any],
+    root: Any,
+    robot: Any,
+    skills: MissionSkills | None,
+    on_tick: Callable[[MissionRunner], None] | None,
+) -> dict[str, Any]:
+    """The run record of a mission on the activated real robots, watched by the monitor."""
+    from bearchair.hardware.real import sdk_versions
     from bearchair.hardware.real.monitor import RobotMonitor
 
     # Battery, falls, temperature and the arm's mode, watched for the whole run: a fault
@@ -376,6 +399,7 @@ def _run_tree(
             tick_period_s=config.tick_period_s,
             on_tick=on_tick,
             post_tick=tuple(hook for hook in (recording, groot2) if hook is not None),
+            on_second_signal=lambda outcome: recorder.write_summary(summarise(outcome, run_info)),
         )
         summary = summarise(runner.run(), run_info)
         # The summary first: a SIGKILL while the picture renders must not lose it.
@@ -503,7 +527,8 @@ def format_summary(summary: dict[str, Any]) -> str:
     if summary["outcome"] == "success":
         lines.append(f"outcome: {outcome} in {summary['wall_seconds']:.1f} s")
     else:
-        lines.append(f"outcome: {outcome} at {summary['failed_stage']}: {summary['reason']}")
+        where = summary["failed_stage"] or "the start"
+        lines.append(f"outcome: {outcome} at {where}: {summary['reason']}")
     return "\n".join(printable(line, 1000) for line in lines)
 
 

@@ -81,6 +81,9 @@ class MissionRunner:
         on_tick: called after each tick (progress display).
         post_tick: hooks called after each tick and once more when the run has ended
             (the tree stopped): recordings and viewers (``bearchair.executive.recording``).
+        on_second_signal: called with the outcome so far when a second stop signal
+            exits the process at once, after the robots were stopped (it writes the
+            summary that the orderly stop had no time to write).
     """
 
     def __init__(
@@ -96,6 +99,7 @@ class MissionRunner:
         timeout_s: float = 900.0,
         on_tick: Callable[[MissionRunner], None] | None = None,
         post_tick: Sequence[Callable[[MissionRunner], None]] = (),
+        on_second_signal: Callable[[MissionOutcome], object] | None = None,
     ) -> None:
         self.root = root
         self.timeout = py_trees.decorators.Timeout(
@@ -114,6 +118,7 @@ class MissionRunner:
         self.timeout_s = timeout_s
         self.on_tick = on_tick
         self.post_tick = tuple(post_tick)
+        self.on_second_signal = on_second_signal
         self.stages = self.stage_clock.stages
         self._seed = seed
         self._arena = arena
@@ -136,26 +141,30 @@ class MissionRunner:
         set_mission_inputs(seed=self._seed, arena=self._arena)
         self._start = time.monotonic()
         stopped, stop_signal, record_error = False, None, None
-        try:
-            with emergency_stop_on_second_signal(lambda: stop_robots(self.robot)):
+        # The second signal's stops cover the clean-up too: that is when it comes.
+        with (
+            emergency_stop_on_second_signal(lambda: stop_robots(self.robot)),
+            emergency_stop_on_second_signal(self._last_words),
+        ):
+            try:
                 self.tree.setup(timeout=30.0, skills=self.skills, robot=self.robot)
                 self._start = time.monotonic()
                 self._tick_until_done()
-        except KeyboardInterrupt as error:
-            stopped = True
-            stop_signal = signal_name(getattr(error, "signum", signal.SIGINT))
-            how = "the operator (Ctrl-C)" if stop_signal == "SIGINT" else stop_signal
-            self._stop(f"interrupted by {how}")
-            logger.warning("writing the run record; a second %s exits at once", stop_signal)
-        except RecordWriteError as error:
-            stopped, record_error = True, str(error)
-            self._stop(f"stopped: {error}")
-        except RobotFault as error:  # a device's monitor: the robots first, then the tree
-            stopped = True
-            stop_robots(self.robot)
-            self._stop(f"stopped: {error}")
-        finally:
-            record_error = self._finish(record_error)
+            except KeyboardInterrupt as error:
+                stopped = True
+                stop_signal = signal_name(getattr(error, "signum", signal.SIGINT))
+                how = "the operator (Ctrl-C)" if stop_signal == "SIGINT" else stop_signal
+                self._stop(f"interrupted by {how}")
+                logger.warning("writing the run record; a second %s exits at once", stop_signal)
+            except RecordWriteError as error:
+                stopped, record_error = True, str(error)
+                self._stop(f"stopped: {error}")
+            except RobotFault as error:  # a device's monitor: the robots first, then the tree
+                stopped = True
+                stop_robots(self.robot)
+                self._stop(f"stopped: {error}")
+            finally:
+                record_error = self._finish(record_error)
         return MissionOutcome(
             status=Status.FAILURE if stopped else self.timeout.status,
             stages=self.stages,
@@ -167,6 +176,25 @@ class MissionRunner:
             blackboard=dict(py_trees.blackboard.Blackboard.storage),
             stop_signal=stop_signal,
             record_error=record_error,
+        )
+
+    def _last_words(self) -> None:
+        """The outcome so far, to :attr:`on_second_signal` (a second stop signal)."""
+        if self.on_second_signal is None:
+            return
+        first = signal_name()
+        self._fail_running_stages(f"interrupted by {first}; a second signal exited at once")
+        self.on_second_signal(
+            MissionOutcome(
+                status=Status.FAILURE,
+                stages=self.stages,
+                ticks=self.tree.count,
+                wall_s=self.elapsed(),
+                interrupted=True,
+                failures=list(self.failures.messages),
+                blackboard=dict(py_trees.blackboard.Blackboard.storage),
+                stop_signal=first,
+            )
         )
 
     def _finish(self, record_error: str | None) -> str | None:

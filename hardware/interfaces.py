@@ -230,5 +230,11 @@ class Robot:
             stopper.join(max(0.0, deadline - time.monotonic()))
 
     def close(self) -> None:
-        """Stops every actuator; safe to call more than once."""
+        """Stops every actuator, then closes the devices that hold a connection (a
+        ``close()`` of their own: the NAO's qi session); safe to call more than once."""
         self.emergency_stop()
+        for device in (self.humanoid, self.arm):
+            close = getattr(device, "close", None)
+            if callable(close):
+                with contextlib.suppress(Exception):
+                    close()

@@ -1,4 +1,5 @@
-"""Shared test fixtures: the calibration chairs (skipped when absent) and a clean blackboard.
+"""Shared test fixtures: the calibration chairs (skipped when absent), a clean blackboard
+and a fresh runtime.
 
 The testing kit's fixtures (``bearchair.testing``: ``mission_blackboard``,
 ``tick_until_done``, ``fake_robot``, ``scripted_skills``) come from its pytest plugin.
@@ -14,6 +15,9 @@ import pytest
 from bearchair.testing import fresh_blackboard
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
+RUNTIME_JOIN_S = 30.0
+"""How long a test's background threads (the planner's build: 0.7 s alone, a few times
+that on the loaded 2-core machine) are waited for after it."""
 
 
 @pytest.fixture(autouse=True)
@@ -22,6 +26,18 @@ def clean_blackboard():
     kit's fixture of the same name, made automatic here)."""
     with fresh_blackboard():
         yield
+
+
+@pytest.fixture(autouse=True)
+def fresh_runtime():
+    """The process's memos (``bearchair.core.runtime``) start empty in every test, so no
+    answer depends on which tests ran before; the threads a test started are joined
+    after it, so none runs on into the next test or the interpreter's exit."""
+    from bearchair.core.runtime import RUNTIME
+
+    RUNTIME.reset()
+    yield
+    RUNTIME.join_threads(RUNTIME_JOIN_S)
 
 
 @pytest.fixture(scope="session")

@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from bearchair.core.memo import BoundedMemo
+from bearchair.core.runtime import RUNTIME
 from bearchair.evaluation.store import TrialStore, campaign_lock
 from bearchair.executive import cli, mission
 from bearchair.executive.inspect_run import RecordedRun
@@ -427,22 +427,19 @@ def test_the_imagination_cache_survives_a_damaged_entry(tmp_path, monkeypatch):
     from bearchair.skills.imagination import chair as imagination_chair
 
     monkeypatch.setenv("BEARCHAIR_CACHE", str(tmp_path))
-    # An earlier test may have prepared the same chair into this process's memory.
-    monkeypatch.setattr(
-        imagination_chair, "_memory", BoundedMemo(imagination_chair.MEMORY_MAX_CHAIRS)
-    )
+    # The memory starts empty: the runtime is reset before every test (conftest.py).
     mesh = box_chair_mesh()
     first = imagination_chair.prepare_chair(mesh)
     entries = list((tmp_path / "imagination").glob("*.npz"))
     assert len(entries) == 1 and not list((tmp_path / "imagination").glob("*.pkl"))
     entries[0].write_bytes(b"garbage")
-    imagination_chair._memory.clear()
+    RUNTIME.reset()  # forget the prepared chair: read it from the cache
     again = imagination_chair.prepare_chair(mesh)
     assert again.mass_kg == pytest.approx(first.mass_kg)
     assert np.allclose(again.T_obb_mesh, first.T_obb_mesh) and len(again.pieces) == len(
         first.pieces
     )
-    imagination_chair._memory.clear()
+    RUNTIME.reset()  # forget the prepared chair: read it from the cache
     cached = imagination_chair.prepare_chair(mesh)  # read back from the rebuilt entry
     assert np.allclose(np.stack(cached.pieces), np.stack(first.pieces))
 

@@ -12,7 +12,6 @@ import pytest
 import trimesh
 
 from bearchair.core.geometry import make_transform, rot_z, wrap_angle
-from bearchair.core.memo import BoundedMemo
 from bearchair.core.meshes import box_chair_mesh, solid_below_surface_boxes
 from bearchair.skills.imagination import imagine_sitting
 from bearchair.skills.imagination.agent import JOINTS, LINKS, TOTAL_MASS_KG, agent_urdf_path
@@ -94,9 +93,7 @@ def test_the_chair_memory_keeps_the_most_recently_used_chairs(tmp_path, monkeypa
         return digest
 
     monkeypatch.setenv("BEARCHAIR_CACHE", str(tmp_path))
-    monkeypatch.setattr(
-        imagination_chair, "_memory", BoundedMemo(imagination_chair.MEMORY_MAX_CHAIRS)
-    )
+    # The memory starts empty: the runtime is reset before every test (conftest.py).
     monkeypatch.setattr(imagination_chair, "read_cached_arrays", lambda path: None)
     monkeypatch.setattr(imagination_chair, "write_cached_arrays", lambda path, arrays: None)
     monkeypatch.setattr(imagination_chair, "_to_cache", lambda chair: {})

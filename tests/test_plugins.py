@@ -126,6 +126,7 @@ def test_an_xml_tree_spec_builds_the_tree_the_file_describes(tmp_path):
     root = load_tree_factory(str(path))(TreeOptions())
     assert tree_to_btcpp_xml(root) == path.read_text()
 
+
 def test_tree_and_run_refuse_a_bad_tree_in_one_line(tmp_path, capsys):
     assert cli.main(["tree", "--tree", "nope:nothing"]) == 2
     out = tmp_path / "run"

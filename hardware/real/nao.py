@@ -33,6 +33,7 @@ only; nothing moves until :meth:`NaoHumanoid.activate`.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import threading
 import time
@@ -367,6 +368,13 @@ class NaoHumanoid:
         kill = _send(self._motion, "killTasksUsingResources", joints) if joints else None
         for future, what in ((stop_move, "stopMove"), (kill, "killTasksUsingResources")):
             _settle(future, what)
+
+    def close(self) -> None:
+        """Stops the NAO and closes the qi session (its threads must not outlive the
+        interpreter: a qi callback running while it finalises aborts the process)."""
+        self.emergency_stop()
+        with contextlib.suppress(Exception):
+            self._session.close()
 
     def stand(self, speed: float = 0.5) -> None:
         """Goes to NAOqi's StandInit posture."""

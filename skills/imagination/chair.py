@@ -90,7 +90,7 @@ MEMORY_MAX_CHAIRS = 4
 at most two chairs (the one scanned and, once the helper has turned it, its new scan),
 so four keep both chairs of the mission before too; an older one is read back from the
 disk cache, which holds every chair prepared."""
-_memory: BoundedMemo[str, PreparedChair] = BoundedMemo(MEMORY_MAX_CHAIRS)
+_memory: BoundedMemo[str, PreparedChair] = BoundedMemo(MEMORY_MAX_CHAIRS, "prepared-chair memory")
 """This process's prepared chairs by mesh digest."""
 
 

@@ -53,19 +53,20 @@ rotation per physics world. Each drop's small start jitter is seeded from
 
 from __future__ import annotations
 
-import atexit
 import math
 import multiprocessing
 import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from multiprocessing.process import BaseProcess
 from typing import NamedTuple
 
 import numpy as np
 import trimesh
 
 from bearchair.core.geometry import SittingPose, transform_points, wrap_angle
+from bearchair.core.runtime import RUNTIME
 from bearchair.skills.imagination import DEFAULT_WORKERS
 from bearchair.skills.imagination.agent import LINKS, agent_urdf_path
 from bearchair.skills.imagination.backrest import check_direction
@@ -665,13 +666,48 @@ def warm_up(workers: int = DEFAULT_WORKERS, *, wait: bool = True) -> None:
                 future.result()
 
 
-def shutdown_workers() -> None:
-    """Stops the worker processes (also done at exit)."""
+def shutdown_workers(timeout_s: float = 30.0) -> bool:
+    """Stops the worker processes: each ends after its current task; those still running
+    after ``timeout_s`` are killed. Returns True when none had to be killed.
+
+    The runtime's shutdown (``bearchair.core.runtime``) calls it, at the latest at exit."""
     with _pools_lock:
-        for pool in _pools.values():
-            pool.shutdown(wait=True, cancel_futures=True)
-        _pools.clear()
+        pools = list(_pools.values())
         _pings.clear()
+    workers = [process for pool in pools for process in _worker_processes(pool)]
+    for pool in pools:
+        pool.shutdown(wait=False, cancel_futures=True)
+    deadline = time.monotonic() + timeout_s
+    for process in workers:
+        process.join(max(deadline - time.monotonic(), 0.0))
+    late = [process for process in workers if process.is_alive()]
+    for process in late:
+        process.kill()
+        process.join(5.0)
+    with _pools_lock:  # only now: a second stop signal meanwhile still finds them
+        for workers_asked, pool in list(_pools.items()):
+            if pool in pools:
+                del _pools[workers_asked]
+    return not late
 
 
-atexit.register(shutdown_workers)
+def kill_workers() -> None:
+    """SIGKILLs the worker processes now and reaps them (a second stop signal).
+
+    Takes no lock: it runs in a signal handler, perhaps while this thread holds one."""
+    pools = list(_pools.values())
+    _pools.clear()  # broken now: the next imagination starts a new pool
+    _pings.clear()
+    workers = [process for pool in pools for process in _worker_processes(pool)]
+    for process in workers:
+        process.kill()
+    for process in workers:
+        process.join(2.0)
+
+
+def _worker_processes(pool: ProcessPoolExecutor) -> list[BaseProcess]:
+    """The pool's worker processes (the executor keeps them by pid, in a private field)."""
+    return list((getattr(pool, "_processes", None) or {}).values())
+
+
+RUNTIME.register("imagination pool", shutdown=shutdown_workers, kill=kill_workers)

@@ -93,8 +93,8 @@ class PreplanMemo(BoundedMemo[tuple, SeatingCheck]):
     a millisecond on a 20 k-face scan), so a chair turned by the helper is a new chair.
     """
 
-    def __init__(self, max_size: int = PREPLAN_MEMO_SIZE) -> None:
-        super().__init__(max_size)
+    def __init__(self, max_size: int = PREPLAN_MEMO_SIZE, name: str | None = None) -> None:
+        super().__init__(max_size, name)
 
     @staticmethod
     def key(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, se2_goal: SE2Pose) -> tuple:
@@ -105,7 +105,7 @@ class PreplanMemo(BoundedMemo[tuple, SeatingCheck]):
         return digest.hexdigest(), pose, tuple(float(v) for v in se2_goal)
 
 
-PREPLANS = PreplanMemo()
+PREPLANS = PreplanMemo(name="pre-plan memo")
 """The memo :func:`wholebody_validator`'s pre-plan answers from."""
 
 

@@ -18,6 +18,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from bearchair.core.runtime import RUNTIME
+
 NAOQI_API_PATH = Path(__file__).resolve().parents[1] / "naoqi_api.json"
 _QI_SCALARS = {"void": "Void", "bool": "Bool", "float": "Float", "int": "Int32"}
 _QI_SCALARS.update({"string": "String", "ALValue": "Dynamic"})
@@ -140,7 +142,7 @@ def answered_later(qi: Any, work: Callable[[], Any], delay_s: float) -> Any:
         else:
             promise.setValue(value)
 
-    threading.Thread(target=run, daemon=True).start()
+    RUNTIME.start_thread(run, name="naoqi-standin call")
     return promise.future()
 
 
@@ -180,5 +182,5 @@ def task_future(
         if not cancelled.is_set():
             promise.setValue(value)
 
-    threading.Thread(target=worker, daemon=True).start()
+    RUNTIME.start_thread(worker, name="naoqi-standin task")
     return promise.future(), cancelled

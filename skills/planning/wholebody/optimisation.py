@@ -40,6 +40,7 @@ from bearchair.core.nao_carrying import (
     PALM_IN_WRIST_M,
     PLACEMENT_TOLERANCE_M,
 )
+from bearchair.core.runtime import RUNTIME
 from bearchair.skills.planning.wholebody.nao_model import PlanarNao, link_transforms, planar_nao
 
 # The bear (0.25 m tall, 0.2 kg, its frame at its seat point: the bottom centre of its
@@ -519,6 +520,6 @@ def start_building_problems() -> threading.Thread:
         problems = seating_problems()
         problems.trajectory_solver(problems.n_knots)
 
-    thread = threading.Thread(target=build, name="build seating problems", daemon=True)
-    thread.start()
-    return thread
+    # Through the runtime: the exit joins it, as casadi crashes an interpreter that
+    # finalises while it builds.
+    return RUNTIME.start_thread(build, name="build seating problems")

@@ -1,0 +1,166 @@
+"""Thresholds tried at their boundary, and the seat's step-in blocked.
+
+Each boundary test names its threshold and which side of it the boundary itself falls on:
+
+- ``bearchair.skills.imagination.backrest.AGREEMENT_RAD`` (30 deg): an imagined direction
+  within it of the backrest's stands (``<=``); beyond it, the mirror planes decide.
+- ``bearchair.skills.perception.registration.RegistrationConfig.min_fitness`` and
+  ``max_rmse_m``: a fit exactly at the minimum fitness, or exactly at the maximum RMSE,
+  is accepted (``>=`` and ``<=``); the least step past either rejects it.
+- ``bearchair.core.arena.ACCESSIBLE_TOLERANCE_RAD`` (30 deg): an accessible placement's
+  sitting direction is at most this from the direction toward the humanoid, both
+  extremes included.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from bearchair.core.arena import (
+    ACCESSIBLE_TOLERANCE_RAD,
+    DEFAULT_ARENA,
+    Box2D,
+    accessible_sitting_yaws,
+)
+from bearchair.core.geometry import SittingPose, wrap_angle
+from bearchair.core.meshes import box_chair_mesh
+from bearchair.core.se2 import SE2Pose
+from bearchair.skills.imagination.backrest import AGREEMENT_RAD, backrest_yaw, check_direction
+from bearchair.skills.perception.errors import RegistrationError
+from bearchair.skills.perception.registration import RegistrationConfig, register_chair
+from bearchair.skills.planning import se2
+from bearchair.skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
+
+HAIR_RAD = math.radians(0.1)
+"""A step past a boundary: far below any angle the mission resolves, far above rounding."""
+
+
+@pytest.mark.parametrize("side", [-1.0, 1.0], ids=["left", "right"])
+def test_the_backrest_agreement_holds_at_30_degrees_and_not_past_it(side: float) -> None:
+    chair_mesh = box_chair_mesh()
+    p = np.array([0.0, 0.0, 0.29])
+    cue = backrest_yaw(chair_mesh, SittingPose(p, 0.0))
+    assert cue is not None
+    at = wrap_angle(cue[0] + side * (AGREEMENT_RAD - HAIR_RAD))
+    kept, check = check_direction(chair_mesh, SittingPose(p, at))
+    assert check is not None and not check.used and kept.yaw == at
+    assert math.isnan(check.mirror_back)  # stood by the agreement, no mirror consulted
+    past = wrap_angle(cue[0] + side * (AGREEMENT_RAD + HAIR_RAD))
+    _, check = check_direction(chair_mesh, SittingPose(p, past))
+    assert check is not None and not math.isnan(check.mirror_back)  # judged by the mirrors
+
+
+def _chair_cloud(n: int = 3000) -> np.ndarray:
+    points = box_chair_mesh().sample(n, seed=0)
+    return np.asarray(points) + np.array([0.6, 0.0, 0.0])
+
+
+def test_a_fit_exactly_at_the_minimum_fitness_and_maximum_rmse_is_accepted() -> None:
+    cloud = _chair_cloud()
+    fit = register_chair(cloud, cloud, RegistrationConfig())
+    at_the_boundary = RegistrationConfig(min_fitness=fit.fitness, max_rmse_m=fit.inlier_rmse_m)
+    accepted = register_chair(cloud, cloud, at_the_boundary)
+    assert accepted.fitness == fit.fitness
+    with pytest.raises(RegistrationError):
+        register_chair(
+            cloud,
+            cloud,
+            replace(at_the_boundary, min_fitness=float(np.nextafter(fit.fitness, 2.0))),
+        )
+    with pytest.raises(RegistrationError):
+        register_chair(
+            cloud,
+            cloud,
+            replace(at_the_boundary, max_rmse_m=float(np.nextafter(fit.inlier_rmse_m, -1.0))),
+        )
+
+
+def test_accessible_directions_reach_the_tolerance_both_ways_and_no_further() -> None:
+    centre = (0.6, 0.0)
+    start = DEFAULT_ARENA.humanoid_start
+    toward = math.atan2(start.y - centre[1], start.x - centre[0])
+    offsets = np.array(
+        [wrap_angle(yaw - toward) for yaw in accessible_sitting_yaws(DEFAULT_ARENA, centre)]
+    )
+    assert offsets.max() == pytest.approx(ACCESSIBLE_TOLERANCE_RAD, abs=1e-9)
+    assert offsets.min() == pytest.approx(-ACCESSIBLE_TOLERANCE_RAD, abs=1e-9)
+
+
+# --- the step in to s_goal --------------------------------------------------------------
+
+STEP_START = SE2Pose(1.6, 0.0, math.pi)
+STEP_GOAL = SE2Pose(1.0, 0.0, math.pi)
+
+
+def _checker(obstacles=(), chair_mesh=None) -> NaoCollisionChecker:
+    arena = DEFAULT_ARENA._replace(obstacles=(*DEFAULT_ARENA.obstacles, *obstacles))
+    return NaoCollisionChecker(arena, chair_solid_boxes(chair_mesh) if chair_mesh else [])
+
+
+def test_a_clear_step_in_is_not_blocked() -> None:
+    assert se2._step_in_blocked_by(_checker(), STEP_START, STEP_GOAL, chair=True) == ""
+
+
+def test_a_step_in_across_an_obstacle_names_it() -> None:
+    """A 2 cm post on the step's line, clear of both of its ends."""
+    post = Box2D(1.29, 1.31, -0.01, 0.01)
+    checker = _checker((post,))
+    assert checker.is_free(STEP_START.x, STEP_START.y, STEP_START.theta)
+    assert se2._step_in_blocked_by(checker, STEP_START, STEP_GOAL, chair=False) == "obstacle"
+
+
+def test_a_step_in_through_a_wall_names_the_wall() -> None:
+    out = SE2Pose(DEFAULT_ARENA.x_max + 0.2, 0.0, math.pi)
+    assert se2._step_in_blocked_by(_checker(), out, STEP_GOAL, chair=False) == "wall"
+
+
+def test_a_step_in_into_the_chair_counts_only_when_asked() -> None:
+    """The step ends inside the ellipsoid's clearance of the chair when the whole-body
+    pre-plan approved it: the chair counts only for a goal reached without an approach."""
+    chair_mesh = box_chair_mesh().apply_translation((0.9, 0.0, 0.0))
+    checker = _checker(chair_mesh=chair_mesh)
+    assert se2._step_in_blocked_by(checker, STEP_START, STEP_GOAL, chair=True) == "chair"
+    assert se2._step_in_blocked_by(checker, STEP_START, STEP_GOAL, chair=False) == ""
+
+
+def test_a_blocked_step_in_makes_the_chair_inaccessible_with_no_path(monkeypatch) -> None:
+    """check_accessibility refuses the goal when the step in to it from the approach is
+    blocked, before planning a path there (the walk would end where the NAO cannot step
+    in). The stance chooser is made to end the walk 0.3 m back along the ray, as it does
+    when s_goal lies inside the walking NAO's clearance of the chair."""
+    from bearchair.skills.planning.preplan import reach_validator
+
+    chair_mesh = box_chair_mesh().apply_translation((0.6, 0.0, 0.0))
+    sitting_pose = SittingPose(np.array([0.6, 0.0, 0.29]), 0.0)
+    choose = se2.choose_stance
+
+    def with_an_approach(*args, **kwargs):
+        choice = choose(*args, **kwargs)
+        goal = choice.se2_goal
+        return choice._replace(approach=SE2Pose(goal.x + 0.3, goal.y, goal.theta))
+
+    monkeypatch.setattr(se2, "choose_stance", with_an_approach)
+
+    def check(arena):
+        return se2.check_accessibility(
+            chair_mesh,
+            sitting_pose,
+            DEFAULT_ARENA.humanoid_start,
+            arena,
+            seed=0,
+            seating_validator=reach_validator,
+        )
+
+    clear = check(DEFAULT_ARENA)
+    assert clear.accessible and clear.step_in_from is not None, clear.reason
+    assert clear.path[-1] == clear.step_in_from  # the walk ends where the step begins
+    # A 1 cm post halfway along this very step in.
+    mid_x = (clear.step_in_from.x + clear.se2_goal.x) / 2
+    post = Box2D(mid_x - 0.005, mid_x + 0.005, -0.005, 0.005)
+    blocked = check(DEFAULT_ARENA._replace(obstacles=(*DEFAULT_ARENA.obstacles, post)))
+    assert not blocked.accessible and blocked.path == ()
+    assert blocked.reason == "the step in to s_goal touches the obstacle"
