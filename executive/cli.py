@@ -38,6 +38,7 @@ from bearchair.executive.cli_types import positive_seconds, seed_value
 from bearchair.executive.config import RunConfig
 from bearchair.executive.interrupts import exit_status, handling_signals, received, signal_name
 from bearchair.executive.operator import ask_operator
+from bearchair.executive.viewer_links import add_bind_argument
 
 OWN_COMMANDS = (cmd_imagine, cmd_scan, cmd_check_hardware, cmd_calibrate_hand_eye, cmd_view)
 """executive's own commands: each module has ``register(subparsers)``."""
@@ -163,6 +164,7 @@ def _run(args: argparse.Namespace) -> int:
         snapshots=args.snapshots,
         record=args.record,
         live=args.live,
+        bind=args.bind,
     )
     check_recording_arguments("bearchair run", args)
     # Every input and the output place are checked before anything runs.
@@ -232,6 +234,7 @@ def add_recording_arguments(parser: argparse.ArgumentParser, *, record_default: 
         help="stream the run to a Rerun viewer as it happens: no value starts the native "
         "viewer, 'web' serves the web viewer, or a viewer's URL (rerun+http://HOST:9876/proxy)",
     )
+    add_bind_argument(parser)
 
 
 def check_recording_arguments(command: str, args: argparse.Namespace) -> None:

@@ -264,11 +264,15 @@ def _run_tree(
 
             skills = DefaultSkills(imagination_workers=config.imagination_workers)
             skills.warm_up()
-        recording = open_recording(root, config.out_dir, record=config.record, live=config.live)
+        recording = open_recording(
+            root, config.out_dir, record=config.record, live=config.live, bind=config.bind
+        )
         if recording is not None:
             skills = recording.watch_skills(skills, robot.clock)
             if recording.viewer_url:
                 print(f"live viewer: {recording.viewer_url}", file=sys.stderr, flush=True)
+            if recording.viewer_hint:
+                print(recording.viewer_hint, file=sys.stderr, flush=True)
         runner = MissionRunner(
             root,
             skills,

@@ -22,18 +22,19 @@ without it this module imports, and asking for a recording raises
 from __future__ import annotations
 
 import collections
+import contextlib
 import importlib.util
 import json
 import logging
 import math
 import os
+import subprocess
 import sys
 import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
-from urllib.parse import quote
 
 import py_trees
 from py_trees.common import Status
@@ -42,6 +43,16 @@ from bearchair.behaviours import keys
 from bearchair.core.errors import BackendUnavailable
 from bearchair.executive.jsonable import to_jsonable
 from bearchair.executive.record import tree_nodes
+from bearchair.executive.viewer_links import (
+    LOOPBACK,
+    grpc_url,
+    is_wildcard,
+    reachable_host,
+    serve_web_page,
+    spawn_native_viewer,
+    ssh_tunnel_hint,
+    web_viewer_link,
+)
 
 if TYPE_CHECKING:
     from bearchair.core.se2 import SE2Pose
@@ -165,6 +176,8 @@ class MissionRecording:
             operator's laptop while the robots run).
         web_port: the web viewer's HTTP port with ``live="web"``.
         grpc_port: the port a spawned viewer or the web viewer's server listens on.
+        bind: the address the web viewer's two servers (or a spawned viewer's) listen
+            on; loopback unless the user opened it (``--bind``).
 
     Raises:
         RecordingUnavailable: rerun-sdk is missing, or a native viewer was asked for
@@ -179,6 +192,7 @@ class MissionRecording:
         live: str | None = None,
         web_port: int = DEFAULT_WEB_PORT,
         grpc_port: int = DEFAULT_VIEWER_PORT,
+        bind: str = LOOPBACK,
     ) -> None:
         rr = _rerun()
         from bearchair.executive import recording_scene
@@ -187,6 +201,10 @@ class MissionRecording:
         self._scene = recording_scene
         self.path = None if path is None else Path(path)
         self.viewer_url: str | None = None
+        self.viewer_hint: str | None = None
+        """How to reach a loopback-bound web viewer from another machine (``ssh -L``)."""
+        self._bind = bind
+        self._page_server: subprocess.Popen[bytes] | None = None
         self.seconds = 0.0
         """Wall time spent in the hook so far (what recording costs the run)."""
         self.cpu_seconds = 0.0
@@ -224,13 +242,18 @@ class MissionRecording:
                 raise RecordingUnavailable(
                     "no display for a native viewer: use --live web (a web viewer on a port)"
                 )
-            self._stream.spawn(port=grpc_port, connect=False)
-            self.viewer_url = f"rerun+http://127.0.0.1:{grpc_port}/proxy"
+            spawn_native_viewer(self._bind, grpc_port)
+            self.viewer_url = grpc_url(LOOPBACK if is_wildcard(self._bind) else self._bind, grpc_port)
             return rr.GrpcSink(self.viewer_url)
         if live == "web":
-            server = rr.GrpcServerSink(port=grpc_port)
-            rr.serve_web_viewer(web_port=web_port, open_browser=False, connect_to=server.uri)
-            self.viewer_url = f"http://127.0.0.1:{web_port}?url={quote(server.uri, safe='')}"
+            # The data in this process, on `bind`; the page from Rerun's program, since
+            # rr.serve_web_viewer listens on every interface (viewer_links).
+            server = rr.GrpcServerSink(bind_ip=self._bind, port=grpc_port)
+            self._page_server = serve_web_page(
+                self._bind, web_port, grpc_url(reachable_host(self._bind), grpc_port)
+            )
+            self.viewer_url = web_viewer_link(self._bind, web_port, grpc_port)
+            self.viewer_hint = ssh_tunnel_hint(self._bind, web_port, grpc_port)
             return server
         self.viewer_url = live
         return rr.GrpcSink(live)
@@ -309,6 +332,11 @@ class MissionRecording:
             self._stream.disconnect()
         except Exception as error:  # never lose the run record over the recording
             logger.warning("could not close the recording: %s", error)
+        if self._page_server is not None:
+            self._page_server.terminate()
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self._page_server.wait(timeout=5.0)
+            self._page_server = None
 
     # -- what is logged ---------------------------------------------------------------
 
@@ -420,12 +448,20 @@ class MissionRecording:
 
 
 def open_recording(
-    root: py_trees.behaviour.Behaviour, out_dir: Path, *, record: bool, live: str | None
+    root: py_trees.behaviour.Behaviour,
+    out_dir: Path,
+    *,
+    record: bool,
+    live: str | None,
+    bind: str = LOOPBACK,
 ) -> MissionRecording | None:
-    """The run's recording as asked for (``--record``, ``--live``), or None for neither."""
+    """The run's recording as asked for (``--record``, ``--live``, ``--bind``), or None
+    for neither."""
     if not record and not live:
         return None
-    return MissionRecording(root, path=out_dir / RECORDING_FILE if record else None, live=live)
+    return MissionRecording(
+        root, path=out_dir / RECORDING_FILE if record else None, live=live, bind=bind
+    )
 
 
 def read_entity(path: Path, entity_path: str) -> list[dict[str, Any]]:

@@ -324,7 +324,7 @@ def test_live_web_serves_the_viewer_while_recording_to_a_file(tmp_path):
         root, path=tmp_path / RECORDING_FILE, live="web", web_port=web_port, grpc_port=grpc_port
     )
     try:
-        assert recording.viewer_url.startswith(f"http://127.0.0.1:{web_port}?url=")
+        assert recording.viewer_url.startswith(f"http://127.0.0.1:{web_port}/?url=")
         assert f"%3A{grpc_port}%2Fproxy" in recording.viewer_url
         with urllib.request.urlopen(f"http://127.0.0.1:{web_port}/", timeout=10) as page:
             assert page.status == 200
