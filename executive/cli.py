@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from bearchair.core.errors import BackendUnavailable, BearchairError, InputError, one_line
+from bearchair.core.streams import import_pybullet_quietly
 from bearchair.executive import (
     cmd_calibrate_hand_eye,
     cmd_check_hardware,
@@ -58,29 +59,91 @@ class CommandUnavailableError(BackendUnavailable):
     """A command registered in the installed metadata cannot be loaded (a stale install)."""
 
 
+class DefaultsHelpFormatter(argparse.HelpFormatter):
+    """``--help`` says each option's default, unless its text already does or it has
+    none worth saying (None, False: a flag that is off)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if (
+            "default" in text
+            or default is None
+            or default is False
+            or default == argparse.SUPPRESS
+            or not action.option_strings
+        ):
+            return text
+        return f"{text} (default: %(default)s)"
+
+
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", DefaultsHelpFormatter)
+        super().__init__(*args, **kwargs)
+
     def error(self, message: str) -> None:  # one line, not a usage dump
         raise InputError(f"{self.prog}: {message} (see --help)")
+
+
+LOG_LEVELS = ("debug", "info", "warning", "error")
+
+
+def add_logging_arguments(parser: argparse.ArgumentParser, *, top: bool) -> None:
+    """``-v`` and ``--log-level``, accepted before or after the subcommand: each
+    subcommand has them too, with no default of its own (the top level's stands)."""
+    parser.add_argument(
+        "-v",
+        "--verbose",
+        action="store_true",
+        default=False if top else argparse.SUPPRESS,
+        help="log debug messages (the same as --log-level debug)",
+    )
+    parser.add_argument(
+        "--log-level",
+        choices=LOG_LEVELS,
+        default="warning" if top else argparse.SUPPRESS,
+        help="the least severe log messages shown on the console",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
     assert __doc__ is not None  # only python -OO strips it, and that strips asserts too
     parser = _Parser(prog="bearchair", description=__doc__.split("\n")[0])
-    parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    add_logging_arguments(parser, top=True)
     subparsers = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     run = subparsers.add_parser("run", help="run the mission in the simulated world")
     run.add_argument(
         "--chair", type=Path, help="chair mesh (OBJ/PLY/STL/OFF/GLB); default: a box chair"
     )
-    run.add_argument("--placement", choices=("accessible", "inaccessible"), default="accessible")
-    run.add_argument("--helper", choices=("obeys", "disobeys", "ignores"), default="obeys")
-    run.add_argument("--seed", type=seed_value, default=0)
+    run.add_argument(
+        "--placement",
+        choices=("accessible", "inaccessible"),
+        default="accessible",
+        help="how the simulated chair is placed: its seat reachable by the NAO, or turned "
+        "so that the NAO must ask the helper to rotate it",
+    )
+    run.add_argument(
+        "--helper",
+        choices=("obeys", "disobeys", "ignores"),
+        default="obeys",
+        help="how the simulated helper answers a request to rotate the chair",
+    )
+    run.add_argument(
+        "--seed",
+        type=seed_value,
+        default=0,
+        help="seeds the world and the skills (same seed, same run)",
+    )
     run.add_argument("--gui", action="store_true", help="watch in the pybullet GUI")
     run.add_argument("--out", type=Path, help="run record directory (default: runs/<time>-seed<N>)")
     run.add_argument("--mute", action="store_true", help="print instructions instead of speaking")
     run.add_argument(
-        "--timeout", type=positive_seconds, default=900.0, help="stop after this many seconds"
+        "--timeout",
+        type=positive_seconds,
+        default=900.0,
+        help="stop the mission as failed after this many wall seconds",
     )
     run.add_argument(
         "--overwrite", action="store_true", help="replace the run record already in --out"
@@ -102,7 +165,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     tree = subparsers.add_parser("tree", help="render the mission tree")
     tree.add_argument(
-        "--format", choices=("ascii", "unicode", "dot", "svg", "png"), default="unicode"
+        "--format",
+        choices=("ascii", "unicode", "dot", "svg", "png"),
+        default="unicode",
+        help="text on the console (ascii, unicode) or a file (dot, svg, png)",
     )
     tree.add_argument("--blackboard", action="store_true", help="show blackboard keys and users")
     tree.add_argument(
@@ -111,7 +177,7 @@ def build_parser() -> argparse.ArgumentParser:
     tree.set_defaults(func=_tree)
 
     inspect = subparsers.add_parser("inspect", help="replay a recorded run")
-    inspect.add_argument("run_dir", type=Path)
+    inspect.add_argument("run_dir", type=Path, help="a run folder written by 'bearchair run'")
     inspect.add_argument("--tick", type=int, help="show the tree at this tick (default: the last)")
     inspect.add_argument("--blackboard", action="store_true", help="also show the blackboard")
     inspect.add_argument("--timeline", action="store_true", help="show every status change")
@@ -121,6 +187,8 @@ def build_parser() -> argparse.ArgumentParser:
         module.register(subparsers)
     for register in registered_commands():
         register(subparsers)
+    for subparser in subparsers.choices.values():
+        add_logging_arguments(subparser, top=False)
     return parser
 
 
@@ -449,10 +517,11 @@ def _exit_now(status: int) -> None:
 def _main(argv: list[str] | None) -> int:
     args: argparse.Namespace | None = None
     try:
+        import_pybullet_quietly()
         parser = build_parser()
         args = parser.parse_args(argv)
         logging.basicConfig(
-            level=logging.DEBUG if args.verbose else logging.WARNING,
+            level=logging.DEBUG if args.verbose else getattr(logging, args.log_level.upper()),
             format="%(levelname)s %(name)s: %(message)s",
         )
         return args.func(args)

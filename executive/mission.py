@@ -31,8 +31,16 @@ if TYPE_CHECKING:
 logger = logging.getLogger(__name__)
 
 
+def stage_seconds_text(wall_s: float, robot_s: float | None) -> str:
+    """``3.2 s wall, 8.9 s robot``: the two clocks a stage is timed on, each named (the
+    robot's runs slower than the wall in simulation, and faster when rendering waits)."""
+    text = f"{wall_s:.1f} s wall"
+    return text if robot_s is None else f"{text}, {robot_s:.1f} s robot"
+
+
 class StageProgress:
-    """Prints a line whenever a stage starts or ends (long stages are the norm here)."""
+    """Prints a line whenever a stage starts or ends (long stages are the norm here),
+    stamped with the run's wall seconds; an ended stage says its wall and robot seconds."""
 
     def __init__(self, stream: TextIO | None = None) -> None:
         self._stream = stream
@@ -46,7 +54,11 @@ class StageProgress:
             if stage.status == "RUNNING":
                 line = f"[{runner.elapsed():7.1f} s] {stage.name} ..."
             else:
-                line = f"[{runner.elapsed():7.1f} s] {stage.name}: {stage.status} ({stage.seconds:.1f} s) {stage.feedback}"
+                took = stage_seconds_text(
+                    stage.seconds,
+                    None if stage.robot_started_s is None else stage.robot_seconds,
+                )
+                line = f"[{runner.elapsed():7.1f} s] {stage.name}: {stage.status} ({took}) {stage.feedback}"
             try:
                 print(line, file=self._stream or sys.stderr, flush=True)
             except (OSError, ValueError):  # nobody reads stderr any more: the run goes on
@@ -360,11 +372,14 @@ def format_summary(summary: dict[str, Any]) -> str:
     lines = [
         f"chair {summary['chair']} | placement {summary['placement']} | helper {summary['helper']} "
         f"| seed {summary['seed']}",
-        f"{'stage':<20} {'status':<8} {'seconds':>8}  outputs",
+        f"{'stage':<20} {'status':<8} {'wall s':>7} {'robot s':>7}  outputs",
     ]
     for stage in summary["stages"]:
+        robot_s = stage.get("robot_seconds")
+        robot_text = "" if robot_s is None else f"{robot_s:.2f}"
         lines.append(
-            f"{stage['name']:<20} {stage['status']:<8} {stage['seconds']:>8.2f}  {stage['message']}"
+            f"{stage['name']:<20} {stage['status']:<8} {stage['seconds']:>7.2f} "
+            f"{robot_text:>7}  {stage['message']}"
         )
     for sentence in summary["instructions"]:
         lines.append(f'said: "{sentence}"')
@@ -376,7 +391,7 @@ def format_summary(summary: dict[str, Any]) -> str:
         )
     outcome = summary["outcome"].upper()
     if summary["outcome"] == "success":
-        lines.append(f"outcome: {outcome} in {summary['wall_seconds']:.1f} s")
+        lines.append(f"outcome: {outcome} in {summary['wall_seconds']:.1f} s wall")
     else:
         lines.append(f"outcome: {outcome} at {summary['failed_stage']}: {summary['reason']}")
     return "\n".join(lines)
