@@ -243,7 +243,9 @@ class MissionRecording:
                     "no display for a native viewer: use --live web (a web viewer on a port)"
                 )
             spawn_native_viewer(self._bind, grpc_port)
-            self.viewer_url = grpc_url(LOOPBACK if is_wildcard(self._bind) else self._bind, grpc_port)
+            self.viewer_url = grpc_url(
+                LOOPBACK if is_wildcard(self._bind) else self._bind, grpc_port
+            )
             return rr.GrpcSink(self.viewer_url)
         if live == "web":
             # The data in this process, on `bind`; the page from Rerun's program, since

@@ -14,6 +14,7 @@ voice falls back to text for good.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import queue
@@ -31,10 +32,9 @@ VOICE_HINT = "pip install 'bearchair[voice]' to hear the instructions"
 
 def print_to_stderr(sentence: str) -> None:
     """Where an unheard sentence goes by default: the console, beside the progress lines."""
-    try:
+    # Nobody reads stderr any more (a closed pipe): the log has the sentence.
+    with contextlib.suppress(OSError, ValueError):
         print(f'say (text only): "{sentence}"', file=sys.stderr, flush=True)
-    except (OSError, ValueError):  # nobody reads stderr any more: the log has it
-        pass
 
 
 def audio_device_available() -> bool:
