@@ -37,6 +37,7 @@ from bearchair.executive import (
 )
 from bearchair.executive.cli_types import positive_seconds, seed_value
 from bearchair.executive.config import RunConfig
+from bearchair.executive.console import showing_step_bars
 from bearchair.executive.interrupts import exit_status, handling_signals, received, signal_name
 from bearchair.executive.operator import ask_operator
 from bearchair.executive.viewer_links import add_bind_argument
@@ -249,7 +250,7 @@ def _run(args: argparse.Namespace) -> int:
         out_dir = default_run_dir(args.seed)
     args.run_dir = out_dir  # where an internal error's traceback goes
     config = RunConfig(**{**config.__dict__, "out_dir": out_dir})
-    with _log_to(out_dir / LOG_FILE):
+    with _log_to(out_dir / LOG_FILE), showing_step_bars():
         if args.robots is not None:
             summary = run_on_robots(
                 config,

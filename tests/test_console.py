@@ -10,6 +10,7 @@ import subprocess
 import sys
 from types import SimpleNamespace
 
+import numpy as np
 import py_trees
 import pytest
 
@@ -128,3 +129,71 @@ def test_chairs_left_out_by_max_chairs_are_not_called_skipped(tmp_path):
     assert "skipped" not in text
     assert left_out_text([]) == "no mesh left out"
     assert left_out_text([SkippedChair("x", "unusable: broken")]) == "1 skipped as unusable"
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_step_bars_draw_on_a_terminal_only():
+    from bearchair.core.progress import report, showing
+    from bearchair.executive.console import showing_step_bars, step_bars
+
+    assert step_bars(io.StringIO()) is None  # a captured stream: no display at all
+    quiet = io.StringIO()
+    with showing_step_bars(quiet):
+        report("scan: views", 1, 9)
+    assert quiet.getvalue() == ""
+    terminal = _Terminal()
+    with showing_step_bars(terminal):
+        for done in range(10):
+            report("scan: views", done, 9)
+    drawn = terminal.getvalue()
+    # tqdm redraws at most every 0.1 s, and takes the bar away when the step is done.
+    assert "scan: views" in drawn and "/9 [" in drawn and drawn.endswith("\r")
+    seen = []
+    with showing(lambda *args: seen.append(args)):
+        report("x", 1, 2)
+    report("x", 2, 2)  # after the block: nobody is shown it
+    assert seen == [("x", 1, 2)]
+
+
+def test_the_scan_and_the_imagination_report_their_steps():
+    from bearchair.core.geometry import yaw_transform
+    from bearchair.core.meshes import box_chair_mesh
+    from bearchair.core.progress import showing
+    from bearchair.skills.imagination import imagine_sitting
+    from bearchair.skills.perception import scan_chair
+    from bearchair.skills.perception.synthetic import SyntheticArm, SyntheticScene
+
+    scene = SyntheticScene(seed=3)
+    scene.add_mesh(box_chair_mesh(), yaw_transform(0.6, np.array([0.58, 0.08, 0.0])))
+    arm = SyntheticArm(scene)
+    reports: list[tuple[str, int, int]] = []
+    try:
+        with showing(lambda *args: reports.append(args)):
+            scan = scan_chair(arm, seed=0)
+            imagination = imagine_sitting(scan.chair_mesh, seed=0, workers=1)
+    finally:
+        arm.close()
+        scene.close()
+    views = [(done, total) for what, done, total in reports if what == "scan: views"]
+    assert views[0][0] == 0 and views[-1][0] == views[-1][1] >= len(scan.frames)
+    assert [done for done, _ in views] == sorted(done for done, _ in views)
+    drops = [(done, total) for what, done, total in reports if what == "imagination: drops"]
+    assert drops and all(0 <= done <= total for done, total in drops)
+    finished = sum(done for done, total in drops if done == total)
+    assert finished == imagination.n_drops
+
+
+def test_trials_progress_is_a_tqdm_bar_on_a_terminal():
+    from bearchair.evaluation.progress import Progress
+
+    terminal = _Terminal()
+    progress = Progress(4, already_done=1, stream=terminal)
+    progress.start()
+    progress.update({"chair": "a.obj", "trial_index": 1, "outcome": "success", "wall_seconds": 30})
+    progress.finish()
+    drawn = terminal.getvalue()
+    assert "trials" in drawn and "2/4" in drawn and "a.obj #1 success" in drawn
