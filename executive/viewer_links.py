@@ -27,11 +27,14 @@ import os
 import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 from urllib.parse import quote
 
 LOOPBACK = "127.0.0.1"
 """Where the viewers listen unless ``--bind`` says otherwise."""
+PAGE_START_S = 20.0
+"""Longest wait for Rerun's program to serve the page (it takes about 0.4 s here)."""
 _ROUTE_PROBE = ("192.0.2.1", 9)
 """A TEST-NET-1 address (RFC 5737): connecting a UDP socket to it sends nothing, and the
 socket's own address is then this machine's address on its default route."""
@@ -152,12 +155,41 @@ def serve_web_page(bind: str, web_port: int, connect_to: str) -> subprocess.Pope
         str(web_port),
         connect_to,
     ]
-    return subprocess.Popen(
+    server = subprocess.Popen(
         command,
         stdin=subprocess.DEVNULL,
         env=quiet_rerun_environment(),
         preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None,
     )
+    try:
+        wait_until_listening(reachable_host(bind), web_port, server)
+    except BaseException:
+        server.terminate()
+        raise
+    return server
+
+
+def wait_until_listening(
+    host: str, port: int, server: subprocess.Popen[bytes], timeout_s: float = PAGE_START_S
+) -> None:
+    """Returns once ``host:port`` accepts connections, so that a link printed next opens.
+
+    Raises:
+        OSError: the server exited, or did not listen within ``timeout_s``.
+    """
+    deadline = time.monotonic() + timeout_s
+    while True:
+        with contextlib.suppress(OSError), socket.create_connection((host, port), timeout=0.5):
+            return
+        if server.poll() is not None:
+            raise OSError(
+                f"Rerun's web viewer exited ({server.returncode}) instead of serving port {port}"
+            )
+        if time.monotonic() > deadline:
+            raise OSError(
+                f"Rerun's web viewer did not listen on port {port} within {timeout_s:.0f} s"
+            )
+        time.sleep(0.05)
 
 
 def _die_with_parent() -> None:
