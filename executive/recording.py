@@ -261,7 +261,10 @@ class MissionRecording:
         return rr.GrpcSink(live)
 
     def _log_static(self) -> None:
+        from bearchair.executive.recording_layout import mission_blueprint
+
         rr = self._rr
+        self._stream.send_blueprint(mission_blueprint())
         self._scene.log_world_frame(self._stream)
         paths = [path for path, _, _ in self._nodes]
         edges = [(path.rsplit("/", 1)[0], path) for path in paths if "/" in path]

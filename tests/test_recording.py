@@ -443,3 +443,23 @@ def _entity_paths(path) -> set[str]:
 def _rgb(packed: int) -> tuple[int, int, int]:
     """Rerun stores colours as 0xRRGGBBAA."""
     return ((packed >> 24) & 0xFF, (packed >> 16) & 0xFF, (packed >> 8) & 0xFF)
+
+
+def test_the_recording_opens_with_the_mission_layout(recorded):
+    from bearchair.executive.recording_layout import CAMERA_VIEW_TABS, blueprint_views
+
+    views = blueprint_views(recorded[0] / RECORDING_FILE)
+    assert ("3D", "scene", "world") in views
+    assert ("Graph", "tree", "tree") in views
+    assert ("TimeSeries", "rotations (deg)", "assistance") in views
+    assert ("TimeSeries", "seating plan (rad)", "seat/plan") in views
+    assert ("TextLog", "log", "/") in views
+    cameras = {origin for kind, _, origin in views if kind == "2D"}
+    assert cameras == {f"world/scan/views/{i}" for i in range(CAMERA_VIEW_TABS)}
+    # Every view's origin holds data in the recording (no empty panel by a typo).
+    recorded_paths = _entity_paths(recorded[0] / RECORDING_FILE)
+    for kind, name, origin in views:
+        if origin != "/":
+            assert any(p == f"/{origin}" or p.startswith(f"/{origin}/") for p in recorded_paths), (
+                f"{kind} view {name!r}: nothing recorded under {origin}"
+            )
