@@ -36,6 +36,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
+import numpy as np
 import py_trees
 from py_trees.common import Status
 
@@ -57,6 +58,7 @@ from bearchair.executive.viewer_links import (
 if TYPE_CHECKING:
     from bearchair.core.se2 import SE2Pose
     from bearchair.executive.runner import MissionRunner
+    from bearchair.skills.results import SeatingPlan
     from bearchair.skills.toolbox import MissionSkills
 logger = logging.getLogger(__name__)
 
@@ -129,8 +131,10 @@ class SkillCalls:
 
     The blackboard keeps results, not every call: the walk looks for the humanoid's
     tag many times and keeps only how it ended, and only the sentences of the
-    instructions are kept. This proxy queues ``(skill, result, robot seconds)`` for the
-    watched skills; the recording logs them at the next tick, from the tick's thread.
+    instructions are kept; the NAO's motions are not kept at all. This proxy queues
+    ``(skill, result, robot seconds)`` for the watched skills (for a motion, the result
+    is ``(plan, robot seconds when it began)``: what it played and from when); the
+    recording logs them at the next tick, from the tick's thread.
 
     Args:
         skills: the :class:`bearchair.skills.toolbox.MissionSkills` the tree uses.
@@ -138,6 +142,8 @@ class SkillCalls:
     """
 
     WATCHED = ("locate_humanoid", "compose_instruction")
+    MOTIONS = ("execute_seating", "release_and_stand")
+    """Skills called as ``(humanoid, plan, ...)`` that play the plan's joint motion."""
 
     def __init__(self, skills: Any, clock: Any) -> None:
         self._skills = skills
@@ -146,12 +152,16 @@ class SkillCalls:
 
     def __getattr__(self, name: str) -> Any:
         attribute = getattr(self._skills, name)
-        if name not in self.WATCHED or not callable(attribute):
+        if name not in self.WATCHED + self.MOTIONS or not callable(attribute):
             return attribute
 
         def watched(*args: Any, **kwargs: Any) -> Any:
+            started_s = self._clock.now()
             result = attribute(*args, **kwargs)
-            self._events.append((name, result, self._clock.now()))
+            event = result
+            if name in self.MOTIONS:
+                event = (args[1] if len(args) > 1 else kwargs.get("plan"), started_s)
+            self._events.append((name, event, self._clock.now()))
             return result
 
         return watched
@@ -196,6 +206,7 @@ class MissionRecording:
     ) -> None:
         rr = _rerun()
         from bearchair.executive import recording_scene
+        from bearchair.executive.recording_robots import MissionRobots
 
         self._rr = rr
         self._scene = recording_scene
@@ -231,6 +242,7 @@ class MissionRecording:
         self._last_pose: SE2Pose | None = None
         self._warned: set[str] = set()
         self._lock = threading.Lock()
+        self._robots = MissionRobots()
         self._log_static()
 
     # -- set-up ---------------------------------------------------------------------
@@ -266,6 +278,11 @@ class MissionRecording:
         rr = self._rr
         self._stream.send_blueprint(mission_blueprint())
         self._scene.log_world_frame(self._stream)
+        # The robots as they stand before the first tick; where the arena puts the arm's
+        # base is known at the first tick (keys.ARENA).
+        self._stream.set_time("tick", sequence=0)
+        self._stream.set_time("robot", duration=0.0)
+        self._guarded("robots", self._robots.log_static, self._stream, (0.0, 0.0))
         paths = [path for path, _, _ in self._nodes]
         edges = [(path.rsplit("/", 1)[0], path) for path in paths if "/" in path]
         self._stream.log(
@@ -289,9 +306,10 @@ class MissionRecording:
             events = self._skill_calls.drain() if self._skill_calls is not None else []
             tree = self._tree_to_log()
             changed = self._changed_values()
+            arm = self._arm_joints_moved(runner)
             # Most ticks change nothing: then nothing reaches Rerun, not even the time
             # (each call into it hands the GIL to the skills' threads and waits for it back).
-            if events or tree is not None or changed:
+            if events or tree is not None or changed or arm is not None:
                 self._stream.set_time("tick", sequence=int(runner.tree.count))
                 # The skill calls returned since the last tick, each at its own time.
                 self._guarded("skill calls", self._log_skill_calls, events)
@@ -300,8 +318,18 @@ class MissionRecording:
                     self._guarded("tree", self._log_tree, *tree)
                 for key, value, previous in changed:
                     self._guarded(key, self._log_value, key, value, previous)
+                if arm is not None:
+                    self._guarded("arm joints", self._robots.log_arm, self._stream, arm)
         self.seconds += time.perf_counter() - started
         self.cpu_seconds += time.thread_time() - cpu_started
+
+    def _arm_joints_moved(self, runner: MissionRunner) -> np.ndarray | None:
+        """The arm's joint angles when they moved since the last log, else None."""
+        try:
+            joints = np.asarray(runner.robot.arm.joint_positions(), dtype=float)
+        except Exception:  # a real arm's state may fail to read: the recording goes on
+            return None
+        return joints if self._robots.arm_moved(joints) else None
 
     def cost(self) -> dict[str, Any]:
         """What the recording cost the run so far: the hook's wall seconds, in all and
@@ -425,6 +453,8 @@ class MissionRecording:
                 self._scene.log_rotation(self._stream, rotation)
         elif key in SCENE_LOGGERS:
             getattr(self._scene, SCENE_LOGGERS[key])(self._stream, value)
+        if key == keys.ARENA:
+            self._robots.log_arm_base(self._stream, value.arm_base_xy)
 
     def _log_skill_calls(self, events: list[tuple[str, Any, float]]) -> None:
         for name, result, robot_s in events:
@@ -435,6 +465,19 @@ class MissionRecording:
                     self._log_humanoid_pose(result)
             elif name == "compose_instruction":
                 self._scene.log_instruction(self._stream, result)
+            elif name in SkillCalls.MOTIONS:
+                self._log_motion(name, *result)
+
+    def _log_motion(self, name: str, plan: SeatingPlan | None, started_s: float) -> None:
+        """The NAO's joints as a seating or retract motion played them, knot by knot."""
+        if plan is None:
+            return
+        if name == "execute_seating":
+            times, positions = plan.times_s, plan.positions_rad
+        else:
+            times, positions = plan.retract_times_s, plan.retract_positions_rad
+        if len(times):
+            self._robots.log_nao_motion(self._stream, plan.joint_names, times, positions, started_s)
 
     def _log_humanoid_pose(self, pose: SE2Pose) -> None:
         """Moves the NAO to its tracked pose; its path gets a point every 2 cm."""

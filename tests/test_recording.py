@@ -133,7 +133,11 @@ def test_the_recording_has_every_domain_s_entities(recorded):
         "/world/accessibility/se2_goal",
         "/world/accessibility/path",
         "/world/nao",
-        "/world/nao/body",
+        "/world/panda/visual_geometries/panda_link3/visual_0",
+        "/world/NaoH25V50/visual_geometries/LThigh/LThigh_visual_0",
+        "/transforms/panda/joints/panda_joint4",
+        "/transforms/nao/joints/LHipPitch",
+        "/transforms/nao/root",
         "/world/walk/tag_detections",
         "/world/walk/path",
         "/walk/tag_seen",
@@ -463,3 +467,95 @@ def test_the_recording_opens_with_the_mission_layout(recorded):
             assert any(p == f"/{origin}" or p.startswith(f"/{origin}/") for p in recorded_paths), (
                 f"{kind} view {name!r}: nothing recorded under {origin}"
             )
+
+
+def test_the_robots_move_with_their_joint_states(recorded):
+    from bearchair.executive.recording_robots import PANDA_ARM_JOINTS
+
+    out_dir, summary, skills, _, _ = recorded
+    path = out_dir / RECORDING_FILE
+    # The Panda's root hangs from the arm's base, the NAO's from its tracked pose.
+    (panda_root,) = read_entity(path, "transforms/panda/root")
+    assert panda_root["Transform3D:parent_frame"] == ["tf#/world/arm_base"]
+    assert panda_root["Transform3D:child_frame"] == ["panda/panda_link0"]
+    nao_roots = read_entity(path, "transforms/nao/root")
+    assert {tuple(row["Transform3D:parent_frame"]) for row in nao_roots} == {("tf#/world/nao",)}
+    # The arm's joints were logged as they changed (the scripted arm moves nothing,
+    # so once); the NAO's hips as the seating plan played them, at their robot times.
+    for joint in PANDA_ARM_JOINTS:
+        assert read_entity(path, f"transforms/panda/joints/{joint}")
+    plan = skills.calls["execute_seating"][0][0][1]
+    knee = plan.joint_names.index("LHipPitch")
+    rows = read_entity(path, "transforms/nao/joints/LHipPitch")
+    assert len(rows) == len(plan.times_s) + len(plan.retract_times_s)
+    seating, retract = rows[: len(plan.times_s)], rows[len(plan.times_s) :]
+    # Each knot at the robot time it was played: the motion's start plus the knot's time
+    # (the scripted skills take no robot time, so both motions start at the same time).
+    started = seating[0]["robot"] - plan.times_s[0]
+    assert [row["robot"] - started for row in seating] == pytest.approx(list(plan.times_s))
+    assert [row["robot"] - started for row in retract] == pytest.approx(list(plan.retract_times_s))
+    assert all(row["Transform3D:child_frame"] == ["nao/LThigh"] for row in rows)
+    assert knee >= 0
+
+
+def test_a_played_motion_poses_the_nao_knot_by_knot(tmp_path):
+    import rerun as rr
+    from scipy.spatial.transform import Rotation
+
+    from bearchair.executive.recording_robots import MissionRobots, joint_transform
+
+    robots = MissionRobots()
+    stream = rr.RecordingStream("test")
+    stream.save(str(tmp_path / "motion.rrd"))
+    knees = [0.0, 0.6, 1.2]
+    robots.log_nao_motion(
+        stream, ("LKneePitch", "RKneePitch"), np.array([0.0, 0.5, 1.0]),
+        np.array([[k, k] for k in knees]), started_s=5.0,
+    )  # fmt: skip
+    stream.flush()
+    stream.disconnect()
+    rows = read_entity(tmp_path / "motion.rrd", "transforms/nao/joints/LKneePitch")
+    assert [row["robot"] for row in rows] == pytest.approx([5.0, 5.5, 6.0])
+    joint = robots.nao.joints["LKneePitch"]
+    for row, knee in zip(rows, knees, strict=True):
+        # Rerun's joint transform and our forward kinematics agree.
+        logged = Rotation.from_quat(row["Transform3D:quaternion"][0])
+        ours = Rotation.from_matrix(joint_transform(joint, knee)[:3, :3])
+        assert (logged.inv() * ours).magnitude() < 1e-6
+    # Bending the knees lowers the body: the base sinks towards the floor.
+    heights = [row["Transform3D:translation"][0][2] for row in
+               read_entity(tmp_path / "motion.rrd", "transforms/nao/root")]  # fmt: skip
+    assert heights[0] > heights[1] > heights[2] > 0.1
+
+
+def test_forward_kinematics_matches_pybullet():
+    import pybullet
+
+    from bearchair.core.nao_carrying import CARRYING_POSTURE_RAD
+    from bearchair.executive.recording_robots import MissionRobots
+    from bearchair.hardware.sim.bullet import (
+        LockedBullet,
+        T_world_link,
+        joint_index_by_name,
+        link_index_by_name,
+        reset_base_link,
+    )
+
+    robots = MissionRobots()
+    bullet = LockedBullet()
+    try:
+        body = bullet.loadURDF(str(robots.nao_urdf), flags=pybullet.URDF_USE_INERTIA_FROM_FILE)
+        reset_base_link(bullet, body, np.eye(4))
+        joints = {**CARRYING_POSTURE_RAD, "LKneePitch": 1.1, "LHipPitch": -0.6, "LAnklePitch": -0.4}
+        index = joint_index_by_name(bullet, body)
+        for name, value in joints.items():
+            bullet.resetJointState(body, index[name], value)
+        sole = T_world_link(bullet, body, link_index_by_name(bullet, body)["l_sole"])
+    finally:
+        bullet.disconnect_once()
+    ours = robots.nao.chain(robots.nao.root_link, "l_sole", joints)
+    np.testing.assert_allclose(ours, sole, atol=1e-6)
+    # Laid flat: with the legs bent, the left sole is still on the floor, flat.
+    T_feet_sole = robots.T_nao_base(joints) @ ours
+    np.testing.assert_allclose(T_feet_sole[:3, :3], np.eye(3), atol=1e-9)
+    np.testing.assert_allclose(T_feet_sole[:3, 3], [0.0, 0.05, 0.0], atol=1e-9)

@@ -1,0 +1,189 @@
+"""The robots in a recording: the Panda and the NAO from their URDFs, moving with their
+joint states.
+
+Each robot is logged once by Rerun's URDF loader (``rerun.urdf.UrdfTree``): its links'
+geometry under ``world/<robot name>/...``, each link in a named frame
+(``panda/panda_link3``, ``nao/LThigh``), and the joints' fixed offsets. A joint state
+is one ``Transform3D`` per joint (``UrdfJoint.compute_transform``) under
+``transforms/<robot>/joints/<joint>``, on the timeline of the moment it describes. The root
+frames hang from the scene's own entities:
+
+* the Panda's base link from ``world/arm_base`` (the arena's ``arm_base_xy``, on the
+  floor); its seven joints as the arm reports them (``ScanningArm.joint_positions``);
+* the NAO's base link from ``world/nao``, the tracked pose of the NAO frame (on the
+  floor between the soles): its offset is the left sole laid flat beside that frame,
+  as the simulated NAO stands (forward kinematics of the legs, :func:`chain`). Its
+  joints: the carrying posture while it walks, then the seating plan's and the retract
+  motion's knots, at the robot times they were played.
+
+The URDFs are the ones the simulated world loads (the Panda drawn with its collision
+meshes, the NAO with primitives): the same robots as on the real cell.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import rerun as rr
+import rerun.urdf as rru
+from scipy.spatial.transform import Rotation
+
+from bearchair.core.arena import HUMANOID_TAG
+from bearchair.core.nao_carrying import CARRYING_POSTURE_RAD
+
+PANDA_ARM_JOINTS = tuple(f"panda_joint{index}" for index in range(1, 8))
+FEET_FRAME_IN_LEFT_SOLE_M = (0.0, -0.05, 0.0)
+"""The NAO frame is half the standing stance (5 cm) to the right of the left sole, in
+the sole's orientation (as :class:`bearchair.hardware.sim.nao.SimNao` places its body)."""
+ARM_STEP_RAD = math.radians(0.5)
+"""The arm's state is logged again once a joint moved half a degree."""
+
+
+class RobotModel:
+    """One robot from its URDF, logged to a recording and posed by joint values.
+
+    Args:
+        urdf: the robot's URDF (meshes by absolute path or primitives).
+        frame_prefix: the prefix of its link frames (``"nao/"``), unique per robot.
+        anchor: the entity whose frame the robot's root link hangs from.
+    """
+
+    def __init__(self, urdf: Path, frame_prefix: str, anchor: str) -> None:
+        self.tree = rru.UrdfTree.from_file_path(
+            str(urdf), entity_path_prefix="world", frame_prefix=frame_prefix
+        )
+        self.frame_prefix = frame_prefix
+        self.anchor = anchor
+        self.entity = f"world/{self.tree.name}"
+        """Where the URDF loader puts the links' geometry."""
+        self.transforms = f"transforms/{frame_prefix.strip('/')}"
+        """Where the joint states and the root's placement go (between named frames,
+        so the entity path is only a name)."""
+        self.joints = {joint.name: joint for joint in self.tree.joints()}
+        self.root_link = self.tree.root_link().name
+
+    def log_model(self, stream: rr.RecordingStream) -> None:
+        """The links' geometry and fixed offsets (static)."""
+        self.tree.log_urdf_to_recording(stream)
+
+    def log_root(self, stream: rr.RecordingStream, T_anchor_root: np.ndarray) -> None:
+        """Hangs the root link's frame from the anchor entity's frame."""
+        stream.log(
+            f"{self.transforms}/root",
+            rr.Transform3D(
+                translation=T_anchor_root[:3, 3],
+                mat3x3=T_anchor_root[:3, :3],
+                parent_frame=f"tf#/{self.anchor}",
+                child_frame=self.frame_prefix + self.root_link,
+            ),
+        )
+
+    def log_joints(self, stream: rr.RecordingStream, values: Mapping[str, float]) -> None:
+        """One transform per joint named in ``values`` (radians or metres)."""
+        for name, value in values.items():
+            joint = self.joints.get(name)
+            if joint is not None:
+                stream.log(
+                    f"{self.transforms}/joints/{name}",
+                    joint.compute_transform(float(value), clamp=False),
+                )
+
+    def chain(self, from_link: str, to_link: str, values: Mapping[str, float]) -> np.ndarray:
+        """``T_from_to``: the pose of ``to_link`` in ``from_link`` by forward kinematics
+        (joints not in ``values`` at 0). ``from_link`` must be an ancestor of ``to_link``."""
+        by_child = {joint.child_link: joint for joint in self.joints.values()}
+        transform = np.eye(4)
+        link = to_link
+        while link != from_link:
+            joint = by_child[link]
+            transform = joint_transform(joint, values.get(joint.name, 0.0)) @ transform
+            link = joint.parent_link
+        return transform
+
+
+def joint_transform(joint: Any, value: float) -> np.ndarray:
+    """A URDF joint's ``T_parent_child`` at ``value``: origin (xyz, fixed-axis rpy), then
+    the motion about (revolute, continuous) or along (prismatic) its axis."""
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_euler("xyz", joint.origin_rpy).as_matrix()
+    T[:3, 3] = joint.origin_xyz
+    motion = np.eye(4)
+    axis = np.asarray(joint.axis, dtype=float)
+    if joint.joint_type in ("revolute", "continuous"):
+        motion[:3, :3] = Rotation.from_rotvec(axis * value).as_matrix()
+    elif joint.joint_type == "prismatic":
+        motion[:3, 3] = axis * value
+    return T @ motion
+
+
+class MissionRobots:
+    """The Panda and the NAO of a mission's recording (see the module docstring)."""
+
+    def __init__(self) -> None:
+        from bearchair.hardware.sim.nao_urdf import nao_urdf
+        from bearchair.hardware.sim.panda import coarse_panda_urdf
+        from bearchair.hardware.sim.tag import tag_assets
+
+        _, plate = tag_assets(HUMANOID_TAG)
+        self.nao_urdf = nao_urdf(plate, HUMANOID_TAG.height_m)
+        self.panda = RobotModel(coarse_panda_urdf(), "panda/", "world/arm_base")
+        self.nao = RobotModel(self.nao_urdf, "nao/", "world/nao")
+        self._last_arm: np.ndarray | None = None
+        self._nao_joints: dict[str, float] = dict(CARRYING_POSTURE_RAD)
+
+    def log_static(self, stream: rr.RecordingStream, arm_base_xy: Sequence[float]) -> None:
+        """Both models, the arm's base, and the NAO standing in its carrying posture."""
+        self.panda.log_model(stream)
+        self.nao.log_model(stream)
+        self.log_arm_base(stream, arm_base_xy)
+        self.panda.log_root(stream, np.eye(4))
+        self.log_nao_posture(stream, self._nao_joints)
+
+    def log_arm_base(self, stream: rr.RecordingStream, arm_base_xy: Sequence[float]) -> None:
+        stream.log(
+            "world/arm_base",
+            rr.Transform3D(translation=(float(arm_base_xy[0]), float(arm_base_xy[1]), 0.0)),
+        )
+
+    def arm_moved(self, joints_rad: np.ndarray) -> bool:
+        """True (and remembered) when a joint moved :data:`ARM_STEP_RAD` since the last log."""
+        joints_rad = np.asarray(joints_rad, dtype=float)
+        last = self._last_arm
+        if last is not None and float(np.max(np.abs(joints_rad - last))) < ARM_STEP_RAD:
+            return False
+        self._last_arm = joints_rad
+        return True
+
+    def log_arm(self, stream: rr.RecordingStream, joints_rad: np.ndarray) -> None:
+        self.panda.log_joints(stream, dict(zip(PANDA_ARM_JOINTS, joints_rad, strict=True)))
+
+    def log_nao_posture(self, stream: rr.RecordingStream, joints: Mapping[str, float]) -> None:
+        """The NAO's joints, its base placed so that the left sole lies flat on the floor."""
+        self._nao_joints = {**self._nao_joints, **joints}
+        self.nao.log_joints(stream, self._nao_joints)
+        self.nao.log_root(stream, self.T_nao_base(self._nao_joints))
+
+    def T_nao_base(self, joints: Mapping[str, float]) -> np.ndarray:
+        """The NAO's base link in the NAO frame (on the floor between the soles)."""
+        T_base_sole = self.nao.chain(self.nao.root_link, "l_sole", joints)
+        T_sole_feet = np.eye(4)
+        T_sole_feet[:3, 3] = FEET_FRAME_IN_LEFT_SOLE_M
+        return np.linalg.inv(T_base_sole @ T_sole_feet)
+
+    def log_nao_motion(
+        self,
+        stream: rr.RecordingStream,
+        joint_names: Sequence[str],
+        times_s: np.ndarray,
+        positions_rad: np.ndarray,
+        started_s: float,
+    ) -> None:
+        """A joint trajectory the NAO played from robot time ``started_s``, knot by knot."""
+        positions = np.asarray(positions_rad, dtype=float).reshape(len(times_s), -1)
+        for time_s, row in zip(np.asarray(times_s, dtype=float), positions, strict=True):
+            stream.set_time("robot", duration=started_s + float(time_s))
+            self.log_nao_posture(stream, dict(zip(joint_names, row, strict=True)))
