@@ -472,7 +472,7 @@ def test_the_recording_opens_with_the_mission_layout(recorded):
 def test_the_robots_move_with_their_joint_states(recorded):
     from bearchair.executive.recording_robots import PANDA_ARM_JOINTS
 
-    out_dir, summary, skills, _, _ = recorded
+    out_dir, _, skills, _, _ = recorded
     path = out_dir / RECORDING_FILE
     # The Panda's root hangs from the arm's base, the NAO's from its tracked pose.
     (panda_root,) = read_entity(path, "transforms/panda/root")
