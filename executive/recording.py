@@ -11,8 +11,13 @@ tree's tick count) and ``robot`` (seconds on the robot's clock):
   ``tree/log`` has a line per status change;
 * ``blackboard/<key>``: each blackboard value as JSON text whenever it changes;
 * the scene: the skills' typed results drawn by :mod:`bearchair.executive.recording_scene`
-  when they appear on the blackboard, and two skill calls the blackboard does not
-  keep (the tag's detections, the rotations asked for), seen by :class:`SkillCalls`.
+  when they appear on the blackboard, and the skill calls the blackboard does not
+  keep (the tag's detections, the rotations asked for, the NAO's motions), seen by
+  :class:`bearchair.executive.skill_calls.SkillCalls`;
+* the robots from their URDFs (:mod:`bearchair.executive.recording_robots`), in the
+  layout of :mod:`bearchair.executive.recording_layout`.
+
+A recording is read back with :func:`bearchair.executive.recording_read.read_entity`.
 
 Skills hold no viewer code. Rerun (``rerun-sdk``) is the optional extra ``[viewer]``;
 without it this module imports, and asking for a recording raises
@@ -36,7 +41,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
-import numpy as np
 import py_trees
 from py_trees.common import Status
 
@@ -44,6 +48,7 @@ from bearchair.behaviours import keys
 from bearchair.core.errors import BackendUnavailable
 from bearchair.executive.jsonable import to_jsonable
 from bearchair.executive.record import tree_nodes
+from bearchair.executive.skill_calls import SkillCalls
 from bearchair.executive.viewer_links import (
     LOOPBACK,
     grpc_url,
@@ -124,54 +129,6 @@ def _rerun() -> Any:
     import rerun
 
     return rerun
-
-
-class SkillCalls:
-    """The mission's skills, passed through, remembering what some calls returned.
-
-    The blackboard keeps results, not every call: the walk looks for the humanoid's
-    tag many times and keeps only how it ended, and only the sentences of the
-    instructions are kept; the NAO's motions are not kept at all. This proxy queues
-    ``(skill, result, robot seconds)`` for the watched skills (for a motion, the result
-    is ``(plan, robot seconds when it began)``: what it played and from when); the
-    recording logs them at the next tick, from the tick's thread.
-
-    Args:
-        skills: the :class:`bearchair.skills.toolbox.MissionSkills` the tree uses.
-        clock: the robot's clock (stamps each call).
-    """
-
-    WATCHED = ("locate_humanoid", "compose_instruction")
-    MOTIONS = ("execute_seating", "release_and_stand")
-    """Skills called as ``(humanoid, plan, ...)`` that play the plan's joint motion."""
-
-    def __init__(self, skills: Any, clock: Any) -> None:
-        self._skills = skills
-        self._clock = clock
-        self._events: collections.deque[tuple[str, Any, float]] = collections.deque()
-
-    def __getattr__(self, name: str) -> Any:
-        attribute = getattr(self._skills, name)
-        if name not in self.WATCHED + self.MOTIONS or not callable(attribute):
-            return attribute
-
-        def watched(*args: Any, **kwargs: Any) -> Any:
-            started_s = self._clock.now()
-            result = attribute(*args, **kwargs)
-            event = result
-            if name in self.MOTIONS:
-                event = (args[1] if len(args) > 1 else kwargs.get("plan"), started_s)
-            self._events.append((name, event, self._clock.now()))
-            return result
-
-        return watched
-
-    def drain(self) -> list[tuple[str, Any, float]]:
-        """The calls returned since the last drain, oldest first (thread-safe)."""
-        events = []
-        while self._events:
-            events.append(self._events.popleft())
-        return events
 
 
 class MissionRecording:
@@ -273,7 +230,7 @@ class MissionRecording:
         return rr.GrpcSink(live)
 
     def _log_static(self) -> None:
-        from bearchair.executive.recording_layout import mission_blueprint
+        from bearchair.executive.recording_layout import mission_blueprint, tree_layout
 
         rr = self._rr
         self._stream.send_blueprint(mission_blueprint())
@@ -288,7 +245,7 @@ class MissionRecording:
         self._stream.log(
             "tree",
             rr.GraphEdges(edges, graph_type=rr.GraphType.Directed),
-            rr.GraphNodes(paths, positions=_tree_layout(self._nodes)),
+            rr.GraphNodes(paths, positions=tree_layout(self._nodes)),
             static=True,
         )
 
@@ -306,7 +263,7 @@ class MissionRecording:
             events = self._skill_calls.drain() if self._skill_calls is not None else []
             tree = self._tree_to_log()
             changed = self._changed_values()
-            arm = self._arm_joints_moved(runner)
+            arm = self._robots.arm_joints_to_log(runner.robot.arm.joint_positions)
             # Most ticks change nothing: then nothing reaches Rerun, not even the time
             # (each call into it hands the GIL to the skills' threads and waits for it back).
             if events or tree is not None or changed or arm is not None:
@@ -322,14 +279,6 @@ class MissionRecording:
                     self._guarded("arm joints", self._robots.log_arm, self._stream, arm)
         self.seconds += time.perf_counter() - started
         self.cpu_seconds += time.thread_time() - cpu_started
-
-    def _arm_joints_moved(self, runner: MissionRunner) -> np.ndarray | None:
-        """The arm's joint angles when they moved since the last log, else None."""
-        try:
-            joints = np.asarray(runner.robot.arm.joint_positions(), dtype=float)
-        except Exception:  # a real arm's state may fail to read: the recording goes on
-            return None
-        return joints if self._robots.arm_moved(joints) else None
 
     def cost(self) -> dict[str, Any]:
         """What the recording cost the run so far: the hook's wall seconds, in all and
@@ -512,41 +461,6 @@ def open_recording(
     )
 
 
-def read_entity(path: Path, entity_path: str) -> list[dict[str, Any]]:
-    """The rows logged to one entity of a recording, in tick order (for tests and tools).
-
-    Each row maps column names (``tick``, ``robot`` in seconds, ``GraphNodes:labels``,
-    ``status``, ...) to Python values; static rows have no ``tick``. The wall-clock
-    ``log_time`` column is left out.
-    """
-    from rerun.chunk import RrdReader
-
-    wanted = "/" + entity_path.strip("/")
-    rows: list[dict[str, Any]] = []
-    for chunk in RrdReader(str(path)).store().stream().to_chunks():
-        if chunk.entity_path != wanted:
-            continue
-        batch = chunk.to_record_batch()
-        names = [n for n in batch.schema.names if n not in ("log_time", "rerun.controls.RowId")]
-        columns = {name: _python_values(batch.column(name)) for name in names}
-        rows.extend(
-            {name: values[i] for name, values in columns.items()} for i in range(batch.num_rows)
-        )
-    rows.sort(key=lambda row: (row.get("tick") is not None, row.get("tick") or 0))
-    return rows
-
-
-def _python_values(column: Any) -> list[Any]:
-    """A column's values; durations (the ``robot`` timeline) as float seconds, since
-    nanoseconds do not fit Python's timedelta."""
-    import pyarrow as pa
-
-    if pa.types.is_duration(column.type):
-        nanoseconds = column.cast(pa.duration("ns")).cast(pa.int64()).to_pylist()
-        return [None if value is None else value / 1e9 for value in nanoseconds]
-    return column.to_pylist()
-
-
 def _robot_seconds(runner: MissionRunner) -> float:
     try:
         return float(runner.robot.clock.now())
@@ -569,29 +483,3 @@ def _text_level(rr: Any, status: str) -> Any:
     if status == Status.FAILURE.value:
         return rr.TextLogLevel.WARN
     return rr.TextLogLevel.INFO
-
-
-def _tree_layout(
-    nodes: list[tuple[str, py_trees.behaviour.Behaviour, int]],
-) -> list[tuple[float, float]]:
-    """A top-down tree layout: leaves side by side, parents centred over their children
-    (graph units; rows 120 apart, leaves 220 apart so that labels fit)."""
-    x_of: dict[str, float] = {}
-    children: dict[str, list[str]] = collections.defaultdict(list)
-    for path, _, _ in nodes:
-        if "/" in path:
-            children[path.rsplit("/", 1)[0]].append(path)
-    next_leaf = 0.0
-
-    def place(path: str) -> float:
-        nonlocal next_leaf
-        if not children[path]:
-            x_of[path] = next_leaf
-            next_leaf += 220.0
-        else:
-            xs = [place(child) for child in children[path]]
-            x_of[path] = (xs[0] + xs[-1]) / 2.0
-        return x_of[path]
-
-    place(nodes[0][0])
-    return [(x_of[path], 120.0 * depth) for path, _, depth in nodes]

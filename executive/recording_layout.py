@@ -10,9 +10,11 @@ user who rearranges the views can get this layout back with "reset blueprint".
 
 from __future__ import annotations
 
+import collections
 from pathlib import Path
 from typing import Any
 
+import py_trees
 import rerun.blueprint as rrb
 
 from bearchair.skills.perception.views import SCAN_CONFIGURATIONS
@@ -76,3 +78,29 @@ def blueprint_views(path: Path) -> list[tuple[str, str, str]]:
 
 def _first(cell: Any) -> str:
     return str(cell[0]) if isinstance(cell, list) and cell else str(cell)
+
+
+def tree_layout(
+    nodes: list[tuple[str, py_trees.behaviour.Behaviour, int]],
+) -> list[tuple[float, float]]:
+    """A top-down tree layout: leaves side by side, parents centred over their children
+    (graph units; rows 120 apart, leaves 220 apart so that labels fit)."""
+    x_of: dict[str, float] = {}
+    children: dict[str, list[str]] = collections.defaultdict(list)
+    for path, _, _ in nodes:
+        if "/" in path:
+            children[path.rsplit("/", 1)[0]].append(path)
+    next_leaf = 0.0
+
+    def place(path: str) -> float:
+        nonlocal next_leaf
+        if not children[path]:
+            x_of[path] = next_leaf
+            next_leaf += 220.0
+        else:
+            xs = [place(child) for child in children[path]]
+            x_of[path] = (xs[0] + xs[-1]) / 2.0
+        return x_of[path]
+
+    place(nodes[0][0])
+    return [(x_of[path], 120.0 * depth) for path, _, depth in nodes]

@@ -23,7 +23,8 @@ meshes, the NAO with primitives): the same robots as on the real cell.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+import time
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -41,6 +42,9 @@ FEET_FRAME_IN_LEFT_SOLE_M = (0.0, -0.05, 0.0)
 the sole's orientation (as :class:`bearchair.hardware.sim.nao.SimNao` places its body)."""
 ARM_STEP_RAD = math.radians(0.5)
 """The arm's state is logged again once a joint moved half a degree."""
+ARM_READ_PERIOD_S = 0.1
+"""Wall seconds between two reads of the arm's joints (10 Hz: its motions last seconds;
+in simulation a read waits for the physics step's lock, on the tick's thread)."""
 
 
 class RobotModel:
@@ -133,6 +137,7 @@ class MissionRobots:
         self.panda = RobotModel(coarse_panda_urdf(), "panda/", "world/arm_base")
         self.nao = RobotModel(self.nao_urdf, "nao/", "world/nao")
         self._last_arm: np.ndarray | None = None
+        self._arm_read_s = -math.inf
         self._nao_joints: dict[str, float] = dict(CARRYING_POSTURE_RAD)
 
     def log_static(self, stream: rr.RecordingStream, arm_base_xy: Sequence[float]) -> None:
@@ -149,14 +154,23 @@ class MissionRobots:
             rr.Transform3D(translation=(float(arm_base_xy[0]), float(arm_base_xy[1]), 0.0)),
         )
 
-    def arm_moved(self, joints_rad: np.ndarray) -> bool:
-        """True (and remembered) when a joint moved :data:`ARM_STEP_RAD` since the last log."""
-        joints_rad = np.asarray(joints_rad, dtype=float)
+    def arm_joints_to_log(self, read: Callable[[], np.ndarray]) -> np.ndarray | None:
+        """The arm's joint angles (``read()``) when a joint moved :data:`ARM_STEP_RAD`
+        since the last ones logged, else None; read at most every
+        :data:`ARM_READ_PERIOD_S`."""
+        now = time.monotonic()
+        if now - self._arm_read_s < ARM_READ_PERIOD_S:
+            return None
+        self._arm_read_s = now
+        try:
+            joints_rad = np.asarray(read(), dtype=float)
+        except Exception:  # a real arm's state may fail to read: the recording goes on
+            return None
         last = self._last_arm
         if last is not None and float(np.max(np.abs(joints_rad - last))) < ARM_STEP_RAD:
-            return False
+            return None
         self._last_arm = joints_rad
-        return True
+        return joints_rad
 
     def log_arm(self, stream: rr.RecordingStream, joints_rad: np.ndarray) -> None:
         self.panda.log_joints(stream, dict(zip(PANDA_ARM_JOINTS, joints_rad, strict=True)))

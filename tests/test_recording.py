@@ -32,13 +32,9 @@ from bearchair.trees.mission import create_tree
 
 pytest.importorskip("rerun", reason="rerun-sdk (the [viewer] extra) is not installed")
 
-from bearchair.executive.recording import (
-    RECORDING_FILE,
-    STATUS_COLOURS,
-    MissionRecording,
-    SkillCalls,
-    read_entity,
-)
+from bearchair.executive.recording import RECORDING_FILE, STATUS_COLOURS, MissionRecording
+from bearchair.executive.recording_read import read_entity
+from bearchair.executive.skill_calls import SkillCalls
 
 T_WORLD_CHAIR = yaw_transform(0.6, np.array([0.58, 0.08, 0.0]))
 BEAR_AT = yaw_transform(0.3, np.array([0.6, 0.05, 0.3]))
