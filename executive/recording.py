@@ -49,6 +49,7 @@ from bearchair.core.errors import BackendUnavailable
 from bearchair.executive.jsonable import to_jsonable
 from bearchair.executive.record import tree_nodes
 from bearchair.executive.skill_calls import SkillCalls
+from bearchair.executive.tree_labels import node_label
 from bearchair.executive.viewer_links import (
     LOOPBACK,
     grpc_url,
@@ -61,7 +62,10 @@ from bearchair.executive.viewer_links import (
 )
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from bearchair.core.se2 import SE2Pose
+    from bearchair.executive.recording_robots import JointSampler
     from bearchair.executive.runner import MissionRunner
     from bearchair.skills.results import SeatingPlan
     from bearchair.skills.toolbox import MissionSkills
@@ -87,8 +91,6 @@ FEEDBACK_PERIOD_S = 1.0
 """Wall seconds between two logs of the tree when only feedback changed (a running
 leaf's message counts its seconds every tick); status changes are logged at their tick.
 Each log takes about 2 ms of the tick thread, more when the skills' threads hold the GIL."""
-FEEDBACK_LABEL_CHARS = 48
-"""Feedback shown in a node's label is cut here; the full text is in ``tree/log``."""
 
 
 SCENE_LOGGERS: dict[str, str] = {
@@ -200,6 +202,7 @@ class MissionRecording:
         self._warned: set[str] = set()
         self._lock = threading.Lock()
         self._robots = MissionRobots()
+        self._arm_sampler: JointSampler | None = None
         self._log_static()
 
     # -- set-up ---------------------------------------------------------------------
@@ -263,22 +266,35 @@ class MissionRecording:
             events = self._skill_calls.drain() if self._skill_calls is not None else []
             tree = self._tree_to_log()
             changed = self._changed_values()
-            arm = self._robots.arm_joints_to_log(runner.robot.arm.joint_positions)
+            arm = self._arm_states(runner)
             # Most ticks change nothing: then nothing reaches Rerun, not even the time
             # (each call into it hands the GIL to the skills' threads and waits for it back).
-            if events or tree is not None or changed or arm is not None:
+            if events or tree is not None or changed or arm:
                 self._stream.set_time("tick", sequence=int(runner.tree.count))
-                # The skill calls returned since the last tick, each at its own time.
+                # The skill calls returned since the last tick, each at its own time;
+                # the arm's states as well.
                 self._guarded("skill calls", self._log_skill_calls, events)
+                self._guarded("arm joints", self._log_arm_states, arm)
                 self._stream.set_time("robot", duration=_robot_seconds(runner))
                 if tree is not None:
                     self._guarded("tree", self._log_tree, *tree)
                 for key, value, previous in changed:
                     self._guarded(key, self._log_value, key, value, previous)
-                if arm is not None:
-                    self._guarded("arm joints", self._robots.log_arm, self._stream, arm)
         self.seconds += time.perf_counter() - started
         self.cpu_seconds += time.thread_time() - cpu_started
+
+    def _arm_states(self, runner: MissionRunner) -> list[tuple[float, np.ndarray]]:
+        """The arm's joint states read since the last tick (its sampler starts at the first)."""
+        if self._arm_sampler is None:
+            from bearchair.executive.recording_robots import JointSampler
+
+            self._arm_sampler = JointSampler(runner.robot.arm.joint_positions, runner.robot.clock)
+        return self._arm_sampler.drain()
+
+    def _log_arm_states(self, states: list[tuple[float, np.ndarray]]) -> None:
+        for robot_s, joints in states:
+            self._stream.set_time("robot", duration=robot_s)
+            self._robots.log_arm(self._stream, joints)
 
     def cost(self) -> dict[str, Any]:
         """What the recording cost the run so far: the hook's wall seconds, in all and
@@ -305,6 +321,8 @@ class MissionRecording:
     def close(self) -> None:
         """Logs the tree's last feedback, flushes and closes the file (the viewer keeps
         what it received)."""
+        if self._arm_sampler is not None:
+            self._arm_sampler.stop()
         with self._lock:
             tree = self._tree_to_log(force=True)
             if tree is not None:
@@ -367,7 +385,7 @@ class MissionRecording:
             rr.GraphNodes(
                 [path for path, _, _ in self._nodes],
                 labels=[
-                    _label(node.name, feedback)
+                    node_label(node.name, feedback)
                     for (_, node, _), (_, feedback) in zip(self._nodes, state, strict=True)
                 ],
                 colors=[STATUS_COLOURS[status] for status, _ in state],
@@ -466,17 +484,6 @@ def _robot_seconds(runner: MissionRunner) -> float:
         return float(runner.robot.clock.now())
     except Exception:  # a real robot's clock may fail at shutdown
         return runner.elapsed()
-
-
-def _label(name: str, feedback: str) -> str:
-    if not feedback:
-        return name
-    cut = (
-        feedback
-        if len(feedback) <= FEEDBACK_LABEL_CHARS
-        else feedback[: FEEDBACK_LABEL_CHARS - 1] + "…"
-    )
-    return f"{name}\n{cut}"
 
 
 def _text_level(rr: Any, status: str) -> Any:

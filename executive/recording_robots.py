@@ -22,8 +22,9 @@ meshes, the NAO with primitives): the same robots as on the real cell.
 
 from __future__ import annotations
 
+import collections
 import math
-import time
+import threading
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -43,8 +44,7 @@ the sole's orientation (as :class:`bearchair.hardware.sim.nao.SimNao` places its
 ARM_STEP_RAD = math.radians(0.5)
 """The arm's state is logged again once a joint moved half a degree."""
 ARM_READ_PERIOD_S = 0.1
-"""Wall seconds between two reads of the arm's joints (10 Hz: its motions last seconds;
-in simulation a read waits for the physics step's lock, on the tick's thread)."""
+"""Wall seconds between two reads of the arm's joints (10 Hz: its motions last seconds)."""
 
 
 class RobotModel:
@@ -136,8 +136,6 @@ class MissionRobots:
         self.nao_urdf = nao_urdf(plate, HUMANOID_TAG.height_m)
         self.panda = RobotModel(coarse_panda_urdf(), "panda/", "world/arm_base")
         self.nao = RobotModel(self.nao_urdf, "nao/", "world/nao")
-        self._last_arm: np.ndarray | None = None
-        self._arm_read_s = -math.inf
         self._nao_joints: dict[str, float] = dict(CARRYING_POSTURE_RAD)
 
     def log_static(self, stream: rr.RecordingStream, arm_base_xy: Sequence[float]) -> None:
@@ -153,24 +151,6 @@ class MissionRobots:
             "world/arm_base",
             rr.Transform3D(translation=(float(arm_base_xy[0]), float(arm_base_xy[1]), 0.0)),
         )
-
-    def arm_joints_to_log(self, read: Callable[[], np.ndarray]) -> np.ndarray | None:
-        """The arm's joint angles (``read()``) when a joint moved :data:`ARM_STEP_RAD`
-        since the last ones logged, else None; read at most every
-        :data:`ARM_READ_PERIOD_S`."""
-        now = time.monotonic()
-        if now - self._arm_read_s < ARM_READ_PERIOD_S:
-            return None
-        self._arm_read_s = now
-        try:
-            joints_rad = np.asarray(read(), dtype=float)
-        except Exception:  # a real arm's state may fail to read: the recording goes on
-            return None
-        last = self._last_arm
-        if last is not None and float(np.max(np.abs(joints_rad - last))) < ARM_STEP_RAD:
-            return None
-        self._last_arm = joints_rad
-        return joints_rad
 
     def log_arm(self, stream: rr.RecordingStream, joints_rad: np.ndarray) -> None:
         self.panda.log_joints(stream, dict(zip(PANDA_ARM_JOINTS, joints_rad, strict=True)))
@@ -201,3 +181,60 @@ class MissionRobots:
         for time_s, row in zip(np.asarray(times_s, dtype=float), positions, strict=True):
             stream.set_time("robot", duration=started_s + float(time_s))
             self.log_nao_posture(stream, dict(zip(joint_names, row, strict=True)))
+
+
+class JointSampler:
+    """Reads a robot's joint angles every ``period_s`` in a thread of its own, keeping
+    ``(robot seconds, angles)`` whenever a joint moved ``step_rad`` since the last kept.
+
+    Not on the tick's thread: in simulation a read waits for the world's lock while
+    physics steps (9 s of a 74 s run when the tick loop read the arm itself).
+
+    Args:
+        read: the joint angles now (``ScanningArm.joint_positions``), radians.
+        clock: the robot's clock (``now()``, seconds).
+    """
+
+    def __init__(
+        self,
+        read: Callable[[], Any],
+        clock: Any,
+        period_s: float = ARM_READ_PERIOD_S,
+        step_rad: float = ARM_STEP_RAD,
+    ) -> None:
+        self._read = read
+        self._clock = clock
+        self._period_s = period_s
+        self._step_rad = step_rad
+        self._kept: collections.deque[tuple[float, np.ndarray]] = collections.deque()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="recording-joints", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        last: np.ndarray | None = None
+        while True:
+            try:
+                joints = np.asarray(self._read(), dtype=float)
+                now_s = float(self._clock.now())
+            except Exception:  # a closed world or a real arm's failed read: try again
+                joints = None
+            if joints is not None and (
+                last is None or float(np.max(np.abs(joints - last))) >= self._step_rad
+            ):
+                self._kept.append((now_s, joints))
+                last = joints
+            if self._stop.wait(self._period_s):
+                return
+
+    def drain(self) -> list[tuple[float, np.ndarray]]:
+        """The states kept since the last drain, oldest first."""
+        kept = []
+        while self._kept:
+            kept.append(self._kept.popleft())
+        return kept
+
+    def stop(self) -> None:
+        """Stops reading (waits for the thread at most one period and a read)."""
+        self._stop.set()
+        self._thread.join(timeout=self._period_s + 5.0)

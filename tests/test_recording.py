@@ -555,3 +555,35 @@ def test_forward_kinematics_matches_pybullet():
     T_feet_sole = robots.T_nao_base(joints) @ ours
     np.testing.assert_allclose(T_feet_sole[:3, :3], np.eye(3), atol=1e-9)
     np.testing.assert_allclose(T_feet_sole[:3, 3], [0.0, 0.05, 0.0], atol=1e-9)
+
+
+def test_the_arm_is_sampled_off_the_tick_thread_when_it_moves():
+    import threading
+    import time
+
+    from bearchair.executive.recording_robots import JointSampler
+
+    angles = [np.zeros(7)]
+    readers: set[str] = set()
+
+    def read():
+        readers.add(threading.current_thread().name)
+        return angles[0]
+
+    class Clock:
+        def now(self):
+            return 7.0
+
+    sampler = JointSampler(read, Clock(), period_s=0.01, step_rad=0.01)
+    try:
+        time.sleep(0.1)
+        assert [(t, list(q)) for t, q in sampler.drain()] == [(7.0, [0.0] * 7)]  # once: still
+        angles[0] = np.full(7, 0.005)  # below the step: not kept
+        time.sleep(0.1)
+        angles[0] = np.full(7, 0.5)
+        time.sleep(0.1)
+        kept = sampler.drain()
+        assert len(kept) == 1 and kept[0][1][0] == 0.5
+    finally:
+        sampler.stop()
+    assert readers == {"recording-joints"}
