@@ -4,8 +4,10 @@ joint states.
 Each robot is logged once by Rerun's URDF loader (``rerun.urdf.UrdfTree``): its links'
 geometry under ``world/<robot name>/...``, each link in a named frame
 (``panda/panda_link3``, ``nao/LThigh``), and the joints' fixed offsets. A joint state
-is one ``Transform3D`` per joint (``UrdfJoint.compute_transform``) under
-``transforms/<robot>/joints/<joint>``, on the timeline of the moment it describes. The root
+is one batch of ``Transform3D`` under ``transforms/<robot>/joints``, a transform per
+joint from its parent link's frame to its child's (:func:`joint_transform`, which
+agrees with Rerun's ``UrdfJoint.compute_transform``), on the timeline of the moment it
+describes. The root
 frames hang from the scene's own entities:
 
 * the Panda's base link from ``world/arm_base`` (the arena's ``arm_base_xy``, on the
@@ -87,14 +89,19 @@ class RobotModel:
         )
 
     def log_joints(self, stream: rr.RecordingStream, values: Mapping[str, float]) -> None:
-        """One transform per joint named in ``values`` (radians or metres)."""
-        for name, value in values.items():
-            joint = self.joints.get(name)
-            if joint is not None:
-                stream.log(
-                    f"{self.transforms}/joints/{name}",
-                    joint.compute_transform(float(value), clamp=False),
-                )
+        """The joints named in ``values`` (radians or metres) as one batch of transforms,
+        each from its parent link's frame to its child's: one log call per state."""
+        joints = [self.joints[name] for name in values if name in self.joints]
+        transforms = [joint_transform(joint, float(values[joint.name])) for joint in joints]
+        stream.log(
+            f"{self.transforms}/joints",
+            rr.Transform3D.from_fields(
+                translation=[T[:3, 3] for T in transforms],
+                quaternion=[Rotation.from_matrix(T[:3, :3]).as_quat() for T in transforms],
+                parent_frame=[self.frame_prefix + joint.parent_link for joint in joints],
+                child_frame=[self.frame_prefix + joint.child_link for joint in joints],
+            ),
+        )
 
     def chain(self, from_link: str, to_link: str, values: Mapping[str, float]) -> np.ndarray:
         """``T_from_to``: the pose of ``to_link`` in ``from_link`` by forward kinematics
@@ -136,7 +143,10 @@ class MissionRobots:
         self.nao_urdf = nao_urdf(plate, HUMANOID_TAG.height_m)
         self.panda = RobotModel(coarse_panda_urdf(), "panda/", "world/arm_base")
         self.nao = RobotModel(self.nao_urdf, "nao/", "world/nao")
-        self._nao_joints: dict[str, float] = dict(CARRYING_POSTURE_RAD)
+        # Standing straight (every joint 0) with the arms carrying: every movable joint
+        # is in each state logged, so that one state is the whole posture.
+        movable = [name for name, joint in self.nao.joints.items() if joint.joint_type != "fixed"]
+        self._nao_joints: dict[str, float] = {**dict.fromkeys(movable, 0.0), **CARRYING_POSTURE_RAD}
 
     def log_static(self, stream: rr.RecordingStream, arm_base_xy: Sequence[float]) -> None:
         """Both models, the arm's base, and the NAO standing in its carrying posture."""

@@ -131,8 +131,9 @@ def test_the_recording_has_every_domain_s_entities(recorded):
         "/world/nao",
         "/world/panda/visual_geometries/panda_link3/visual_0",
         "/world/NaoH25V50/visual_geometries/LThigh/LThigh_visual_0",
-        "/transforms/panda/joints/panda_joint4",
-        "/transforms/nao/joints/LHipPitch",
+        "/transforms/panda/joints",
+        "/transforms/panda/root",
+        "/transforms/nao/joints",
         "/transforms/nao/root",
         "/world/walk/tag_detections",
         "/world/walk/path",
@@ -465,9 +466,24 @@ def test_the_recording_opens_with_the_mission_layout(recorded):
             )
 
 
-def test_the_robots_move_with_their_joint_states(recorded):
-    from bearchair.executive.recording_robots import PANDA_ARM_JOINTS
+def _joint_states(path, robot: str, child_frame: str) -> list[dict]:
+    """Each logged state of one joint: robot time, translation and quaternion (xyzw)."""
+    states = []
+    for row in read_entity(path, f"transforms/{robot}/joints"):
+        children = row["Transform3D:child_frame"]
+        if child_frame in children:
+            index = children.index(child_frame)
+            states.append(
+                {
+                    "robot": row["robot"],
+                    "translation": row["Transform3D:translation"][index],
+                    "quaternion": row["Transform3D:quaternion"][index],
+                }
+            )
+    return states
 
+
+def test_the_robots_move_with_their_joint_states(recorded):
     out_dir, _, skills, _, _ = recorded
     path = out_dir / RECORDING_FILE
     # The Panda's root hangs from the arm's base, the NAO's from its tracked pose.
@@ -476,29 +492,31 @@ def test_the_robots_move_with_their_joint_states(recorded):
     assert panda_root["Transform3D:child_frame"] == ["panda/panda_link0"]
     nao_roots = read_entity(path, "transforms/nao/root")
     assert {tuple(row["Transform3D:parent_frame"]) for row in nao_roots} == {("tf#/world/nao",)}
-    # The arm's joints were logged as they changed (the scripted arm moves nothing,
-    # so once); the NAO's hips as the seating plan played them, at their robot times.
-    for joint in PANDA_ARM_JOINTS:
-        assert read_entity(path, f"transforms/panda/joints/{joint}")
+    # The arm's seven joints were logged as they changed (the fake arm stays still:
+    # once), each from its parent link's frame to its child's.
+    (arm,) = read_entity(path, "transforms/panda/joints")
+    assert arm["Transform3D:child_frame"] == [f"panda/panda_link{i}" for i in range(1, 8)]
+    assert arm["Transform3D:parent_frame"] == [f"panda/panda_link{i}" for i in range(7)]
+    # The NAO's hips as the seating plan and the retract motion played them.
     plan = skills.calls["execute_seating"][0][0][1]
-    knee = plan.joint_names.index("LHipPitch")
-    rows = read_entity(path, "transforms/nao/joints/LHipPitch")
-    assert len(rows) == len(plan.times_s) + len(plan.retract_times_s)
-    seating, retract = rows[: len(plan.times_s)], rows[len(plan.times_s) :]
+    states = _joint_states(path, "nao", "nao/LThigh")
+    moved = states[1:]  # the first: the carrying posture before the first tick
+    assert len(moved) == len(plan.times_s) + len(plan.retract_times_s)
+    seating, retract = moved[: len(plan.times_s)], moved[len(plan.times_s) :]
     # Each knot at the robot time it was played: the motion's start plus the knot's time
     # (the scripted skills take no robot time, so both motions start at the same time).
     started = seating[0]["robot"] - plan.times_s[0]
-    assert [row["robot"] - started for row in seating] == pytest.approx(list(plan.times_s))
-    assert [row["robot"] - started for row in retract] == pytest.approx(list(plan.retract_times_s))
-    assert all(row["Transform3D:child_frame"] == ["nao/LThigh"] for row in rows)
-    assert knee >= 0
+    assert [state["robot"] - started for state in seating] == pytest.approx(list(plan.times_s))
+    assert [state["robot"] - started for state in retract] == pytest.approx(
+        list(plan.retract_times_s)
+    )
 
 
 def test_a_played_motion_poses_the_nao_knot_by_knot(tmp_path):
     import rerun as rr
     from scipy.spatial.transform import Rotation
 
-    from bearchair.executive.recording_robots import MissionRobots, joint_transform
+    from bearchair.executive.recording_robots import MissionRobots
 
     robots = MissionRobots()
     stream = rr.RecordingStream("test")
@@ -508,19 +526,25 @@ def test_a_played_motion_poses_the_nao_knot_by_knot(tmp_path):
         stream, ("LKneePitch", "RKneePitch"), np.array([0.0, 0.5, 1.0]),
         np.array([[k, k] for k in knees]), started_s=5.0,
     )  # fmt: skip
+    joint = robots.nao.joints["LKneePitch"]
+    for index, knee in enumerate(knees):  # Rerun's own joint transforms, to compare
+        stream.log(f"rerun/{index}", joint.compute_transform(knee))
     stream.flush()
     stream.disconnect()
-    rows = read_entity(tmp_path / "motion.rrd", "transforms/nao/joints/LKneePitch")
-    assert [row["robot"] for row in rows] == pytest.approx([5.0, 5.5, 6.0])
-    joint = robots.nao.joints["LKneePitch"]
-    for row, knee in zip(rows, knees, strict=True):
-        # Rerun's joint transform and our forward kinematics agree.
-        logged = Rotation.from_quat(row["Transform3D:quaternion"][0])
-        ours = Rotation.from_matrix(joint_transform(joint, knee)[:3, :3])
-        assert (logged.inv() * ours).magnitude() < 1e-6
+    path = tmp_path / "motion.rrd"
+    states = _joint_states(path, "nao", "nao/LTibia")
+    assert [state["robot"] for state in states] == pytest.approx([5.0, 5.5, 6.0])
+    for index, state in enumerate(states):
+        (theirs,) = read_entity(path, f"rerun/{index}")
+        assert state["translation"] == pytest.approx(theirs["Transform3D:translation"][0])
+        ours = Rotation.from_quat(state["quaternion"])
+        assert (
+            Rotation.from_quat(theirs["Transform3D:quaternion"][0]).inv() * ours
+        ).magnitude() < 1e-6
     # Bending the knees lowers the body: the base sinks towards the floor.
-    heights = [row["Transform3D:translation"][0][2] for row in
-               read_entity(tmp_path / "motion.rrd", "transforms/nao/root")]  # fmt: skip
+    heights = [
+        row["Transform3D:translation"][0][2] for row in read_entity(path, "transforms/nao/root")
+    ]
     assert heights[0] > heights[1] > heights[2] > 0.1
 
 
