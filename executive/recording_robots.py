@@ -93,15 +93,15 @@ class RobotModel:
         each from its parent link's frame to its child's: one log call per state."""
         joints = [self.joints[name] for name in values if name in self.joints]
         transforms = [joint_transform(joint, float(values[joint.name])) for joint in joints]
-        stream.log(
-            f"{self.transforms}/joints",
-            rr.Transform3D.from_fields(
-                translation=[T[:3, 3] for T in transforms],
-                quaternion=[Rotation.from_matrix(T[:3, :3]).as_quat() for T in transforms],
-                parent_frame=[self.frame_prefix + joint.parent_link for joint in joints],
-                child_frame=[self.frame_prefix + joint.child_link for joint in joints],
-            ),
-        )
+        # One Transform3D row may hold many transforms between named frames (Rerun's URDF
+        # loader writes /tf_static so); the type hints only name a single one.
+        batch: dict[str, Any] = {
+            "translation": [T[:3, 3] for T in transforms],
+            "quaternion": [Rotation.from_matrix(T[:3, :3]).as_quat() for T in transforms],
+            "parent_frame": [self.frame_prefix + joint.parent_link for joint in joints],
+            "child_frame": [self.frame_prefix + joint.child_link for joint in joints],
+        }
+        stream.log(f"{self.transforms}/joints", rr.Transform3D.from_fields(**batch))
 
     def chain(self, from_link: str, to_link: str, values: Mapping[str, float]) -> np.ndarray:
         """``T_from_to``: the pose of ``to_link`` in ``from_link`` by forward kinematics
