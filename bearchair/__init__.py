@@ -2,8 +2,8 @@
 
 Everything importable lives under this one name. The card's top-level folders
 (``core/``, ``hardware/``, ``skills/``, ``behaviours/``, ``trees/``, ``executive/``,
-``evaluation/``) are its subpackages: in a checkout ``bearchair/<room>`` is a symbolic
-link to ``../<room>``, and a built wheel holds them as ``bearchair/<room>/``.
+``evaluation/``, the testing kit ``testing/``) are its subpackages: in a checkout
+``bearchair/<room>`` is a symbolic link to ``../<room>``, and a built wheel holds them as ``bearchair/<room>/``.
 """
 
 from importlib.metadata import PackageNotFoundError, version

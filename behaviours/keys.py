@@ -68,7 +68,8 @@ VALUES = {
 """What each key holds: the ``value`` column of the table above."""
 
 SET_BY_EXECUTIVE = (SEED, ARENA)
-"""The keys the executive writes before the first tick (``bearchair.executive.runner``)."""
+"""The keys written before the first tick, by the executive or any other host, with
+:func:`bearchair.behaviours.mission_inputs.set_mission_inputs`."""
 
 MAX_ROTATIONS = 3
 """Rotations the helper may be asked for before the mission gives up (the paper)."""

@@ -5,6 +5,8 @@ domain class here::
 
     BearchairError
     ├── InputError          a command-line argument or value is not acceptable
+    │   ├── ConfigError     a mission configuration file is wrong (one line naming the field)
+    │   └── PluginError     a plug-in cannot be loaded or does not satisfy its Protocol
     ├── MeshError           a mesh file is unusable (MeshLoadError)
     ├── OutputError         an output place cannot be written (RecordWriteError)
     ├── RunRecordError      a run record cannot be read
@@ -38,6 +40,17 @@ class BearchairError(Exception):
 
 class InputError(BearchairError):
     """A command-line argument or value is not acceptable."""
+
+
+class ConfigError(InputError):
+    """A mission configuration (``bearchair run --config``) is wrong: the message is one
+    line naming the file and the field."""
+
+
+class PluginError(InputError):
+    """A plug-in (an entry point of the ``bearchair.*`` groups, or a ``module:factory``)
+    cannot be loaded, or what it gives does not satisfy its Protocol: the message names
+    the plug-in and what is missing."""
 
 
 class MeshError(BearchairError):

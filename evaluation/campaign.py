@@ -44,6 +44,7 @@ def run_campaign(
     on_record: Callable[[dict[str, Any]], None] | None = None,
     record: bool = False,
     imagination_workers: int = DEFAULT_WORKERS,
+    tree: str = "mission",
 ) -> CampaignResult:
     """Runs the trials the records do not hold yet, recording each as it ends.
 
@@ -57,6 +58,8 @@ def run_campaign(
         on_record: called after each record is committed (tests use it to interrupt).
         record: each trial writes a Rerun recording, ``mission.rrd``, in its run folder.
         imagination_workers: processes each trial's imagination drops in (1: its own).
+        tree: the ``--tree`` SPEC every trial's worker runs
+            (``bearchair.executive.tree_source``).
 
     Returns:
         What ran; ``interrupted`` when Ctrl-C stopped it (finished trials are kept).
@@ -65,7 +68,7 @@ def run_campaign(
     finished = store.finished_keys()
     todo = [spec for spec in specs if spec.key not in finished]
     already_done = len(specs) - len(todo)
-    jobs = _jobs(todo, runs_dir, timeout_s, record, imagination_workers)
+    jobs = _jobs(todo, runs_dir, timeout_s, record, imagination_workers, tree)
     ran = 0
 
     def on_result(spec: TrialSpec, outcome: WorkerOutcome) -> None:
@@ -98,6 +101,7 @@ def _jobs(
     timeout_s: float,
     record: bool,
     imagination_workers: int,
+    tree: str = "mission",
 ) -> list[Job]:
     """Each trial with its worker payload, its run folder emptied of an interrupted run's."""
     jobs = []
@@ -105,14 +109,12 @@ def _jobs(
         run_dir = runs_dir / spec.run_dir_name()
         if run_dir.exists():  # left by an interrupted run: start clean
             shutil.rmtree(run_dir)
-        jobs.append(
-            (
-                spec,
-                spec.to_payload(
-                    run_dir, timeout_s, record=record, imagination_workers=imagination_workers
-                ),
-            )
+        payload = spec.to_payload(
+            run_dir, timeout_s, record=record, imagination_workers=imagination_workers
         )
+        if tree != "mission":  # the shipped tree's payload is as it always was
+            payload["tree"] = tree
+        jobs.append((spec, payload))
     return jobs
 
 

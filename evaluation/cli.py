@@ -80,6 +80,13 @@ def register(subparsers: Any) -> None:
         "when rerun-sdk is installed; open one with 'bearchair view RUN_DIR')",
     )
     parser.add_argument(
+        "--tree",
+        metavar="SPEC",
+        default="mission",
+        help="the tree every trial runs: mission (default), a bearchair.trees entry point, "
+        "module:factory, or a BehaviorTree.CPP .xml file",
+    )
+    parser.add_argument(
         "--worker-cmd",
         help="run each trial with this command instead of 'python -m bearchair.evaluation.worker' "
         "(the trial's JSON is appended)",
@@ -103,6 +110,8 @@ def resume_command(args: argparse.Namespace) -> str:
         words += ["--worker-cmd", args.worker_cmd]
     if not getattr(args, "record", True):
         words += ["--no-record"]
+    if getattr(args, "tree", "mission") != "mission":
+        words += ["--tree", args.tree]
     return shlex.join(words)
 
 
@@ -140,8 +149,10 @@ def run(args: argparse.Namespace) -> int:
     from bearchair.evaluation.store import TrialStore, campaign_lock
     from bearchair.executive.interrupts import exit_status
     from bearchair.executive.outputs import ensure_writable_dir
+    from bearchair.executive.tree_source import build_tree, load_tree_factory
 
     _check_arguments(args)
+    build_tree(load_tree_factory(args.tree), spec=args.tree)  # a bad --tree: before any trial
     chairs, skipped = _chairs(args)
     backend = _backend(args)
     record = args.record and _recording_available()
@@ -266,6 +277,7 @@ def _run_campaign(
             progress=progress,
             record=record,
             imagination_workers=imagination_workers(args),
+            tree=args.tree,
         )
     except BackendUnavailable as error:
         raise InputError(f"bearchair trials: {error}") from error

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from bearchair.core.errors import RecordStoreError
+from bearchair.core.provenance import software_versions
 from bearchair.evaluation.protocol import TrialSpec
 
 COLUMNS: dict[str, str] = {
@@ -49,6 +50,7 @@ COLUMNS: dict[str, str] = {
     "attempts": "INTEGER",  # worker runs: 2 when a crashed or killed worker was retried
     "run_dir": "TEXT",
     "finished_at": "TEXT",
+    "software": "TEXT",  # JSON: bearchair's version, git commit, key dependencies' versions
 }
 KEY_COLUMNS = ("chair", "placement", "helper", "trial_index", "seed")
 
@@ -222,7 +224,7 @@ def _to_sql(value: Any) -> Any:
 
 def _from_row(row: sqlite3.Row) -> dict[str, Any]:
     record = dict(row)
-    for name in ("stage_seconds", "sitting_pose"):
+    for name in ("stage_seconds", "sitting_pose", "software"):
         if record.get(name):
             record[name] = json.loads(record[name])
     return record
@@ -266,6 +268,7 @@ def record_from_summary(
         "attempts": attempts,
         "run_dir": run_dir,
         "finished_at": _now(),
+        "software": summary.get("software") or software_versions(),
     }
 
 
@@ -288,6 +291,7 @@ def record_from_error(
         "attempts": attempts,
         "run_dir": run_dir,
         "finished_at": _now(),
+        "software": software_versions(),  # the harness's: the worker left no summary
     }
 
 

@@ -1,7 +1,8 @@
 """One trial of a campaign, in its own process: ``python -m bearchair.evaluation.worker '<json>'``.
 
 The JSON is ``bearchair.evaluation.protocol.TrialSpec.to_payload``: chair_path, placement,
-helper, seed, trial_index, out_dir, timeout_s, record. The worker runs the whole mission in the
+helper, seed, trial_index, out_dir, timeout_s, record (and ``tree``, a ``--tree`` SPEC,
+when the campaign runs another tree than the mission's). The worker runs the whole mission in the
 simulated world (``bearchair.executive.mission.run_in_simulation``), which writes the run record
 into out_dir, keeps the robot's reconstructed chair (``chair_reconstructed.ply``) for the
 imagined-pose picture, and prints one line ``BEARCHAIR-TRIAL-RESULT {...}`` on stdout
@@ -95,6 +96,7 @@ def main(argv: list[str] | None = None) -> int:
         payload = json.loads(argv[0])
         from bearchair.executive.config import RunConfig
         from bearchair.executive.mission import run_in_simulation
+        from bearchair.executive.tree_source import load_tree_factory
 
         out_dir = Path(payload["out_dir"])
         config = RunConfig(
@@ -108,9 +110,12 @@ def main(argv: list[str] | None = None) -> int:
             timeout_s=mission_timeout_s(float(payload["timeout_s"])),
             record=bool(payload.get("record", False)) and _rerun_installed(),
             imagination_workers=int(payload.get("imagination_workers", DEFAULT_WORKERS)),
+            tree_spec=str(payload.get("tree", "mission")),
         )
         keeper = ChairKeeper()
-        summary = run_in_simulation(config, on_tick=keeper)
+        summary = run_in_simulation(
+            config, on_tick=keeper, tree=load_tree_factory(config.tree_spec)
+        )
         try:
             keeper.save(out_dir)
         except Exception as error:  # the picture is optional, the result is not

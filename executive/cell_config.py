@@ -17,6 +17,15 @@ homogeneous matrices with translations in metres, named ``T_<to>_<from>``. Examp
 F frame), not against the end effector set in Desk (``O_T_EE``): the backend removes
 ``F_T_EE`` from the arm's pose before composing it.
 
+A device may come from a plug-in backend (``bearchair.hardware.backends``): a section
+``"arm"``, ``"humanoid"`` or ``"speaker"`` names it, with the backend's own settings::
+
+    "speaker": {"backend": "my-speaker", "volume": 0.5}
+
+The other devices keep the built-in backends (``panda``, ``nao``); an arm from a plug-in
+needs no ``panda_host`` nor ``T_flange_camera``, a humanoid and a speaker both from
+plug-ins no ``nao_url``.
+
 Checks (each failure is one line naming the field): unknown keys are refused (with the
 nearest known name), rotations are proper and orthonormal (a scaled or mirrored matrix
 is refused), translations are bounded (millimetres written as metres are refused), the
@@ -30,7 +39,7 @@ from __future__ import annotations
 import difflib
 import json
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -71,10 +80,13 @@ class CellConfig:
     """A checked cell description (see the module docstring).
 
     Attributes:
-        nao_url: NAOqi endpoint, ``tcp://host:9559`` or ``tcps://host:9503`` (NAOqi >= 2.9).
-        panda_host: the Panda controller's address (FCI).
+        nao_url: NAOqi endpoint, ``tcp://host:9559`` or ``tcps://host:9503`` (NAOqi >= 2.9);
+            None when the humanoid and the speaker both come from plug-ins.
+        panda_host: the Panda controller's address (FCI); None when the arm comes from a
+            plug-in.
         T_world_base: 4x4 pose of the arm's base in the world (metres).
-        T_flange_camera: 4x4 camera optical frame in the Panda's flange frame (metres).
+        T_flange_camera: 4x4 camera optical frame in the Panda's flange frame (metres);
+            the identity when the arm comes from a plug-in (its backend calibrates its own).
         nao_start_x_m, nao_start_y_m, nao_start_yaw_rad: where the NAO stands at the
             start, in the world: odometry is counted from here.
         nao_user, nao_password: credentials for ``tcps://`` (None for ``tcp://``).
@@ -82,11 +94,13 @@ class CellConfig:
         openni_library_dir: the folder holding ``libOpenNI2.so`` (Debian installs it
             outside the binding's search path); None to use the binding's default.
         panda_speed_factor: fraction of the Panda's joint velocity limits for scan moves.
+        devices: per role ("arm", "humanoid", "speaker") that a plug-in backend fills,
+            its section: ``{"backend": name, ...settings}``.
         source: the file this came from.
     """
 
-    nao_url: str
-    panda_host: str
+    nao_url: str | None
+    panda_host: str | None
     T_world_base: np.ndarray
     T_flange_camera: np.ndarray
     nao_start_x_m: float
@@ -97,6 +111,7 @@ class CellConfig:
     camera: str = "carmine"
     openni_library_dir: str | None = None
     panda_speed_factor: float = 0.2
+    devices: dict[str, dict[str, Any]] = field(default_factory=dict)
     source: Path | None = None
 
     @property
@@ -127,7 +142,13 @@ _REQUIRED = (
     "nao_start_y_m",
     "nao_start_yaw_rad",
 )
-_KNOWN = tuple(item.name for item in fields(CellConfig) if item.name != "source")
+DEVICE_ROLES = ("arm", "humanoid", "speaker")
+"""The sections that select a plug-in backend (``bearchair.hardware.backends.ROLES``)."""
+BUILT_IN_BACKENDS = {"arm": "panda", "humanoid": "nao", "speaker": "nao"}
+_KNOWN = (
+    *(item.name for item in fields(CellConfig) if item.name not in ("source", "devices")),
+    *DEVICE_ROLES,
+)
 
 
 def load_cell_config(path: Path, arena: Arena = DEFAULT_ARENA) -> CellConfig:
@@ -169,7 +190,10 @@ def parse_cell_config(
 ) -> CellConfig:
     """Checks a decoded cell description (see :func:`load_cell_config`)."""
     _check_fields(raw)
-    nao_url, nao_user, nao_password = _nao_connection(raw)
+    devices = _device_sections(raw)
+    needs_nao = not ("humanoid" in devices and "speaker" in devices)
+    _check_required(raw, "arm" not in devices, needs_nao)
+    nao_url, nao_user, nao_password = _nao_connection(raw) if needs_nao else (None, None, None)
     camera = _text(raw, "camera", "carmine")
     if camera not in CAMERAS:
         raise CellConfigError(f"camera: {camera!r} is not one of {', '.join(CAMERAS)}")
@@ -181,11 +205,15 @@ def parse_cell_config(
 
     T_world_base = _rigid(raw, "T_world_base", max_translation_m=3.0)
     _check_base(T_world_base, arena)
-    T_flange_camera = _rigid(raw, "T_flange_camera", max_translation_m=MAX_HAND_EYE_M)
+    T_flange_camera = (
+        _rigid(raw, "T_flange_camera", max_translation_m=MAX_HAND_EYE_M)
+        if "arm" not in devices
+        else np.eye(4)
+    )
     x_m, y_m, yaw_rad = _nao_start(raw, arena)
     return CellConfig(
         nao_url=nao_url,
-        panda_host=_text(raw, "panda_host"),
+        panda_host=_text(raw, "panda_host") if "arm" not in devices else None,
         T_world_base=T_world_base,
         T_flange_camera=T_flange_camera,
         nao_start_x_m=x_m,
@@ -196,13 +224,14 @@ def parse_cell_config(
         camera=camera,
         openni_library_dir=_optional_text(raw, "openni_library_dir"),
         panda_speed_factor=speed,
+        devices=devices,
         source=source,
     )
 
 
 def _check_fields(raw: Any) -> None:
-    """Raises CellConfigError unless ``raw`` is an object of known fields holding every
-    required one (a legacy field gets its own message, a misspelt one a suggestion)."""
+    """Raises CellConfigError unless ``raw`` is an object of known fields (a legacy field
+    gets its own message, a misspelt one a suggestion)."""
     if not isinstance(raw, dict):
         raise CellConfigError(
             f"the cell file must be an object of fields, got {type(raw).__name__}"
@@ -214,9 +243,45 @@ def _check_fields(raw: Any) -> None:
             near = difflib.get_close_matches(str(key), _KNOWN, n=1, cutoff=0.6)
             hint = f" (did you mean {near[0]}?)" if near else ""
             raise CellConfigError(f"unknown field {key!r}{hint}; known: {', '.join(_KNOWN)}")
-    missing = [key for key in _REQUIRED if key not in raw]
+
+
+def _check_required(raw: dict[str, Any], needs_panda: bool, needs_nao: bool) -> None:
+    """Raises CellConfigError naming the first required field missing (the Panda's and
+    the NAO's fields are required only of the built-in backends)."""
+    skipped = set()
+    if not needs_panda:
+        skipped |= {"panda_host", "T_flange_camera"}
+    if not needs_nao:
+        skipped.add("nao_url")
+    missing = [key for key in _REQUIRED if key not in raw and key not in skipped]
     if missing:
         raise CellConfigError(f"missing field {missing[0]}")
+
+
+def _device_sections(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """The device sections that name a plug-in backend, each checked to be an object
+    with a non-empty ``backend``; a section naming the built-in backend is dropped."""
+    devices = {}
+    for role in DEVICE_ROLES:
+        if role not in raw:
+            continue
+        section = raw[role]
+        if not isinstance(section, dict):
+            raise CellConfigError(
+                f'{role}: an object {{"backend": NAME, ...}} is needed, got {section!r}'
+            )
+        backend = section.get("backend")
+        if not isinstance(backend, str) or not backend.strip():
+            raise CellConfigError(f"{role}.backend: a backend name is needed, got {backend!r}")
+        if backend == BUILT_IN_BACKENDS[role]:
+            if len(section) > 1:
+                raise CellConfigError(
+                    f"{role}: the built-in {backend} backend takes its settings from the "
+                    f"cell's own fields, not {', '.join(sorted(set(section) - {'backend'}))}"
+                )
+            continue
+        devices[role] = {**section, "backend": backend.strip()}
+    return devices
 
 
 def _nao_connection(raw: dict[str, Any]) -> tuple[str, str | None, str | None]:

@@ -27,22 +27,35 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from bearchair.core.errors import BackendUnavailable, BearchairError, InputError, one_line
+from bearchair.core.provenance import version_line
 from bearchair.core.streams import import_pybullet_quietly
 from bearchair.executive import (
     cmd_calibrate_hand_eye,
     cmd_check_hardware,
+    cmd_config,
     cmd_imagine,
     cmd_scan,
     cmd_view,
 )
 from bearchair.executive.cli_types import positive_seconds, seed_value
-from bearchair.executive.config import RunConfig
+from bearchair.executive.cmd_config import (
+    add_config_arguments,
+    check_run_inputs,
+    mission_from_args,
+)
 from bearchair.executive.console import showing_step_bars
 from bearchair.executive.interrupts import exit_status, handling_signals, received, signal_name
 from bearchair.executive.operator import ask_operator
 from bearchair.executive.viewer_links import add_bind_argument
 
-OWN_COMMANDS = (cmd_imagine, cmd_scan, cmd_check_hardware, cmd_calibrate_hand_eye, cmd_view)
+OWN_COMMANDS = (
+    cmd_imagine,
+    cmd_scan,
+    cmd_check_hardware,
+    cmd_calibrate_hand_eye,
+    cmd_view,
+    cmd_config,
+)
 """executive's own commands: each module has ``register(subparsers)``."""
 COMMANDS_GROUP = "bearchair.commands"
 """The entry-point group of commands from packages above executive (pyproject.toml):
@@ -112,30 +125,33 @@ def build_parser() -> argparse.ArgumentParser:
     assert __doc__ is not None  # only python -OO strips it, and that strips asserts too
     parser = _Parser(prog="bearchair", description=__doc__.split("\n")[0])
     add_logging_arguments(parser, top=True)
+    parser.add_argument(
+        "--version", action="version", version=version_line(), help="print the version and exit"
+    )
     subparsers = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     run = subparsers.add_parser("run", help="run the mission in the simulated world")
     run.add_argument(
         "--chair", type=Path, help="chair mesh (OBJ/PLY/STL/OFF/GLB); default: a box chair"
     )
+    # Flags left off keep the configuration's values (--config; default: accessible, obeys, 0).
     run.add_argument(
         "--placement",
         choices=("accessible", "inaccessible"),
-        default="accessible",
-        help="how the simulated chair is placed: its seat reachable by the NAO, or turned "
-        "so that the NAO must ask the helper to rotate it",
+        help="how the simulated chair is placed: its seat reachable by the NAO, or turned so "
+        "that the NAO must ask the helper to rotate it (default: accessible, or --config's)",
     )
     run.add_argument(
         "--helper",
         choices=("obeys", "disobeys", "ignores"),
-        default="obeys",
-        help="how the simulated helper answers a request to rotate the chair",
+        help="how the simulated helper answers a request to rotate the chair "
+        "(default: obeys, or --config's)",
     )
     run.add_argument(
         "--seed",
         type=seed_value,
-        default=0,
-        help="seeds the world and the skills (same seed, same run)",
+        help="seeds the world and the skills: the same seed gives the same run "
+        "(default: 0, or --config's)",
     )
     run.add_argument("--gui", action="store_true", help="watch in the pybullet GUI")
     run.add_argument("--out", type=Path, help="run record directory (default: runs/<time>-seed<N>)")
@@ -143,8 +159,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--timeout",
         type=positive_seconds,
-        default=900.0,
-        help="stop the mission as failed after this many wall seconds",
+        help="stop the mission as failed after this many wall seconds "
+        "(default: 900, or --config's)",
     )
     run.add_argument(
         "--overwrite", action="store_true", help="replace the run record already in --out"
@@ -154,7 +170,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="in simulation, also save a picture whenever a stage ends (OUT/snapshots)",
     )
-    add_recording_arguments(run, record_default=False)
+    add_recording_arguments(run, record_default=None)
     run.add_argument(
         "--robots",
         type=Path,
@@ -162,6 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="run on the real NAO and Panda described by this file instead of the simulation",
     )
     run.add_argument("--yes", action="store_true", help="with --robots: start without asking")
+    add_config_arguments(run)
     run.set_defaults(func=_run)
 
     tree = subparsers.add_parser("tree", help="render the mission tree")
@@ -175,6 +192,7 @@ def build_parser() -> argparse.ArgumentParser:
     tree.add_argument(
         "--out", type=Path, help="output file for dot/svg/png (default: mission.<format>)"
     )
+    add_config_arguments(tree)
     tree.set_defaults(func=_tree)
 
     inspect = subparsers.add_parser("inspect", help="replay a recorded run")
@@ -182,6 +200,9 @@ def build_parser() -> argparse.ArgumentParser:
     inspect.add_argument("--tick", type=int, help="show the tree at this tick (default: the last)")
     inspect.add_argument("--blackboard", action="store_true", help="also show the blackboard")
     inspect.add_argument("--timeline", action="store_true", help="show every status change")
+    inspect.add_argument(
+        "--tree", metavar="SPEC", help="also say whether the record's tree is the one SPEC builds"
+    )
     inspect.set_defaults(func=_inspect)
 
     for module in OWN_COMMANDS:
@@ -213,7 +234,6 @@ def registered_commands() -> list[Callable[[Any], None]]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from bearchair.core.meshes import load_chair_mesh
     from bearchair.executive.mission import (
         StageProgress,
         format_summary,
@@ -222,44 +242,28 @@ def _run(args: argparse.Namespace) -> int:
     )
     from bearchair.executive.outputs import default_run_dir, prepare_run_dir
 
-    config = RunConfig(
-        chair_path=args.chair,
-        placement=args.placement,
-        helper=args.helper,
-        seed=args.seed,
-        gui=args.gui,
-        mute=args.mute,
-        timeout_s=args.timeout,
-        snapshots=args.snapshots,
-        record=args.record,
-        live=args.live,
-        bind=args.bind,
-    )
-    check_recording_arguments("bearchair run", args)
     # Every input and the output place are checked before anything runs.
-    if args.robots is not None:
-        if args.chair is not None:
-            raise InputError("bearchair run: --chair is for the simulation; not with --robots")
-        if not args.robots.is_file():
-            raise InputError(f"bearchair run: --robots {args.robots}: no such file")
-    elif args.chair is not None:
-        load_chair_mesh(args.chair)
-    if args.out is not None:
-        out_dir = prepare_run_dir(args.out, overwrite=args.overwrite)
+    mission = mission_from_args(args)
+    factory = check_run_inputs(mission)
+    outputs = mission.outputs
+    check_recording_arguments("bearchair run", argparse.Namespace(**outputs.model_dump()))
+    if outputs.out_dir is not None:
+        out_dir = prepare_run_dir(outputs.out_dir, overwrite=outputs.overwrite)
     else:
-        out_dir = default_run_dir(args.seed)
+        out_dir = default_run_dir(mission.run.seed)
     args.run_dir = out_dir  # where an internal error's traceback goes
-    config = RunConfig(**{**config.__dict__, "out_dir": out_dir})
+    config = mission.run_config(out_dir)
     with _log_to(out_dir / LOG_FILE), showing_step_bars():
-        if args.robots is not None:
+        if mission.robots.used:
             summary = run_on_robots(
                 config,
-                args.robots,
+                mission.robots.cell_file or mission.robots.cell,
                 on_tick=StageProgress(),
                 confirm=None if args.yes else ask_operator,
+                tree=factory,
             )
         else:
-            summary = run_in_simulation(config, on_tick=StageProgress())
+            summary = run_in_simulation(config, on_tick=StageProgress(), tree=factory)
     print(format_summary(summary))
     print(f"run record: {out_dir}")
     if summary.get("interrupted"):
@@ -286,14 +290,18 @@ def _log_to(path: Path):
             handler.close()
 
 
-def add_recording_arguments(parser: argparse.ArgumentParser, *, record_default: bool) -> None:
-    """``--record/--no-record`` and ``--live`` (Rerun recordings, ``bearchair.executive.recording``)."""
+def add_recording_arguments(
+    parser: argparse.ArgumentParser, *, record_default: bool | None
+) -> None:
+    """``--record/--no-record`` and ``--live`` (Rerun recordings, ``bearchair.executive.recording``);
+    ``record_default`` None: left off, the flag is None (the configuration decides, off)."""
+    default = {True: "on", False: "off", None: "the configuration's, off"}[record_default]
     parser.add_argument(
         "--record",
         action=argparse.BooleanOptionalAction,
         default=record_default,
         help="write a Rerun recording of the run, OUT/mission.rrd (open it with "
-        f"'bearchair view OUT'; default: {'on' if record_default else 'off'})",
+        f"'bearchair view OUT'; default: {default})",
     )
     parser.add_argument(
         "--live",
@@ -303,7 +311,7 @@ def add_recording_arguments(parser: argparse.ArgumentParser, *, record_default: 
         help="stream the run to a Rerun viewer as it happens: no value starts the native "
         "viewer, 'web' serves the web viewer, or a viewer's URL (rerun+http://HOST:9876/proxy)",
     )
-    add_bind_argument(parser)
+    add_bind_argument(parser, configured=True)
 
 
 def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
@@ -329,19 +337,24 @@ def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
 def _tree(args: argparse.Namespace) -> int:
     from bearchair.executive.outputs import check_output_file
     from bearchair.executive.render import TEXT_FORMATS, render_graph, render_text
-    from bearchair.trees.mission import create_tree
+    from bearchair.executive.tree_source import build_tree, load_tree_factory
 
+    mission = mission_from_args(args)
+    factory = load_tree_factory(mission.tree.factory)
     if args.format in TEXT_FORMATS:
         if args.out is not None:
             raise InputError(
                 f"bearchair tree: --out is for dot/svg/png, not --format {args.format}"
             )
-        print(render_text(create_tree(), args.format, args.blackboard))
-        return 0
-    out = check_output_file(
-        args.out or Path(f"mission.{args.format}"), "--out", (f".{args.format}",)
-    )
-    print(render_graph(create_tree(), args.format, out, args.blackboard))
+    else:
+        args.out = check_output_file(
+            args.out or Path(f"mission.{args.format}"), "--out", (f".{args.format}",)
+        )
+    root = build_tree(factory, mission.tree.options(), mission.tree.factory)
+    if args.out is None:
+        print(render_text(root, args.format, args.blackboard))
+    else:
+        print(render_graph(root, args.format, args.out, args.blackboard))
     return 0
 
 
@@ -353,6 +366,8 @@ def _inspect(args: argparse.Namespace) -> int:
     print(f"{args.run_dir}: tick {state['tick']} of {run.last_tick}, t = {state['t']:.2f} s")
     for note in run.notes:
         print(f"note: {note}")
+    if args.tree is not None:
+        print(f"tree: {run.compare_tree(args.tree)}")
     print(run.tree_text(args.tick))
     if args.blackboard:
         print("\nblackboard:")

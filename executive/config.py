@@ -5,12 +5,14 @@ from __future__ import annotations
 import json
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 from bearchair.core.arena import DEFAULT_ARENA, Arena
 from bearchair.skills.imagination import DEFAULT_WORKERS
+from bearchair.skills.parameters import SkillParameters
+from bearchair.trees.options import TreeOptions
 
 logger = logging.getLogger(__name__)
 
@@ -38,6 +40,15 @@ class RunConfig:
         bind: the address a live viewer listens on (loopback unless opened, ``--bind``).
         imagination_workers: processes the imagination's drops run in (1: the run's own;
             the result is the same for any number).
+        tree_options: how the tree is composed (assistance, rotations, re-scan).
+        tree_spec: which tree (``--tree``: a name, ``module:factory`` or an XML file),
+            recorded with the run; the factory itself is passed to the run.
+        skill_parameters: the scan's and the imagination's tuned parameters.
+        skill_plugins: ``bearchair.skills`` plug-ins stacked over the default skills.
+        tick_period_s: wall time between two ticks of the tree.
+        resolved: the mission configuration this came from, as JSON
+            (``bearchair.executive.mission_config``), written to the run record; None:
+            the record holds these fields.
     """
 
     chair_path: Path | None = None
@@ -54,9 +65,39 @@ class RunConfig:
     live: str | None = None
     bind: str = "127.0.0.1"
     imagination_workers: int = DEFAULT_WORKERS
+    tree_options: TreeOptions = field(default_factory=TreeOptions)
+    tree_spec: str = "mission"
+    skill_parameters: SkillParameters = field(default_factory=SkillParameters)
+    skill_plugins: tuple[str, ...] = ()
+    tick_period_s: float = 0.05
+    resolved: dict[str, Any] | None = None
+
+    def record_json(self) -> dict[str, Any]:
+        """What the run record keeps of the configuration: ``resolved`` when the run
+        came from a mission configuration, else these fields."""
+        if self.resolved is not None:
+            return self.resolved
+        return {
+            item.name: _jsonable(getattr(self, item.name))
+            for item in fields(self)
+            if item.name != "resolved"
+        }
 
     def chair_name(self) -> str:
         return self.chair_path.name if self.chair_path else "box-chair (built in)"
+
+
+def _jsonable(value: Any) -> Any:
+    if is_dataclass(value) and not isinstance(value, type):
+        return asdict(value)
+    if isinstance(value, Path):
+        return str(value)
+    if isinstance(value, tuple) and hasattr(value, "_asdict"):  # Arena, Box2D, SE2Pose
+        named: Any = value
+        return {key: _jsonable(item) for key, item in named._asdict().items()}
+    if isinstance(value, tuple | list):
+        return [_jsonable(item) for item in value]
+    return value
 
 
 def front_yaw_from_manifest(chair_path: Path) -> float | None:

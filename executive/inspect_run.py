@@ -72,6 +72,41 @@ class RecordedRun:
             line += f" (interrupted by {self.summary.get('signal', 'the operator')})"
         return line
 
+    def compare_tree(self, spec: str) -> str:
+        """Whether the recorded tree is the one ``spec`` (``--tree``) builds with the run's
+        tree options (its ``config.json``; the defaults without one), as a phrase.
+
+        Raises:
+            PluginError: ``spec`` names no tree, or its factory fails.
+        """
+        from bearchair.executive.record import tree_shape
+        from bearchair.executive.tree_source import build_tree, load_tree_factory
+
+        built = tree_shape(build_tree(load_tree_factory(spec), self._tree_options(), spec))
+        keys = ("path", "name", "type", "depth", "memory")
+        for index, (recorded, node) in enumerate(zip(self.shape, built, strict=False)):
+            if any(recorded.get(key) != node.get(key) for key in keys):
+                return (
+                    f"not the one {spec} builds: node {index} is {recorded.get('path')} "
+                    f"({recorded.get('type')}) in the record, {node['path']} ({node['type']}) built"
+                )
+        if len(self.shape) != len(built):
+            return (
+                f"not the one {spec} builds: {len(self.shape)} nodes recorded, {len(built)} built"
+            )
+        return f"the one {spec} builds ({len(built)} nodes)"
+
+    def _tree_options(self) -> Any:
+        from bearchair.trees.options import TreeOptions
+
+        try:
+            config = json.loads((self.run_dir / "config.json").read_text(encoding="utf-8"))
+            section = config.get("tree") or config.get("tree_options") or {}
+            fields = ("assistance", "max_rotations", "rescan_fallback")
+            return TreeOptions(**{key: section[key] for key in fields if key in section})
+        except (OSError, ValueError, TypeError, AttributeError):
+            return TreeOptions()
+
     @property
     def last_tick(self) -> int:
         return self.ticks[-1]["tick"]

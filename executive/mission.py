@@ -9,7 +9,7 @@ import os
 import signal
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
@@ -22,8 +22,10 @@ from bearchair.executive.outputs import atomic_path
 from bearchair.executive.record import RecordWriteError, RunRecorder
 from bearchair.executive.recording import open_recording
 from bearchair.executive.runner import MissionRunner, summarise
+from bearchair.executive.tree_source import build_tree
 from bearchair.skills.toolbox import MissionSkills
 from bearchair.trees.mission import create_tree
+from bearchair.trees.options import TreeFactory
 
 if TYPE_CHECKING:
     from bearchair.hardware.sim.world import SimConfig, SimWorld
@@ -110,28 +112,44 @@ def _both(
     return call
 
 
+CONFIG_FILE = "config.json"
+"""The run folder's copy of the resolved configuration (``RunConfig.record_json``)."""
+
+
 def run_in_simulation(
     config: RunConfig,
     skills: MissionSkills | None = None,
     on_tick: Callable[[MissionRunner], None] | None = None,
+    tree: TreeFactory | None = None,
 ) -> dict[str, Any]:
     """Builds the simulated world and the tree, runs the mission, writes the run record.
+
+    Args:
+        config: the run.
+        skills: the skills (None: the default skills with ``config``'s parameters and
+            skill plug-ins).
+        on_tick: called after every tick (progress).
+        tree: the tree factory, called with ``config.tree_options`` (None: the mission's
+            ``create_tree``; see ``bearchair.executive.tree_source.load_tree_factory``).
 
     Returns:
         The summary written to ``summary.json``.
 
     Raises:
         core.meshes.MeshLoadError: the chair file is unusable (checked before anything runs).
+        PluginError: the tree factory fails or returns no behaviour.
     """
     sim_config = _sim_config(config)
-    root = create_tree()
+    root = build_tree(tree or create_tree, config.tree_options, config.tree_spec)
     recorder = RunRecorder(config.out_dir, root)
+    write_config(config)
     run_info = {
         "chair": config.chair_name(),
         "placement": config.placement,
         "helper": config.helper,
         "seed": config.seed,
         "backend": "sim",
+        "tree": config.tree_spec,
         "started_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
     try:
@@ -162,6 +180,14 @@ def run_in_simulation(
         )
     finally:
         world.close()
+
+
+def write_config(config: RunConfig) -> Path:
+    """Writes the resolved configuration to the run folder's :data:`CONFIG_FILE`."""
+    path = config.out_dir / CONFIG_FILE
+    with atomic_path(path) as scratch:
+        scratch.write_text(json.dumps(config.record_json(), indent=2, default=str) + "\n")
+    return path
 
 
 def _sim_config(config: RunConfig) -> SimConfig:
@@ -207,12 +233,17 @@ def _open_world(sim_config: SimConfig) -> SimWorld:
 
 def run_on_robots(
     config: RunConfig,
-    cell_file: Path,
+    cell_file: Path | Mapping[str, Any],
     skills: MissionSkills | None = None,
     on_tick: Callable[[MissionRunner], None] | None = None,
     confirm: Callable[[str], bool] | None = None,
+    tree: TreeFactory | None = None,
 ) -> dict[str, Any]:
-    """Runs the mission on the real NAO and Panda described by ``cell_file``.
+    """Runs the mission on the real NAO and Panda described by ``cell_file`` (a cell
+    file, or its fields: a configuration's ``[robots.cell]``).
+
+    ``tree`` is the tree factory (None: the mission's ``create_tree``), called with
+    ``config.tree_options`` before any robot is connected.
 
     The cell file is checked first; connecting moves nothing; the robots are activated
     (the NAO set up for carrying) only once ``confirm`` agrees (None: agreed, ``--yes``).
@@ -223,11 +254,15 @@ def run_on_robots(
             said no.
     """
     from bearchair.core.errors import BackendUnavailable
-    from bearchair.executive.cell_config import load_cell_config
+    from bearchair.executive.cell_config import load_cell_config, parse_cell_config
     from bearchair.hardware.real import sdk_versions
     from bearchair.hardware.real.robots import activate, connect_robots
 
-    cell = load_cell_config(cell_file, config.arena)
+    if isinstance(cell_file, Mapping):
+        cell = parse_cell_config(dict(cell_file), config.arena)
+    else:
+        cell = load_cell_config(cell_file, config.arena)
+    root = build_tree(tree or create_tree, config.tree_options, config.tree_spec)
     robot = connect_robots(cell)
     if confirm is not None and not confirm("The NAO and the Panda will move now. Go on? [y/N] "):
         robot.close()
@@ -240,8 +275,8 @@ def run_on_robots(
     except BaseException:  # Ctrl-C while setting up: stop, then let it through
         robot.emergency_stop()
         raise
-    root = create_tree()
     recorder = RunRecorder(config.out_dir, root)
+    write_config(config)
     (config.out_dir / "cell.json").write_text(json.dumps(cell.to_json(), indent=2))
     run_info = {
         "chair": "real",
@@ -249,7 +284,8 @@ def run_on_robots(
         "helper": "person",
         "seed": config.seed,
         "backend": "real",
-        "cell_file": str(cell_file),
+        "tree": config.tree_spec,
+        "cell_file": "inline ([robots.cell])" if isinstance(cell_file, Mapping) else str(cell_file),
         "sdk_versions": sdk_versions(),
         "started_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
@@ -271,11 +307,7 @@ def _run_tree(
     recording = None
     try:
         if skills is None:
-            # Imported only when a mission runs: it imports every skill (about 2 s).
-            from bearchair.skills.default_skills import DefaultSkills
-
-            skills = DefaultSkills(imagination_workers=config.imagination_workers)
-            skills.warm_up()
+            skills = configured_skills(config)
         recording = open_recording(
             root, config.out_dir, record=config.record, live=config.live, bind=config.bind
         )
@@ -293,6 +325,7 @@ def _run_tree(
             arena=config.arena,
             recorder=recorder,
             timeout_s=config.timeout_s,
+            tick_period_s=config.tick_period_s,
             on_tick=on_tick,
             post_tick=() if recording is None else (recording,),
         )
@@ -322,6 +355,24 @@ def _run_tree(
         recorder.close()
         if recording is not None:
             recording.close()
+
+
+def configured_skills(config: RunConfig) -> MissionSkills:
+    """The default skills with ``config``'s parameters, the skill plug-ins stacked over
+    them, warming up.
+
+    Raises:
+        PluginError: a skill plug-in is missing or does not satisfy the protocol.
+    """
+    # Imported only when a mission runs: it imports every skill (about 2 s).
+    from bearchair.skills.default_skills import DefaultSkills
+    from bearchair.skills.plugins import apply_skill_plugins
+
+    defaults = DefaultSkills(
+        imagination_workers=config.imagination_workers, parameters=config.skill_parameters
+    )
+    defaults.warm_up()
+    return apply_skill_plugins(defaults, config.skill_plugins)
 
 
 def summary_before_start(

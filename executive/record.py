@@ -23,6 +23,7 @@ from typing import Any
 import py_trees
 
 from bearchair.core.errors import OutputError, RunRecordError
+from bearchair.core.provenance import software_versions
 from bearchair.executive.jsonable import to_jsonable
 from bearchair.executive.outputs import describe_os_error, write_text_atomic
 
@@ -181,7 +182,9 @@ class RunRecorder:
             ) from error
 
     def write_summary(self, summary: dict[str, Any]) -> Path:
+        """Writes ``summary.json`` whole, with the software that made it (``software``)."""
         path = self.out_dir / SUMMARY_FILE
+        summary = {**summary, "software": software_versions()}
         try:
             return write_text_atomic(path, json.dumps(to_jsonable(summary), indent=2) + "\n")
         except OutputError as error:

@@ -13,6 +13,7 @@ import py_trees
 from py_trees.common import Status
 
 from bearchair.behaviours import keys
+from bearchair.behaviours.mission_inputs import set_mission_inputs
 from bearchair.core.arena import Arena
 from bearchair.executive.interrupts import (
     emergency_stop_on_second_signal,
@@ -151,10 +152,7 @@ class MissionRunner:
         py_trees.blackboard.Blackboard.clear()
         if self.recorder:
             self.recorder.watch(self.tree)
-        writer = py_trees.blackboard.Client(name="executive")
-        for key, value in zip(keys.SET_BY_EXECUTIVE, (self._seed, self._arena), strict=True):
-            writer.register_key(key=key, access=py_trees.common.Access.WRITE)
-            writer.set(key, value)
+        set_mission_inputs(seed=self._seed, arena=self._arena)
         self._start = time.monotonic()
         stopped, stop_signal, record_error = False, None, None
         try:

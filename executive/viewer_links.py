@@ -54,16 +54,17 @@ def bind_address(text: str) -> str:
         ) from None
 
 
-def add_bind_argument(parser: argparse.ArgumentParser) -> None:
-    """``--bind ADDR`` for a command that serves a viewer."""
+def add_bind_argument(parser: argparse.ArgumentParser, *, configured: bool = False) -> None:
+    """``--bind ADDR`` for a command that serves a viewer; ``configured``: left off, the
+    mission configuration's ``outputs.bind`` stands (default None here)."""
     parser.add_argument(
         "--bind",
         type=bind_address,
-        default=LOOPBACK,
+        default=None if configured else LOOPBACK,
         metavar="ADDR",
-        help="the address the web viewer listens on: 127.0.0.1 serves this machine only "
+        help="the address the viewer listens on: 127.0.0.1 serves this machine only "
         "(reach it from elsewhere with ssh -L), 0.0.0.0 every network (anyone who can reach "
-        "this machine can watch)",
+        "this machine can watch)" + (" (default: 127.0.0.1, or --config's)" if configured else ""),
     )
 
 

@@ -196,12 +196,16 @@ class FakeArm:
 
 @dataclass
 class FakeSpeaker:
-    """Keeps what was said."""
+    """Keeps what was said, in ``spoken`` (the name the real speakers use).
 
-    said: list[str] = field(default_factory=list)
+    Attributes:
+        spoken: every sentence passed to :meth:`say`, in order.
+    """
+
+    spoken: list[str] = field(default_factory=list)
 
     def say(self, sentence: str) -> None:
-        self.said.append(sentence)
+        self.spoken.append(sentence)
 
 
 @dataclass

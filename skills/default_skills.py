@@ -11,6 +11,9 @@ import functools
 import threading
 
 from bearchair.skills import assistance, control, imagination, perception
+from bearchair.skills.imagination.simulation import SimulationSettings
+from bearchair.skills.parameters import SkillParameters
+from bearchair.skills.perception.reconstruction import ReconstructionConfig
 from bearchair.skills.planning import se2, stance, wholebody
 from bearchair.skills.planning.wholebody.optimisation import start_building_problems
 
@@ -20,6 +23,8 @@ class DefaultSkills:
 
     Args:
         imagination_workers: processes ``imagine_sitting`` drops in (1: this one).
+        parameters: the tuned parameters of the scan and the imagination (None: the
+            skills' own defaults).
     """
 
     scan_chair = staticmethod(perception.scan_chair)
@@ -36,14 +41,47 @@ class DefaultSkills:
     execute_seating = staticmethod(wholebody.execute_seating)
     release_and_stand = staticmethod(wholebody.release_and_stand)
 
-    def __init__(self, imagination_workers: int = imagination.DEFAULT_WORKERS) -> None:
+    def __init__(
+        self,
+        imagination_workers: int = imagination.DEFAULT_WORKERS,
+        parameters: SkillParameters | None = None,
+    ) -> None:
+        parameters = parameters or SkillParameters()
         self.imagination_workers = imagination_workers
+        self.parameters = parameters
+        settings = _simulation_settings(parameters)
         self.imagine_sitting = functools.partial(
-            imagination.imagine_sitting, workers=imagination_workers
+            imagination.imagine_sitting,
+            workers=imagination_workers,
+            **({} if settings is None else {"settings": settings}),
         )
+        if parameters.scan_views is not None or parameters.voxel_size_m is not None:
+            self.scan_chair = functools.partial(
+                perception.scan_chair,
+                views=parameters.scan_views,
+                config=_reconstruction(parameters),
+            )
 
     def warm_up(self) -> threading.Thread:
         """Starts building, in the background, what a skill would otherwise build on its
         first call: the whole-body planner's problems (2 s), needed after the scan and the
         imagination."""
         return start_building_problems()
+
+
+def _simulation_settings(parameters: SkillParameters) -> SimulationSettings | None:
+    changed = {
+        name: value
+        for name, value in (
+            ("max_time_s", parameters.max_drop_time_s),
+            ("drop_clearance_m", parameters.drop_clearance_m),
+        )
+        if value is not None
+    }
+    return SimulationSettings()._replace(**changed) if changed else None
+
+
+def _reconstruction(parameters: SkillParameters) -> ReconstructionConfig | None:
+    if parameters.voxel_size_m is None:
+        return None
+    return ReconstructionConfig(voxel_size_m=parameters.voxel_size_m)

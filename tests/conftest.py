@@ -1,22 +1,27 @@
-"""Shared test fixtures: the calibration chairs (skipped when absent) and a clean blackboard."""
+"""Shared test fixtures: the calibration chairs (skipped when absent) and a clean blackboard.
+
+The testing kit's fixtures (``bearchair.testing``: ``mission_blackboard``,
+``tick_until_done``, ``fake_robot``, ``scripted_skills``) come from its pytest plugin.
+"""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
 
-import py_trees
 import pytest
+
+from bearchair.testing import fresh_blackboard
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 
 
 @pytest.fixture(autouse=True)
 def clean_blackboard():
-    """py_trees' blackboard is process-global: every test starts with an empty one."""
-    py_trees.blackboard.Blackboard.clear()
-    yield
-    py_trees.blackboard.Blackboard.clear()
+    """py_trees' blackboard is process-global: every test starts with an empty one (the
+    kit's fixture of the same name, made automatic here)."""
+    with fresh_blackboard():
+        yield
 
 
 @pytest.fixture(scope="session")

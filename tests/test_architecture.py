@@ -24,6 +24,9 @@ MAY_IMPORT: dict[str, set[str]] = {
     "trees": {"core", "hardware", "skills", "behaviours"},
     "executive": {"core", "hardware", "skills", "behaviours", "trees"},
     "evaluation": {"core", "hardware", "skills", "behaviours", "trees", "executive"},
+    # The testing kit: fakes, scripted skills and fixtures for leaves and trees; nothing
+    # imports it (bearchair/testing/__init__.py says why it stops below the executive).
+    "testing": {"core", "hardware", "skills", "behaviours", "trees"},
 }
 """Each package and the project's packages it may import: a layering, lowest first."""
 

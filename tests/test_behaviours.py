@@ -35,6 +35,7 @@ from bearchair.skills.results import (
 )
 from bearchair.skills.scripted import ScriptedSkills, default_results
 from bearchair.skills.toolbox import SkillNotReady
+from bearchair.testing import tick_until_done, write_blackboard
 
 DEFAULTS = default_results()
 
@@ -69,7 +70,6 @@ LEAVES = [
 
 def fill_blackboard() -> None:
     """Everything a leaf may read, as earlier stages would have left it."""
-    writer = py_trees.blackboard.Client(name="test")
     values = {
         keys.SEED: 7,
         keys.ARENA: DEFAULT_ARENA,
@@ -79,20 +79,7 @@ def fill_blackboard() -> None:
         keys.ACCESSIBILITY: DEFAULTS["check_accessibility"],
         keys.SEATING_PLAN: DEFAULTS["plan_seating"],
     }
-    for key, value in values.items():
-        writer.register_key(key=key, access=py_trees.common.Access.WRITE)
-        writer.set(key, value)
-
-
-def tick_until_done(leaf: py_trees.behaviour.Behaviour, max_ticks: int = 400) -> list[Status]:
-    statuses = []
-    for _ in range(max_ticks):
-        leaf.tick_once()
-        statuses.append(leaf.status)
-        if leaf.status != Status.RUNNING:
-            return statuses
-        time.sleep(0.005)
-    raise AssertionError(f"{leaf.name} still RUNNING after {max_ticks} ticks")
+    write_blackboard(values)
 
 
 def make(leaf_class, skills, judge=None):
@@ -209,7 +196,7 @@ def test_instruct_helper_speaks_and_counts():
     leaf.stop(Status.INVALID)
     tick_until_done(leaf)
     sentence = DEFAULTS["compose_instruction"].sentence
-    assert robot.speaker.said == [sentence, sentence]
+    assert robot.speaker.spoken == [sentence, sentence]
     assert py_trees.blackboard.Blackboard.get(keys.ROTATIONS) == 2
     assert py_trees.blackboard.Blackboard.get(keys.INSTRUCTIONS) == [sentence, sentence]
 
@@ -223,7 +210,7 @@ def test_instruct_helper_asks_for_nothing_when_no_rotation_helps():
     leaf.setup(skills=skills, robot=robot)
     assert tick_until_done(leaf)[-1] == Status.FAILURE
     assert leaf.feedback_message == reason
-    assert robot.speaker.said == [] and not skills.calls["compose_instruction"]
+    assert robot.speaker.spoken == [] and not skills.calls["compose_instruction"]
     _, kwargs = skills.calls["choose_rotation"][0]
     assert kwargs == {"seed": 7}
 

@@ -53,8 +53,8 @@ class FakeMission:
         self.skills = ScriptedSkills(delays_s=delays_s or {})
         self.on_tick = on_tick
 
-    def __call__(self, config, skills=None, on_tick=None):
-        root = create_tree()
+    def __call__(self, config, skills=None, on_tick=None, tree=None):
+        root = (tree or create_tree)(config.tree_options)
         recorder = RunRecorder(config.out_dir, root)
         run_info = {"chair": "stub", "placement": "accessible", "helper": "obeys", "seed": 0}
         return mission._run_tree(

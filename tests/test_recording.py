@@ -337,7 +337,9 @@ def test_live_web_serves_the_viewer_while_recording_to_a_file(tmp_path):
 def test_run_record_and_live_flags(tmp_path, monkeypatch, capsys):
     args = cli.build_parser().parse_args(["run", "--record", "--live", "web"])
     assert args.record is True and args.live == "web"
-    assert cli.build_parser().parse_args(["run"]).record is False
+    plain = cli.build_parser().parse_args(["run"])
+    assert plain.record is None  # left to the configuration, whose default is off
+    assert cli.mission_from_args(plain).outputs.record is False
     assert cli.build_parser().parse_args(["run", "--live"]).live == "spawn"
     trials = cli.build_parser().parse_args(["trials", "--chairs", "x", "--no-record"])
     assert trials.record is False

@@ -227,7 +227,7 @@ def test_helper_ignores():
         for _ in range(2):
             turned, shift, _ = _turn(world, SENTENCE.format("clockwise", 120))
             assert abs(turned) < 0.5 and shift < 0.002
-        assert len(world.speaker.said) == 2
+        assert len(world.speaker.spoken) == 2
 
 
 def test_walking_moves_the_nao_and_odometry_drifts_little():

@@ -148,7 +148,21 @@ def test_links_never_name_a_wildcard_and_say_how_to_tunnel():
 
 
 def test_bind_takes_an_address_only(tmp_path, capsys):
-    assert cli.build_parser().parse_args(["run"]).bind == LOOPBACK
+    from pydantic import ValidationError
+
+    from bearchair.executive.mission_config import MissionConfig
+
+    # run: left off, the configuration's outputs.bind stands, loopback by default.
+    assert cli.build_parser().parse_args(["run"]).bind is None
+    assert MissionConfig().outputs.bind == LOOPBACK
+    assert MissionConfig().run_config(tmp_path).bind == LOOPBACK
+    opened = MissionConfig.model_validate({"outputs": {"bind": "0.0.0.0"}})
+    assert opened.run_config(tmp_path).bind == "0.0.0.0"
+    with pytest.raises(ValidationError, match="not an IP address"):
+        MissionConfig.model_validate({"outputs": {"bind": "example.org"}})
+    assert cli.main(["run", "--bind", "example.org", "--out", str(tmp_path / "r")]) == 2
+    assert "not an IP address" in capsys.readouterr().err
+    assert cli.build_parser().parse_args(["view", "x"]).bind == LOOPBACK
     assert cli.build_parser().parse_args(["view", "x", "--bind", "0.0.0.0"]).bind == "0.0.0.0"
     assert cli.main(["view", str(tmp_path), "--web", "--bind", "example.org"]) == 2
     assert "not an IP address" in capsys.readouterr().err

@@ -25,7 +25,12 @@
 
 Nothing here touches hardware: skills and robots arrive at
 ``tree.setup(skills=..., robot=...)``, so the tree renders offline
-(``py-trees-render trees.mission.create_tree``).
+(``py-trees-render bearchair.trees.mission.create_tree``).
+
+:class:`bearchair.trees.options.TreeOptions` varies it: without the assistance,
+``MakeChairAccessible`` is the first accessibility check alone (an inaccessible chair
+fails the mission); without the re-scan fallback, ``LocateTurnedChair`` is ICP alone; the
+retry's count is ``max_rotations``. ``create_tree()`` is the tree above.
 """
 
 from __future__ import annotations
@@ -44,6 +49,7 @@ from bearchair.behaviours.imagine import ImagineSitting
 from bearchair.behaviours.scan import ScanChair
 from bearchair.behaviours.seat import ReleaseAndStand, SeatBear
 from bearchair.behaviours.walk import WalkToChair
+from bearchair.trees.options import TreeOptions
 
 STAGES = (
     "ScanChair",
@@ -57,11 +63,13 @@ STAGES = (
 """The mission's stages: the names of the root's children, in order."""
 
 
-def create_locate_turned_chair() -> py_trees.behaviour.Behaviour:
+def create_locate_turned_chair(rescan_fallback: bool = True) -> py_trees.behaviour.Behaviour:
     """Where the chair is after a turn: the rotation measured by ICP, or, when no fit is
     accepted (a turn that shows sides the first scan never saw), the chair scanned and its
     sitting pose imagined again, so that the next instruction is not given for a chair
-    where it no longer stands."""
+    where it no longer stands. Without ``rescan_fallback``: ICP alone."""
+    if not rescan_fallback:
+        return MeasureChairRotation()
     anew = py_trees.composites.Sequence(
         name="Scan the turned chair anew",
         memory=True,
@@ -72,7 +80,9 @@ def create_locate_turned_chair() -> py_trees.behaviour.Behaviour:
     )
 
 
-def create_assistance_loop(max_rotations: int = keys.MAX_ROTATIONS) -> py_trees.behaviour.Behaviour:
+def create_assistance_loop(
+    max_rotations: int = keys.MAX_ROTATIONS, rescan_fallback: bool = True
+) -> py_trees.behaviour.Behaviour:
     """The human-assistance loop: check, then ask for up to ``max_rotations`` rotations."""
     ask_once = py_trees.composites.Sequence(
         name="Ask the helper to rotate the chair",
@@ -80,7 +90,7 @@ def create_assistance_loop(max_rotations: int = keys.MAX_ROTATIONS) -> py_trees.
         children=[
             InstructHelper(),
             WaitUntilChairStill(),
-            create_locate_turned_chair(),
+            create_locate_turned_chair(rescan_fallback),
             CheckAccessibility(name="CheckAccessibilityAgain"),
         ],
     )
@@ -97,8 +107,22 @@ def create_assistance_loop(max_rotations: int = keys.MAX_ROTATIONS) -> py_trees.
     )
 
 
-def create_tree() -> py_trees.behaviour.Behaviour:
-    """Builds the whole mission tree (no hardware needed)."""
+def create_accessibility(options: TreeOptions) -> py_trees.behaviour.Behaviour:
+    """The ``MakeChairAccessible`` stage: the assistance loop, or without the assistance
+    the one check (named as the stage, so the stages keep their names)."""
+    if not options.assistance:
+        return CheckAccessibility(name="MakeChairAccessible")
+    return create_assistance_loop(options.max_rotations, options.rescan_fallback)
+
+
+def create_tree(options: TreeOptions | None = None) -> py_trees.behaviour.Behaviour:
+    """Builds the whole mission tree (no hardware needed).
+
+    Args:
+        options: how to compose it; None: ``TreeOptions()``, the tree of the module
+            docstring.
+    """
+    options = options or TreeOptions()
     return py_trees.composites.Sequence(
         name="Put the bear on the chair",
         memory=True,
@@ -106,7 +130,7 @@ def create_tree() -> py_trees.behaviour.Behaviour:
             ScanChair(),
             ImagineSitting(),
             CheckSeatReachable(),
-            create_assistance_loop(),
+            create_accessibility(options),
             WalkToChair(),
             SeatBear(),
             ReleaseAndStand(),

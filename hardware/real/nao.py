@@ -276,13 +276,19 @@ class NaoHumanoid:
 
 
 class NaoSpeaker:
-    """:class:`bearchair.hardware.interfaces.Speaker` through the NAO's own voice (ALTextToSpeech.say)."""
+    """:class:`bearchair.hardware.interfaces.Speaker` through the NAO's own voice (ALTextToSpeech.say).
+
+    Attributes:
+        spoken: every sentence said, in order (the name every speaker uses).
+    """
 
     def __init__(self, session: Any) -> None:
         self._tts = session.service("ALTextToSpeech")
+        self.spoken: list[str] = []
 
     def say(self, sentence: str) -> None:
         self._tts.say(sentence)
+        self.spoken.append(sentence)
 
 
 class WallClock:

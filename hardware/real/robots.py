@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from bearchair.hardware.backends import build_device
 from bearchair.hardware.interfaces import Robot
 from bearchair.hardware.real.nao import NaoHumanoid, NaoSpeaker, WallClock, connect
 from bearchair.hardware.real.panda import PandaArm
@@ -42,20 +43,39 @@ def connect_panda(config: Any) -> PandaArm:
 def connect_robots(config: Any) -> Robot:
     """Connects the NAO and the Panda of an :class:`bearchair.executive.cell_config.CellConfig`.
 
+    A device whose section names a plug-in backend (``config.devices``) is made by it
+    (:func:`bearchair.hardware.backends.build_device`) instead; the NAO is reached only
+    when the humanoid or the speaker is the built-in one.
+
     Raises:
         BackendUnavailable: an SDK or a robot is missing (the message names which).
+        PluginError: a plug-in backend is missing or does not satisfy its protocol.
     """
-    session = connect(config.nao_url, config.nao_user, config.nao_password)
+    devices: dict[str, dict[str, Any]] = getattr(config, "devices", {}) or {}
+    made = {
+        role: build_device(role, section["backend"], _settings(section))
+        for role, section in devices.items()
+    }
+    session = None
+    if "humanoid" not in made or "speaker" not in made:
+        session = connect(config.nao_url, config.nao_user, config.nao_password)
     return Robot(
-        arm=connect_panda(config),
-        humanoid=NaoHumanoid(session, odom_origin=config.nao_start),
-        speaker=NaoSpeaker(session),
+        arm=made["arm"] if "arm" in made else connect_panda(config),
+        humanoid=made["humanoid"]
+        if "humanoid" in made
+        else NaoHumanoid(session, odom_origin=config.nao_start),
+        speaker=made["speaker"] if "speaker" in made else NaoSpeaker(session),
         clock=WallClock(),
     )
+
+
+def _settings(section: dict[str, Any]) -> dict[str, Any]:
+    return {key: value for key, value in section.items() if key != "backend"}
 
 
 def activate(robot: Robot) -> None:
     """Sets the NAO up for carrying (Autonomous Life and awareness off, no arm swing,
     carrying posture, hands closed, head held): the robots move from here on."""
-    assert isinstance(robot.humanoid, NaoHumanoid)  # connect_robots' humanoid is one
-    robot.humanoid.activate()
+    activate_humanoid = getattr(robot.humanoid, "activate", None)  # a plug-in's may have none
+    if callable(activate_humanoid):
+        activate_humanoid()

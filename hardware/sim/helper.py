@@ -172,18 +172,18 @@ class SimSpeaker:
     lets the helper hear the sentence.
 
     Attributes:
-        said: every sentence, in order.
+        spoken: every sentence, in order (the name every speaker uses).
     """
 
     def __init__(self, helper: SimHelper | None, voice: Speaker | None = None) -> None:
         self._helper = helper
         self._voice = voice
-        self.said: list[str] = []
+        self.spoken: list[str] = []
 
     def say(self, sentence: str) -> None:
         """Says one sentence."""
         log.info("robot says: %s", sentence)
-        self.said.append(sentence)
+        self.spoken.append(sentence)
         if self._voice is not None:
             self._voice.say(sentence)
         else:

@@ -154,6 +154,7 @@ def imagine_sitting(
     seed: int,
     cancel: threading.Event | None = None,
     workers: int = DEFAULT_WORKERS,
+    settings: SimulationSettings | None = None,
 ) -> ImaginationResult:
     """Finds how to sit on a chair by simulating drops of a child-sized agent.
 
@@ -163,12 +164,15 @@ def imagine_sitting(
         seed: seeds the drops' start jitter; the same seed gives the same result.
         cancel: when set, pending drops are abandoned and the result says "cancelled".
         workers: worker processes (1 runs in this process).
+        settings: the drops' physics and stopping (default: :class:`SimulationSettings`).
 
     Returns:
         The sitting pose g = (p, γ) in the mesh's frame, every drop, and the timings;
         or ``found=False`` with the reason (not a chair, degenerate mesh, cancelled).
     """
-    return imagine_sitting_details(chair_mesh, seed=seed, cancel=cancel, workers=workers).result
+    return imagine_sitting_details(
+        chair_mesh, seed=seed, cancel=cancel, workers=workers, settings=settings
+    ).result
 
 
 def imagine_sitting_details(

@@ -23,6 +23,7 @@ def scan_chair(
     seed: int,
     cancel: threading.Event | None = None,
     config: ReconstructionConfig | None = None,
+    views: tuple[int, ...] | None = None,
 ) -> ChairScan:
     """Captures RGB-D at each of :data:`SCAN_CONFIGURATIONS` and reconstructs the chair.
 
@@ -36,6 +37,7 @@ def scan_chair(
         seed: seeds the floor RANSAC.
         cancel: when set, the scan stops before the next motion.
         config: reconstruction parameters (default: :class:`ReconstructionConfig`).
+        views: indices into :data:`SCAN_CONFIGURATIONS` to visit, in order (None: all).
 
     Returns:
         The chair scan with the frames captured; ``seconds`` has ``motion`` and
@@ -48,10 +50,13 @@ def scan_chair(
     """
     config = config or ReconstructionConfig()
     config = ReconstructionConfig(**{**config.__dict__, "seed": seed})
-    frames, notes, timing = capture_views(arm, SCAN_CONFIGURATIONS, cancel, ScanCancelled)
+    configurations = (
+        SCAN_CONFIGURATIONS if views is None else tuple(SCAN_CONFIGURATIONS[i] for i in views)
+    )
+    frames, notes, timing = capture_views(arm, configurations, cancel, ScanCancelled)
     if len(frames) < MIN_SCAN_VIEWS:
         raise PerceptionError(
-            f"chair scan: only {len(frames)} of {len(SCAN_CONFIGURATIONS)} views could be "
+            f"chair scan: only {len(frames)} of {len(configurations)} views could be "
             f"captured clear of the chair (need {MIN_SCAN_VIEWS}): " + "; ".join(notes)
         )
     if cancel is not None and cancel.is_set():
