@@ -7,6 +7,7 @@ so a result can be traced to the code and the libraries that produced it.
 from __future__ import annotations
 
 import functools
+import json
 import subprocess
 from importlib import metadata
 from pathlib import Path
@@ -38,8 +39,28 @@ def distribution_version(name: str) -> str | None:
         return None
 
 
+SHIPPED_FILE = "shipped_from.json"
+"""In a copy of the package shipped to other machines (a Ray cluster's nodes,
+``bearchair.evaluation.shipping``): the version and commit of the code it was copied
+from, which the copy, neither installed nor a checkout, cannot tell by itself."""
+
+
+@functools.cache
+def shipped_from() -> dict[str, Any] | None:
+    """:data:`SHIPPED_FILE` beside this package's subpackages, or None (not a shipped copy)."""
+    try:
+        shipped = json.loads((Path(__file__).resolve().parent.parent / SHIPPED_FILE).read_text())
+    except (OSError, ValueError):
+        return None
+    return shipped if isinstance(shipped, dict) else None
+
+
 def bearchair_version() -> str:
-    """bearchair's installed version (``0+unknown`` for a checkout that was never installed)."""
+    """bearchair's installed version (``0+unknown`` for a checkout that was never installed);
+    a shipped copy's is the one it was copied from."""
+    shipped = shipped_from()
+    if shipped is not None and isinstance(shipped.get("bearchair"), str):
+        return shipped["bearchair"]
     return distribution_version("bearchair") or "0+unknown"
 
 
@@ -47,10 +68,14 @@ def bearchair_version() -> str:
 def git_commit() -> str | None:
     """The commit of the checkout this code runs from (``+dirty`` when it has changes).
 
-    None where the code is not in a git checkout (an installed wheel) or git is missing.
+    None where the code is not in a git checkout (an installed wheel) or git is missing;
+    a shipped copy's (:data:`SHIPPED_FILE`) is the one of the code it was copied from.
     The package folder is resolved first: in a checkout ``bearchair/<room>`` links to
     ``<checkout>/<room>``.
     """
+    shipped = shipped_from()
+    if shipped is not None:
+        return shipped.get("git_commit")
     checkout = Path(__file__).resolve().parent.parent
     if not (checkout / ".git").exists():
         return None

@@ -2,7 +2,8 @@
 
 Both backends run the same trial worker (``bearchair.evaluation.worker_process``): here as
 forks of a preloaded trial server (``bearchair.evaluation.forked_workers``), on Ray as a
-command on the node that runs the task. They hand each :class:`WorkerOutcome` back to
+command on the node that runs the task, in a temporary folder whose run record the task
+sends back (``bearchair.evaluation.shipping``). They hand each :class:`WorkerOutcome` back to
 the caller in the caller's thread, as soon as it is ready, so the harness alone writes
 the records. On Ctrl-C (KeyboardInterrupt in
 the caller's thread), a backend stops every running trial and re-raises; what was
@@ -13,14 +14,30 @@ from __future__ import annotations
 
 import contextlib
 import importlib
+import json
+import logging
+import os
+import tarfile
+import tempfile
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from pathlib import Path
 from typing import Any, Protocol
 
 from bearchair.core.errors import BackendUnavailable
 from bearchair.evaluation.forked_workers import PreloadedLauncher
 from bearchair.evaluation.protocol import TrialSpec
+from bearchair.evaluation.shipping import (
+    TrialScratch,
+    chair_files,
+    pack_folder,
+    package_dir,
+    stage_package,
+    tree_file,
+    unpack_folder,
+)
 from bearchair.evaluation.worker_process import (
+    CommandLauncher,
     ProcessGroup,
     WorkerLauncher,
     WorkerOutcome,
@@ -89,12 +106,52 @@ class LocalBackend:
                 on_result(spec, future.result())
 
 
+RAY_LOG_LEVEL = logging.WARNING
+"""Ray's own log lines on the head: warnings only, so its INFO lines do not tear the
+progress bar (the trials' output goes to each run folder's ``worker.log``)."""
+NODE_FILE = "ray_node.json"
+"""In each run folder a Ray trial sends back: the node that ran it and the package it ran."""
+
+
 def _ray_trial(
-    command: list[str] | None, payload: dict[str, Any], timeout_s: float
+    command: list[str] | None,
+    payload: dict[str, Any],
+    timeout_s: float,
+    chair: dict[str, bytes],
+    tree: dict[str, bytes] | None = None,
 ) -> dict[str, Any]:
-    """The Ray task: one trial subprocess on whichever node runs it."""
-    outcome = run_worker_with_retry(command or default_worker_command(), payload, timeout_s)
-    return outcome._asdict()
+    """The Ray task: one trial subprocess on whichever node runs it, its run folder sent back.
+
+    The node shares no folder with the head: the trial runs on the shipped chair in a
+    temporary folder, whose run record returns as a gzipped tar (``record``).
+    """
+    with TrialScratch() as scratch:
+        here = scratch.payload_here(payload, chair, tree)
+        launcher = CommandLauncher(command or default_worker_command(), env=_worker_env())
+        outcome = run_worker_with_retry(launcher, here, timeout_s)
+        scratch.run_dir.mkdir(parents=True, exist_ok=True)
+        (scratch.run_dir / NODE_FILE).write_text(json.dumps(_node_description()))
+        return {"outcome": outcome._asdict(), "record": pack_folder(scratch.run_dir)}
+
+
+def _worker_env() -> dict[str, str]:
+    """This process's environment, the package it imported first on the trial's path: on
+    a Ray node the copy the head shipped (``runtime_env``), not whatever is installed."""
+    env = dict(os.environ)
+    root = str(package_dir().parent)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH", "")) if p)
+    return env
+
+
+def _node_description() -> dict[str, Any]:
+    """Where this Ray task runs: the node's id and address, the package's folder."""
+    description: dict[str, Any] = {"package_dir": str(package_dir()), "cwd": os.getcwd()}
+    with contextlib.suppress(Exception):  # outside a Ray worker (tests): no node to name
+        context = import_ray().get_runtime_context()
+        description["node_id"] = context.get_node_id()
+    with contextlib.suppress(Exception):
+        description["node_ip"] = import_ray().util.get_node_ip_address()
+    return description
 
 
 def import_ray() -> Any:
@@ -112,61 +169,96 @@ def import_ray() -> Any:
 class RayBackend:
     """Runs each trial subprocess as a Ray task, at most ``workers`` at once.
 
-    The worker command is resolved on the node that runs it (its own Python), so the
-    project must be installed there; run directories are written on that node.
+    Nothing is assumed installed or shared but Ray and the dependencies: the head ships
+    this ``bearchair`` package to every node (``runtime_env`` ``py_modules``) and each
+    trial's chair with its task; each task sends its run folder back and the head writes
+    it where the campaign keeps it (``docs/ray.md``).
 
     Args:
-        workers: tasks in flight at once.
+        workers: tasks in flight at once; None: the cluster's CPUs over ``cpus_per_trial``.
         timeout_s: per-trial wall time before the worker is killed (inside the task).
         address: an existing cluster (``ray://host:10001`` or ``host:6379``); None starts
-            a local Ray.
-        cpus_per_trial: CPUs Ray reserves per task (the imagination uses 2 processes).
+            a local Ray (or joins ``RAY_ADDRESS``).
+        cpus_per_trial: CPUs Ray reserves per task.
         command: the worker command; None for the real worker on the remote node.
+        ship_package: send this package to the nodes (False: use the nodes' own install).
     """
 
     def __init__(
         self,
-        workers: int,
+        workers: int | None,
         timeout_s: float,
         address: str | None = None,
         cpus_per_trial: float = 1.0,
         command: list[str] | None = None,
+        ship_package: bool = True,
     ) -> None:
         self.ray = import_ray()
-        self.workers = max(1, workers)
+        self.workers = None if workers is None else max(1, workers)
         self.timeout_s = timeout_s
         self.address = address
         self.cpus_per_trial = cpus_per_trial
         self.command = command
+        self.ship_package = ship_package
+        self.description = ""
+
+    def connect(self) -> str:
+        """Starts or joins Ray (once), shipping the package; returns a line on the cluster.
+
+        Raises:
+            BackendUnavailable: Ray could not start, or the cluster could not be reached
+                (a cluster that wants a token and got none says so).
+        """
+        if self.description:
+            return self.description
+        ray = self.ray
+        where = f" at {self.address}" if self.address else ""
+        with tempfile.TemporaryDirectory(prefix="bearchair-ray-") as staging:
+            runtime_env = (
+                {"py_modules": [str(stage_package(Path(staging)))]} if self.ship_package else None
+            )
+            explicit_token_mode_for_a_local_ray(self.address)
+            try:
+                ray.init(
+                    address=self.address or None,
+                    ignore_reinit_error=True,
+                    runtime_env=runtime_env,
+                    log_to_driver=False,
+                    logging_level=RAY_LOG_LEVEL,
+                )
+            except Exception as error:
+                raise BackendUnavailable(
+                    f"could not start or reach Ray{where}: {_why(error)}"
+                ) from error
+        cpus = float(ray.cluster_resources().get("CPU", 0.0))
+        if self.workers is None:
+            self.workers = max(1, int(cpus // self.cpus_per_trial))
+        nodes = sum(1 for node in ray.nodes() if node.get("Alive", True))
+        self.description = (
+            f"Ray{where or ' (local)'}: {nodes} node(s), {cpus:g} CPU(s); "
+            f"{self.workers} trial(s) at once"
+        )
+        return self.description
 
     def run(self, jobs: Sequence[Job], on_result: OnResult) -> None:
+        self.connect()
         ray = self.ray
-        try:
-            ray.init(address=self.address or None, ignore_reinit_error=True)
-        except Exception as error:
-            raise BackendUnavailable(
-                f"could not start or reach Ray{f' at {self.address}' if self.address else ''}: "
-                f"{str(error).splitlines()[0] if str(error) else type(error).__name__}"
-            ) from error
+        workers = self.workers or 1
         task = ray.remote(num_cpus=self.cpus_per_trial, max_retries=0)(_ray_trial)
         queue = list(jobs)
-        in_flight: dict[Any, TrialSpec] = {}
+        in_flight: dict[Any, Job] = {}
         try:
             while queue or in_flight:
-                while queue and len(in_flight) < self.workers:
+                while queue and len(in_flight) < workers:
                     spec, payload = queue.pop(0)
-                    in_flight[task.remote(self.command, payload, self.timeout_s)] = spec
+                    chair = chair_files(payload.get("chair_path"))
+                    tree = tree_file(payload.get("tree"))
+                    ref = task.remote(self.command, payload, self.timeout_s, chair, tree)
+                    in_flight[ref] = (spec, payload)
                 ready, _ = ray.wait(list(in_flight), num_returns=1)
                 for ref in ready:
-                    spec = in_flight.pop(ref)
-                    try:
-                        outcome = WorkerOutcome(**ray.get(ref))
-                    except Exception as error:  # the task's worker died, the node left, ...
-                        first_line = str(error).strip().splitlines()[0] if str(error) else ""
-                        outcome = WorkerOutcome(
-                            None, f"ray task failed: {type(error).__name__}: {first_line}", 0.0
-                        )
-                    on_result(spec, outcome)
+                    spec, payload = in_flight.pop(ref)
+                    on_result(spec, self._outcome(ref, Path(payload["out_dir"])))
         except BaseException:
             for ref in in_flight:
                 # Not force=True: the task gets a KeyboardInterrupt and kills its trial
@@ -174,3 +266,55 @@ class RayBackend:
                 with contextlib.suppress(Exception):  # already finished or gone
                     ray.cancel(ref)
             raise
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        """Leaves the cluster (a local Ray started here stops); :meth:`connect` rejoins."""
+        if self.description:
+            self.description = ""
+            with contextlib.suppress(Exception):  # already gone
+                self.ray.shutdown()
+
+    def _outcome(self, ref: Any, run_dir: Path) -> WorkerOutcome:
+        """The task's outcome, its run folder written into ``run_dir`` here."""
+        try:
+            result = self.ray.get(ref)
+        except Exception as error:  # the task's worker died, the node left, ...
+            return WorkerOutcome(
+                None, f"ray task failed: {type(error).__name__}: {_why(error)}", 0.0
+            )
+        outcome = WorkerOutcome(**result["outcome"])
+        try:
+            unpack_folder(result["record"], run_dir)
+        except (OSError, tarfile.TarError) as error:
+            return outcome._replace(
+                summary=None, error=f"the trial's run folder could not be written here: {error}"
+            )
+        return outcome
+
+
+def explicit_token_mode_for_a_local_ray(address: str | None) -> None:
+    """Makes Ray's default for a Ray started here explicit, which silences its warning.
+
+    A new local Ray turns token authentication on (writing ``~/.ray/auth_token`` if
+    missing) and warns that it did unless ``RAY_AUTH_MODE`` says so. Joining a cluster
+    (``address``, or ``RAY_ADDRESS``) changes nothing: the user's ``RAY_AUTH_MODE`` and
+    token decide (``docs/ray.md``).
+    """
+    if address is None and not os.environ.get("RAY_ADDRESS"):
+        os.environ.setdefault("RAY_AUTH_MODE", "token")
+
+
+def _why(error: BaseException) -> str:
+    """One line on why Ray failed; a cluster wanting a token says how to give one."""
+    text = str(error).strip()
+    first = text.splitlines()[0] if text else type(error).__name__
+    # Ray's own reason (an invalid token) goes to its log lines, not into the exception.
+    unsure = "failed to connect" in text.lower() and os.environ.get("RAY_AUTH_MODE") != "token"
+    if unsure or "authentication" in text.lower() or "token" in text.lower():
+        return (
+            f"{first} (if the cluster uses token authentication: export RAY_AUTH_MODE=token and "
+            "RAY_AUTH_TOKEN, or copy the head's ~/.ray/auth_token here; docs/ray.md)"
+        )
+    return first

@@ -42,7 +42,9 @@ def register(subparsers: Any) -> None:
         "--protocol", choices=("paper",), default="paper", help="which trials each chair gets"
     )
     parser.add_argument(
-        "--workers", type=positive_int, default=1, help="trials at once (default 1)"
+        "--workers",
+        type=positive_int,
+        help="trials at once (default: 1 with --backend local; the cluster's CPUs with --backend ray)",
     )
     parser.add_argument(
         "--backend",
@@ -98,7 +100,9 @@ def resume_command(args: argparse.Namespace) -> str:
     """The command line that resumes this campaign."""
     words = ["bearchair", "trials", "--chairs", str(args.chairs), "--protocol", args.protocol]
     words += ["--seed", str(args.seed), "--out", str(args.out), "--db", str(_db_path(args))]
-    words += ["--workers", str(args.workers), "--timeout", f"{args.timeout:g}"]
+    if args.workers is not None:
+        words += ["--workers", str(args.workers)]
+    words += ["--timeout", f"{args.timeout:g}"]
     words += ["--backend", args.backend]
     if args.address:
         words += ["--address", args.address]
@@ -131,7 +135,13 @@ def imagination_workers(args: argparse.Namespace) -> int:
     processes than cores only queue); on a Ray cluster, the imagination's default."""
     if args.backend == "ray":
         return DEFAULT_WORKERS
-    return max(1, min(DEFAULT_WORKERS, (os.cpu_count() or 1) // max(1, args.workers)))
+    return max(1, min(DEFAULT_WORKERS, (os.cpu_count() or 1) // (args.workers or 1)))
+
+
+def _workers_text(args: argparse.Namespace) -> str:
+    if args.workers is None and args.backend == "ray":
+        return "trials at once: the cluster's CPUs"
+    return f"{args.workers or 1} worker(s)"
 
 
 def _db_path(args: argparse.Namespace) -> Path:
@@ -165,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"{len(chairs)} chairs x {len(specs) // len(chairs)} trials = {len(specs)} trials "
             f"({done_before} already recorded in {db_path}); "
-            f"{left_out_text(skipped)}; backend {args.backend}, {args.workers} worker(s)",
+            f"{left_out_text(skipped)}; backend {args.backend}, {_workers_text(args)}",
             file=sys.stderr,
         )
         result = _run_campaign(args, specs, store, backend, done_before, record)
@@ -248,7 +258,7 @@ def _backend(args: argparse.Namespace) -> Backend:
     try:
         if args.backend == "ray":
             return RayBackend(args.workers, args.timeout, args.address, command=command)
-        return LocalBackend(args.workers, args.timeout, command)
+        return LocalBackend(args.workers or 1, args.timeout, command)
     except BackendUnavailable as error:
         raise InputError(f"bearchair trials: {error}") from error
 
@@ -266,8 +276,11 @@ def _run_campaign(
     from bearchair.evaluation.campaign import run_campaign
     from bearchair.evaluation.progress import Progress
 
-    progress = Progress(len(specs), done_before)
     try:
+        connect = getattr(backend, "connect", None)
+        if connect is not None:  # before the progress bar: Ray's start-up is not a trial
+            print(f"bearchair trials: {connect()}", file=sys.stderr)
+        progress = Progress(len(specs), done_before)
         return run_campaign(
             specs,
             store,

@@ -94,10 +94,12 @@ class CommandLauncher:
 
     Args:
         command: the worker command (tests inject a fake one).
+        env: the worker's environment; None: this process's.
     """
 
-    def __init__(self, command: list[str] | None = None) -> None:
+    def __init__(self, command: list[str] | None = None, env: dict[str, str] | None = None) -> None:
         self.command = command or default_worker_command()
+        self.env = env
 
     def start(self, payload_json: str, log: IO[str]) -> subprocess.Popen[str]:
         return subprocess.Popen(
@@ -106,6 +108,7 @@ class CommandLauncher:
             stderr=log,
             stdin=subprocess.DEVNULL,
             text=True,
+            env=self.env,
             start_new_session=True,
             preexec_fn=die_with_parent,
         )

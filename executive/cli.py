@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import importlib.metadata
 import json
 import logging
@@ -179,18 +180,36 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--yes", action="store_true", help="with --robots: start without asking")
     add_config_arguments(run)
+    run.add_argument(
+        "--groot2",
+        nargs="?",
+        const=1667,
+        type=int,
+        metavar="PORT",
+        help="publish the running tree to Groot2 on PORT and PORT+1 (default 1667; "
+        "docs/btcpp-groot2.md)",
+    )
+    run.add_argument(
+        "--groot2-bind",
+        metavar="ADDRESS",
+        help="the address Groot2's ports listen on (default 127.0.0.1; '*': every interface, "
+        "through BehaviorTree.CPP's own publisher)",
+    )
     run.set_defaults(func=_run)
 
     tree = subparsers.add_parser("tree", help="render the mission tree")
     tree.add_argument(
         "--format",
-        choices=("ascii", "unicode", "dot", "svg", "png"),
+        choices=("ascii", "unicode", "dot", "svg", "png", "btcpp"),
         default="unicode",
-        help="text on the console (ascii, unicode) or a file (dot, svg, png)",
+        help="text on the console (ascii, unicode) or a file (dot, svg, png; btcpp: "
+        "BehaviorTree.CPP v4 XML for Groot2, docs/btcpp-groot2.md)",
     )
     tree.add_argument("--blackboard", action="store_true", help="show blackboard keys and users")
     tree.add_argument(
-        "--out", type=Path, help="output file for dot/svg/png (default: mission.<format>)"
+        "--out",
+        type=Path,
+        help="output file for dot/svg/png (default: mission.<format>) or btcpp (default: stdout)",
     )
     add_config_arguments(tree)
     tree.set_defaults(func=_tree)
@@ -242,6 +261,7 @@ def _run(args: argparse.Namespace) -> int:
     )
     from bearchair.executive.outputs import default_run_dir, prepare_run_dir
 
+    check_groot2_arguments("bearchair run", args)
     # Every input and the output place are checked before anything runs.
     mission = mission_from_args(args)
     factory = check_run_inputs(mission)
@@ -252,7 +272,11 @@ def _run(args: argparse.Namespace) -> int:
     else:
         out_dir = default_run_dir(mission.run.seed)
     args.run_dir = out_dir  # where an internal error's traceback goes
-    config = mission.run_config(out_dir)
+    config = dataclasses.replace(
+        mission.run_config(out_dir),
+        groot2_port=args.groot2,
+        groot2_bind=args.groot2_bind or "127.0.0.1",
+    )
     with _log_to(out_dir / LOG_FILE), showing_step_bars():
         if mission.robots.used:
             summary = run_on_robots(
@@ -334,6 +358,26 @@ def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
         )
 
 
+def check_groot2_arguments(command: str, args: argparse.Namespace) -> None:
+    """One line before any work when ``--groot2`` cannot be served."""
+    from bearchair.executive.groot2 import (
+        INSTALL_HINT,
+        check_groot2_address,
+        check_groot2_port,
+        missing_modules,
+    )
+
+    if args.groot2 is None:
+        if args.groot2_bind is not None:
+            raise InputError(f"{command}: --groot2-bind is for --groot2 [PORT]")
+        return
+    check_groot2_port(args.groot2)
+    missing = missing_modules()
+    if missing:
+        raise InputError(f"{command}: --groot2 needs {', '.join(missing)}: {INSTALL_HINT}")
+    check_groot2_address(args.groot2, args.groot2_bind or "127.0.0.1")
+
+
 def _tree(args: argparse.Namespace) -> int:
     from bearchair.executive.outputs import check_output_file
     from bearchair.executive.render import TEXT_FORMATS, render_graph, render_text
@@ -341,6 +385,12 @@ def _tree(args: argparse.Namespace) -> int:
 
     mission = mission_from_args(args)
     factory = load_tree_factory(mission.tree.factory)
+    if args.format == "btcpp":
+        from bearchair.executive.render import write_btcpp
+
+        return write_btcpp(
+            build_tree(factory, mission.tree.options(), mission.tree.factory), args.out
+        )
     if args.format in TEXT_FORMATS:
         if args.out is not None:
             raise InputError(

@@ -49,6 +49,10 @@ class RunConfig:
         resolved: the mission configuration this came from, as JSON
             (``bearchair.executive.mission_config``), written to the run record; None:
             the record holds these fields.
+        groot2_port: publish the running tree to Groot2 on this port and the next
+            (``bearchair.executive.groot2``); None: not published.
+        groot2_bind: the address Groot2's ports listen on (``*``: BT.CPP's own publisher,
+            every interface).
     """
 
     chair_path: Path | None = None
@@ -82,6 +86,9 @@ class RunConfig:
             for item in fields(self)
             if item.name != "resolved"
         }
+
+    groot2_port: int | None = None
+    groot2_bind: str = "127.0.0.1"
 
     def chair_name(self) -> str:
         return self.chair_path.name if self.chair_path else "box-chair (built in)"

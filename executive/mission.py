@@ -72,10 +72,11 @@ class StageSnapshots:
 
     The pictures go to ``out_dir`` as ``NN-<stage>-<status>.png`` (a perspective and a
     ``-top`` view): what the scene looked like when SeatBear finished, for example, which
-    the final picture no longer shows.
+    the final picture no longer shows. ``render(path, view=, stage=, status=, reason=)``
+    draws one (:class:`ScenePictures`: captioned, with what the stage decided).
     """
 
-    def __init__(self, render: Callable[..., None], out_dir: Path) -> None:
+    def __init__(self, render: Callable[..., object], out_dir: Path) -> None:
         self._render = render
         self._out_dir = out_dir
         self._seen: dict[str, str] = {}
@@ -93,12 +94,59 @@ class StageSnapshots:
             self._out_dir.mkdir(parents=True, exist_ok=True)
             for suffix, view in (("", "perspective"), ("-top", "top")):
                 path = self._out_dir / f"{stem}{suffix}.png"
+                reason = getattr(stage, "feedback", "")
                 try:
-                    self._render(path, view=view)
+                    self._render(
+                        path, view=view, stage=stage.name, status=stage.status, reason=reason
+                    )
                 except Exception as error:  # a missing picture must not stop the mission
                     logger.warning("could not render %s: %s", path.name, error)
                     continue
                 self.written.append(path)
+
+
+class ScenePictures:
+    """Pictures of the simulated scene with the mission's marks and a caption
+    (``bearchair.executive.scene_picture``).
+
+    Args:
+        world: the simulated world (its ``render_scene`` and its clock).
+        chair: the chair's name, for the caption.
+        seed: the run's seed, for the caption.
+    """
+
+    def __init__(self, world: SimWorld, chair: str, seed: int) -> None:
+        self._world = world
+        self._chair = chair
+        self._seed = seed
+
+    def __call__(
+        self,
+        path: Path,
+        view: str = "perspective",
+        stage: str = "final",
+        status: str = "",
+        reason: str = "",
+    ) -> list[str]:
+        """Writes the picture at ``path``; returns the caption's lines."""
+        from bearchair.executive import scene_picture
+
+        frame = self._world.render_scene("top" if view == "top" else "perspective")
+        caption = scene_picture.SceneCaption(
+            self._chair, self._seed, stage, status, self._world.clock.now(), reason
+        )
+        return scene_picture.write(frame, scene_picture.SceneMarks.from_blackboard(), caption, path)
+
+    def final(self, path: Path, summary: dict[str, Any]) -> None:
+        """The end of the run: its outcome, the failed stage and the reason (a success:
+        what the last stage reported)."""
+        status = summary["outcome"].upper()
+        if summary.get("failed_stage"):
+            status += f" at {summary['failed_stage']}"
+        reason = summary.get("reason") or ""
+        if not reason and summary.get("stages"):
+            reason = summary["stages"][-1].get("message", "")
+        self(path, "perspective", "final", status, reason)
 
 
 def _both(
@@ -164,8 +212,9 @@ def run_in_simulation(
         if isinstance(error, KeyboardInterrupt):
             return summary
         raise
+    pictures = ScenePictures(world, config.chair_name(), config.seed)
     if config.snapshots:
-        on_tick = _both(on_tick, StageSnapshots(world.render_png, config.out_dir / "snapshots"))
+        on_tick = _both(on_tick, StageSnapshots(pictures, config.out_dir / "snapshots"))
     try:
         return _run_tree(
             root,
@@ -175,7 +224,7 @@ def run_in_simulation(
             run_info,
             skills,
             on_tick,
-            world.render_png,
+            pictures.final,
             lambda summary: _ground_truth(world, summary),
         )
     finally:
@@ -300,11 +349,12 @@ def _run_tree(
     run_info: dict[str, Any],
     skills: MissionSkills | None,
     on_tick: Callable[[MissionRunner], None] | None,
-    render_png: Callable[[Path], None] | None,
+    render_png: Callable[[Path, dict[str, Any]], None] | None,
     ground_truth: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """Ticks the tree on ``robot`` and writes the summary; the record survives any error."""
     recording = None
+    groot2 = None
     try:
         if skills is None:
             skills = configured_skills(config)
@@ -317,6 +367,7 @@ def _run_tree(
                 print(f"live viewer: {recording.viewer_url}", file=sys.stderr, flush=True)
             if recording.viewer_hint:
                 print(recording.viewer_hint, file=sys.stderr, flush=True)
+        groot2 = open_groot2(root, config)
         runner = MissionRunner(
             root,
             skills,
@@ -327,7 +378,7 @@ def _run_tree(
             timeout_s=config.timeout_s,
             tick_period_s=config.tick_period_s,
             on_tick=on_tick,
-            post_tick=() if recording is None else (recording,),
+            post_tick=tuple(hook for hook in (recording, groot2) if hook is not None),
         )
         summary = summarise(runner.run(), run_info)
         # The summary first: a SIGKILL while the picture renders must not lose it.
@@ -335,7 +386,7 @@ def _run_tree(
         if render_png is not None:
             try:
                 with atomic_path(config.out_dir / "final_scene.png") as scratch:
-                    render_png(scratch)
+                    render_png(scratch, summary)
                 summary["picture"] = "final_scene.png"
             except Exception as error:  # a missing picture must not lose the record
                 logger.warning("could not render the final scene: %s", error)
@@ -355,6 +406,20 @@ def _run_tree(
         recorder.close()
         if recording is not None:
             recording.close()
+        if groot2 is not None:
+            groot2.close()
+
+
+def open_groot2(root: Any, config: RunConfig) -> Any:
+    """The Groot2 publisher of the run's tree (``--groot2``), or None when not asked for."""
+    if config.groot2_port is None:
+        return None
+    from bearchair.executive.groot2 import Groot2Monitor
+
+    monitor = Groot2Monitor(root, config.groot2_port, config.groot2_bind)
+    where = " (it listens on every interface)" if monitor.every_interface else ""
+    print(f"Groot2: connect to {monitor.address}{where}", file=sys.stderr, flush=True)
+    return monitor
 
 
 def configured_skills(config: RunConfig) -> MissionSkills:

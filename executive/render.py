@@ -2,17 +2,13 @@
 
 from __future__ import annotations
 
-import contextlib
-import io
-import os
 import shutil
-import tempfile
 from pathlib import Path
 
 import py_trees
 
 from bearchair.behaviours import keys
-from bearchair.core.errors import RenderError
+from bearchair.core.errors import RenderError, one_line
 from bearchair.executive.outputs import atomic_path
 
 TEXT_FORMATS = ("ascii", "unicode")
@@ -90,21 +86,37 @@ def blackboard_table(root: py_trees.behaviour.Behaviour) -> str:
 def render_graph(
     root: py_trees.behaviour.Behaviour, fmt: str, out: Path, with_blackboard: bool
 ) -> Path:
-    """Writes the tree as a dot, SVG or PNG file at ``out`` (Graphviz's ``dot`` for images)."""
+    """Writes the tree (``executive.tree_picture``) as a dot, SVG or PNG file at ``out``.
+
+    SVG and PNG need Graphviz's ``dot``.
+    """
+    from bearchair.executive.tree_picture import tree_graph
+
     if fmt in ("svg", "png") and shutil.which("dot") is None:
         raise RenderError("Graphviz's 'dot' is not installed (apt-get install graphviz)")
-    # py_trees prints every file it writes; the caller reports the one that matters.
-    with tempfile.TemporaryDirectory() as scratch, contextlib.redirect_stdout(io.StringIO()):
-        written = py_trees.display.render_dot_tree(
-            root,
-            name="mission",
-            target_directory=scratch,
-            with_blackboard_variables=with_blackboard,
-        )
-        source = written.get(fmt)
-        if source is None or not os.path.exists(source):
-            raise RenderError(f"py_trees did not produce a {fmt} file")
-        out.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(out) as scratch:
-            shutil.copyfile(source, scratch)
+    graph = tree_graph(root, with_blackboard)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(out) as scratch:
+        if fmt == "dot":
+            Path(scratch).write_text(graph.to_string(), encoding="utf-8")
+        else:
+            try:
+                image = graph.create(prog="dot", format=fmt)
+                Path(scratch).write_bytes(image if isinstance(image, bytes) else image.encode())
+            except Exception as error:  # pydot raises bare Exception on dot's errors
+                raise RenderError(f"Graphviz's dot failed: {one_line(error)}") from error
     return out
+
+
+def write_btcpp(root: py_trees.behaviour.Behaviour, out: Path | None) -> int:
+    """``bearchair tree --format btcpp``: the BehaviorTree.CPP v4 XML on stdout, or in ``out``
+    (written whole or not at all)."""
+    from bearchair.executive.btcpp import tree_to_btcpp_xml
+    from bearchair.executive.outputs import check_output_file, write_text_atomic
+
+    xml = tree_to_btcpp_xml(root)
+    if out is None:
+        print(xml, end="")
+        return 0
+    print(write_text_atomic(check_output_file(out, "--out", (".xml",)), xml))
+    return 0

@@ -112,14 +112,9 @@ def _check_factory(factory: object, spec: str) -> None:
 
 
 def _xml_factory(path: Path) -> TreeFactory:
-    """A BehaviorTree.CPP XML file's factory, from ``bearchair.executive.btcpp``."""
-    try:
-        from bearchair.executive import btcpp  # pyright: ignore[reportAttributeAccessIssue]
-    except ImportError as error:
-        raise InputError(
-            f"--tree {path}: trees from BehaviorTree.CPP XML need bearchair.executive.btcpp, "
-            "which this installation does not have"
-        ) from error
+    """A BehaviorTree.CPP XML file's factory (``bearchair.executive.btcpp``)."""
+    from bearchair.executive import btcpp
+
     if not path.is_file():
         raise InputError(f"--tree {path}: no such file")
     return btcpp.factory_from_xml_file(path)

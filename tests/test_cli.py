@@ -123,7 +123,8 @@ def test_stage_snapshots_picture_each_stage_end_once(tmp_path) -> None:
     Stage = namedtuple("Stage", "name status")
     calls: list[tuple[str, str]] = []
 
-    def render(path, view: str) -> None:
+    def render(path, view: str, stage: str, status: str, reason: str) -> None:
+        assert path.name.startswith(f"{stage}-{status.lower()}", 3) and isinstance(reason, str)
         calls.append((path.name, view))
         path.write_bytes(b"png")
 
@@ -146,7 +147,7 @@ def test_stage_snapshots_picture_each_stage_end_once(tmp_path) -> None:
     assert [p.name for p in snapshots.written] == [name for name, _ in calls]
     assert all(p.exists() for p in snapshots.written)
 
-    def broken(path, view: str) -> None:
+    def broken(path, view: str, **caption) -> None:
         raise RuntimeError("no renderer")
 
     quiet = StageSnapshots(broken, tmp_path / "broken")

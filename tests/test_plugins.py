@@ -113,15 +113,18 @@ def test_a_factory_that_returns_no_behaviour_is_refused():
         build_tree(load_tree_factory("bearchair.trees.options:TreeOptions"))
 
 
-def test_an_xml_tree_needs_the_btcpp_module(tmp_path):
-    try:
-        import bearchair.executive.btcpp  # noqa: F401  # pyright: ignore[reportMissingImports]
-    except ImportError:
-        with pytest.raises(InputError, match=r"need bearchair\.executive\.btcpp"):
-            load_tree_factory(str(tmp_path / "mission.xml"))
-    else:
-        pytest.skip("bearchair.executive.btcpp is installed: its own tests cover --tree file.xml")
+def test_an_xml_tree_file_that_is_missing_is_one_line(tmp_path):
+    with pytest.raises(InputError, match="no such file"):
+        load_tree_factory(str(tmp_path / "absent.xml"))
 
+
+def test_an_xml_tree_spec_builds_the_tree_the_file_describes(tmp_path):
+    from bearchair.executive.btcpp import tree_to_btcpp_xml
+
+    path = tmp_path / "mission.xml"
+    path.write_text(tree_to_btcpp_xml(create_tree()))
+    root = load_tree_factory(str(path))(TreeOptions())
+    assert tree_to_btcpp_xml(root) == path.read_text()
 
 def test_tree_and_run_refuse_a_bad_tree_in_one_line(tmp_path, capsys):
     assert cli.main(["tree", "--tree", "nope:nothing"]) == 2

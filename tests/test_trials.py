@@ -544,15 +544,27 @@ def test_progress_lines_and_eta():
 class FakeRay:
     """The few Ray calls the backend makes, on threads (Ray itself is an optional extra)."""
 
-    def __init__(self):
+    def __init__(self, cpus: float = 3.0):
         from concurrent.futures import ThreadPoolExecutor
 
         self.pool = ThreadPoolExecutor(max_workers=4)
         self.init_kwargs = None
         self.remote_options = None
+        self.cpus = cpus
+        self.shipped_files: list[Path] = []
 
     def init(self, **kwargs):
         self.init_kwargs = kwargs
+        for folder in (kwargs.get("runtime_env") or {}).get("py_modules", []):
+            # Ray zips the folder during init; the head removes its copy afterwards.
+            self.shipped_files = [p for p in Path(folder).rglob("*")]
+            self.shipped_links = [p for p in self.shipped_files if p.is_symlink()]
+
+    def cluster_resources(self):
+        return {"CPU": self.cpus}
+
+    def nodes(self):
+        return [{"Alive": True}, {"Alive": True}]
 
     def remote(self, **options):
         self.remote_options = options

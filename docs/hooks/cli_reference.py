@@ -30,7 +30,14 @@ def cli_reference() -> str:
         parser = build_parser()
         blocks = ["### bearchair", "", "```text", parser.format_help().rstrip(), "```", ""]
         for name, sub in _subcommands(parser).items():
-            blocks += [f"### bearchair {name}", "", "```text", sub.format_help().rstrip(), "```", ""]
+            blocks += [
+                f"### bearchair {name}",
+                "",
+                "```text",
+                sub.format_help().rstrip(),
+                "```",
+                "",
+            ]
     finally:
         if previous is None:
             os.environ.pop("COLUMNS", None)

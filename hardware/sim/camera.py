@@ -125,6 +125,31 @@ def render_view(
     )
 
 
+class SceneFrame(NamedTuple):
+    """A picture of the scene for people, with the camera that took it.
+
+    Attributes:
+        rgb: (H, W, 3) uint8.
+        T_world_camera: 4x4, OpenCV convention (x right, y down, z forward).
+        intrinsics: the pinhole camera.
+    """
+
+    rgb: np.ndarray
+    T_world_camera: np.ndarray
+    intrinsics: CameraIntrinsics
+
+    def project(self, points_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Pixels (N, 2) of world points (N, 3) metres, and which are in front of the camera."""
+        points = np.atleast_2d(np.asarray(points_world, dtype=float))
+        T_camera_world = np.linalg.inv(self.T_world_camera)
+        camera = points @ T_camera_world[:3, :3].T + T_camera_world[:3, 3]
+        in_front = camera[:, 2] > NEAR_M
+        z = np.where(in_front, camera[:, 2], 1.0)
+        k = self.intrinsics
+        pixels = np.column_stack([k.fx * camera[:, 0] / z + k.cx, k.fy * camera[:, 1] / z + k.cy])
+        return pixels, in_front
+
+
 class CarmineNoise(NamedTuple):
     """A structured-light depth noise model after the Carmine/Kinect v1 literature.
 

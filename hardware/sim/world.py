@@ -31,7 +31,7 @@ from bearchair.core.se2 import SE2Pose
 from bearchair.hardware.interfaces import CameraIntrinsics, Robot, Speaker
 from bearchair.hardware.sim.bear import SimBear
 from bearchair.hardware.sim.bullet import LockedBullet, matrix_to_pose, pose_to_matrix
-from bearchair.hardware.sim.camera import render_view
+from bearchair.hardware.sim.camera import SceneFrame, render_view
 from bearchair.hardware.sim.chair import SimChair
 from bearchair.hardware.sim.clock import SimClock
 from bearchair.hardware.sim.contacts import ChairTouchMonitor
@@ -50,6 +50,10 @@ TAPE_WIDTH_M = 0.03
 planner keeps the humanoid inside it, but the chair may stand across it."""
 PLACEMENT_TOLERANCE_DEG = 30.0
 SETTLE_S = 0.5
+PERSPECTIVE_PITCH_RAD = math.radians(45.0)
+"""How far the report's perspective camera looks down. With the 46.8 degree vertical
+field of view its top row is 21.6 degrees below the horizon, so from the eye's height
+it meets the floor inside the renderer's 8 m far plane: no blank band at the top."""
 
 
 @dataclass(frozen=True)
@@ -225,14 +229,27 @@ class SimWorld:
     # --- pictures -----------------------------------------------------------------------
     def render_png(self, path: Path, view: Literal["top", "perspective"] = "perspective") -> None:
         """Writes a 960x720 picture of the scene (TinyRenderer) for reports."""
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        Image.fromarray(self.render_scene(view).rgb).save(path)
+
+    def render_scene(self, view: Literal["top", "perspective"] = "perspective") -> SceneFrame:
+        """A 960x720 picture of the scene with its camera, to draw on (``SceneFrame.project``).
+
+        ``top`` looks straight down from 3.4 m above the arena's middle, world +x up the
+        picture (the arena and the Panda's base fill its height); ``perspective``
+        looks at the arena from behind its far corner, 45 degrees down: steep enough that
+        the top row meets the floor within the renderer's far plane (``FAR_M``), so no
+        row is left blank.
+        """
         arena = self.config.arena
         centre = np.array([(arena.x_min + arena.x_max) / 2.0 - 0.3, 0.0, 0.25])
         if view == "top":
-            eye = centre + np.array([0.0, 0.0, 4.2])
+            eye = centre + np.array([0.0, 0.0, 3.4])
             forward = np.array([0.0, 0.0, -1.0])
             down = np.array([-1.0, 0.0, 0.0])
         elif view == "perspective":
-            eye = np.array([arena.x_max + 0.6, arena.y_min - 1.6, 1.9])
+            eye = np.array([arena.x_max + 0.2, arena.y_min - 1.2, 0.0])
+            eye[2] = centre[2] + math.tan(PERSPECTIVE_PITCH_RAD) * math.hypot(*(centre - eye)[:2])
             forward = centre - eye
             forward /= np.linalg.norm(forward)
             right = np.cross(forward, [0.0, 0.0, 1.0])
@@ -249,8 +266,7 @@ class SimWorld:
         self.clock.timers.render_s += time.perf_counter() - started
         self.clock.timers.frames += 1
         self.clock.timers.pixels += intrinsics.width * intrinsics.height
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        Image.fromarray(rendered.rgb).save(path)
+        return SceneFrame(rendered.rgb, T_world_camera, intrinsics)
 
     # --- life cycle ---------------------------------------------------------------------
     def close(self) -> None:

@@ -1,14 +1,18 @@
 """A picture of the imagined sitting: the chair, the agent at g = (p, γ) and an arrow.
 
-Drawn with matplotlib (Agg) from three views: a perspective view, the top view and the
-side view across the sitting direction. The agent is drawn in its key sitting
-configuration as a stick figure (pelvis, torso, head, thighs, shanks).
+Drawn with matplotlib (Agg) in two orthographic 2D views with metric axes: from above
+(x, y) and from the side (along the sitting direction, and z). The agent is drawn in its
+key sitting configuration as a stick figure (pelvis, torso, head, thighs, shanks). The
+one renderer of imagined poses: ``bearchair imagine --image`` and the trials report
+(``bearchair.evaluation.pictures``) both draw with :func:`render_sitting`.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 import trimesh
@@ -56,17 +60,99 @@ def agent_key_points(sitting_pose: SittingPose) -> dict[str, np.ndarray]:
     }
 
 
+SITTING_COLOUR = "tab:red"
+AGENT_COLOUR = "saddlebrown"
+CHAIR_FACE = (0.45, 0.55, 0.75, 0.30)
+ARROW_M = 0.25
+"""The sitting direction's arrow, metres (the agent's thigh and a quarter)."""
+
+
 def render_sitting(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose | None, path: str | Path, title: str = ""
 ) -> Path:
-    """Writes a PNG of the chair, and of the agent and its sitting direction when found.
+    """Writes a PNG of the chair from above and from the side, with the agent and its
+    sitting direction when there is a pose.
 
     Args:
-        chair_mesh: the chair in the frame of the pose.
-        sitting_pose: g in the mesh frame, or None (the chair alone is drawn).
+        chair_mesh: the chair in the frame of the pose (metres, z up).
+        sitting_pose: g in the mesh frame, or None (the chair alone is drawn; the side
+            view then looks along +x).
         path: the PNG to write.
         title: a line above the figure.
+
+    Raises:
+        RenderError: matplotlib is not installed (the message names the extra).
     """
+    plt = _pyplot()
+    mesh = chair_mesh
+    if len(mesh.faces) > _MAX_FACES:
+        keep = np.random.default_rng(0).choice(len(mesh.faces), _MAX_FACES, replace=False)
+        mesh = trimesh.Trimesh(mesh.vertices, mesh.faces[np.sort(keep)], process=False)
+    triangles = np.asarray(mesh.vertices, dtype=float)[np.asarray(mesh.faces, dtype=int)]
+    yaw = 0.0 if sitting_pose is None else float(sitting_pose.yaw)
+    origin = np.zeros(3) if sitting_pose is None else np.asarray(sitting_pose.position, float)
+    forward = np.array([math.cos(yaw), math.sin(yaw)])
+    segments = [] if sitting_pose is None else list(agent_key_points(sitting_pose).values())
+
+    figure, (top, side) = plt.subplots(1, 2, figsize=(11, 4.8))
+
+    def along(points: np.ndarray) -> np.ndarray:
+        return (points[..., :2] - origin[:2]) @ forward
+
+    _draw_view(top, triangles[:, :, :2], [seg[:, :2] for seg in segments])
+    side_triangles = np.stack([along(triangles), triangles[:, :, 2]], axis=-1)
+    side_segments = [np.column_stack([along(seg), seg[:, 2]]) for seg in segments]
+    _draw_view(side, side_triangles, side_segments)
+    _label_views(top, side, "the sitting direction" if sitting_pose is not None else "x")
+    if sitting_pose is not None:
+        tip = origin[:2] + ARROW_M * forward
+        _arrow(top, origin[:2], tip)
+        _arrow(side, np.array([0.0, origin[2]]), np.array([ARROW_M, origin[2]]))
+        x, y, z = origin
+        caption = f"pelvis p = ({x:.2f}, {y:.2f}, {z:.2f}) m, facing {math.degrees(yaw):.0f} deg"
+        title = f"{title}\n{caption}" if title else caption
+        _fit(
+            top, np.vstack([triangles[:, :, :2].reshape(-1, 2), tip, *[s[:, :2] for s in segments]])
+        )
+        _fit(side, np.vstack([side_triangles.reshape(-1, 2), [ARROW_M, z], *side_segments]))
+    else:
+        _fit(top, triangles[:, :, :2].reshape(-1, 2))
+        _fit(side, side_triangles.reshape(-1, 2))
+    if title:
+        figure.suptitle(title)
+    if segments:
+        _legend_below(figure)
+    else:
+        figure.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=90)
+    plt.close(figure)
+    return path
+
+
+def _label_views(top: Any, side: Any, horizontal: str) -> None:
+    side.axhline(0.0, color="0.4", lw=1)  # the floor
+    top.set_title("from above")
+    top.set_xlabel("x (m)")
+    top.set_ylabel("y (m)")
+    side.set_title(f"from the side ({horizontal} to the right)")
+    side.set_xlabel(f"along {horizontal} (m)")
+    side.set_ylabel("z (m)")
+
+
+def _legend_below(figure: Any) -> None:
+    """What the agent's and the pose's colours are, under both views."""
+    from matplotlib.lines import Line2D
+
+    agent = Line2D([], [], color=AGENT_COLOUR, lw=3, label="the agent, seated")
+    pose = Line2D([], [], color=SITTING_COLOUR, marker="o", label="pelvis p, sitting direction γ")
+    figure.legend(handles=[agent, pose], loc="lower center", ncol=2, fontsize=9, frameon=False)
+    figure.tight_layout(rect=(0.0, 0.06, 1.0, 1.0))  # room for the legend below
+
+
+def _pyplot() -> Any:
+    """``matplotlib.pyplot`` on the Agg backend, or a RenderError naming the extra."""
     try:
         import matplotlib
     except ImportError as error:
@@ -75,45 +161,40 @@ def render_sitting(
         ) from error
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    mesh = chair_mesh
-    if len(mesh.faces) > _MAX_FACES:
-        keep = np.random.default_rng(0).choice(len(mesh.faces), _MAX_FACES, replace=False)
-        mesh = trimesh.Trimesh(mesh.vertices, mesh.faces[np.sort(keep)], process=False)
-    triangles = mesh.vertices[mesh.faces]
-    figure = plt.figure(figsize=(12, 4.5))
-    views = [("perspective", 25, -60), ("top", 90, -90), ("side", 0, None)]
-    side_azim = -90.0 if sitting_pose is None else math.degrees(sitting_pose.yaw) - 90.0
-    lo, hi = chair_mesh.bounds
-    centre = 0.5 * (lo + hi)
-    half = 0.5 * float(max(hi - lo)) + 0.15
-    for index, (name, elev, azim) in enumerate(views, start=1):
-        axes = figure.add_subplot(1, 3, index, projection="3d")
-        axes.add_collection3d(
-            Poly3DCollection(triangles, facecolor=(0.6, 0.7, 0.85, 0.35), edgecolor="none")
+    return plt
+
+
+def _draw_view(axes: Any, polygons: np.ndarray, segments: list[np.ndarray]) -> None:
+    """The chair's triangles (N, 3, 2) filled, the agent's segments (2, 2) over them."""
+    from matplotlib.collections import PolyCollection
+
+    axes.add_collection(
+        PolyCollection(
+            cast(Sequence[np.ndarray], polygons), facecolors=[CHAIR_FACE], edgecolors="none"
         )
-        if sitting_pose is not None:
-            for segment in agent_key_points(sitting_pose).values():
-                axes.plot(*segment.T, color="saddlebrown", linewidth=4)
-            p = sitting_pose.position
-            axes.scatter(*p, color="black", s=30)
-            direction = 0.25 * np.array(
-                [math.cos(sitting_pose.yaw), math.sin(sitting_pose.yaw), 0.0]
-            )
-            axes.quiver(*p, *direction, color="red", linewidth=2.5, arrow_length_ratio=0.3)
-        axes.set_xlim(centre[0] - half, centre[0] + half)
-        axes.set_ylim(centre[1] - half, centre[1] + half)
-        axes.set_zlim(max(lo[2] - 0.05, centre[2] - half), centre[2] + half)
-        axes.set_box_aspect((1, 1, 1))
-        axes.view_init(elev=elev, azim=side_azim if azim is None else azim)
-        axes.set_title(name)
-        axes.set_xlabel("x (m)")
-        axes.set_ylabel("y (m)")
-    if title:
-        figure.suptitle(title)
-    figure.tight_layout()
-    path = Path(path)
-    figure.savefig(path, dpi=90)
-    plt.close(figure)
-    return path
+    )
+    for segment in segments:
+        axes.plot(
+            segment[:, 0], segment[:, 1], "-", color=AGENT_COLOUR, lw=3, solid_capstyle="round"
+        )
+
+
+def _arrow(axes: Any, start: np.ndarray, tip: np.ndarray) -> None:
+    axes.plot(*start, "o", color=SITTING_COLOUR, ms=6)
+    axes.annotate(
+        "",
+        xy=tuple(tip),
+        xytext=tuple(start),
+        annotation_clip=False,
+        arrowprops={"arrowstyle": "-|>", "color": SITTING_COLOUR, "lw": 2},
+    )
+
+
+def _fit(axes: Any, points: np.ndarray, margin_m: float = 0.08) -> None:
+    """Equal metric axes around ``points`` with a margin."""
+    low = points.min(axis=0) - margin_m
+    high = points.max(axis=0) + margin_m
+    axes.set_xlim(low[0], high[0])
+    axes.set_ylim(low[1], high[1])
+    axes.set_aspect("equal")
