@@ -44,7 +44,7 @@ class SeatBear(SkillBehaviour):
 
         def job() -> SeatingPlan:
             if steps_in:
-                here = tracked_humanoid_pose(skills, robot)
+                here = tracked_humanoid_pose(skills, robot, after_walking=True)
                 if raised:
                     skills.raise_bear(
                         robot.humanoid, chair_mesh, sitting_pose, here, cancel=self.cancel_event
@@ -59,7 +59,7 @@ class SeatBear(SkillBehaviour):
                 if not step_in.reached:
                     held = "raised" if raised else "carried"
                     raise RuntimeError(f"stepping in with the bear {held}: {step_in.reason}")
-            humanoid_pose = tracked_humanoid_pose(skills, robot)
+            humanoid_pose = tracked_humanoid_pose(skills, robot, after_walking=True)
             plan = skills.plan_seating(chair_mesh, sitting_pose, humanoid_pose, raised=raised)
             skills.execute_seating(robot.humanoid, plan, cancel=self.cancel_event)
             return plan

@@ -26,14 +26,20 @@ def locate_torso(skills: MissionSkills, robot: Robot) -> SE2Pose | None:
     return SE2Pose(pose.x, pose.y, wrap_angle(pose.theta - float(head_yaw_rad())))
 
 
-def tracked_humanoid_pose(skills: MissionSkills, robot: Robot) -> SE2Pose:
+def tracked_humanoid_pose(
+    skills: MissionSkills, robot: Robot, *, after_walking: bool = False
+) -> SE2Pose:
     """The humanoid's pose from its ArUco tag, or its own odometry when the tag is not seen.
 
     Odometry drifts while walking, but before walking it is the best estimate there is,
-    and the accessibility check only needs the start of the path.
+    and the accessibility check only needs the start of the path: so falling back to it
+    is said at info level before a walk, and as a warning ``after_walking``.
     """
     pose = locate_torso(skills, robot)
     if pose is None:
-        logger.warning("humanoid tag not seen: using the humanoid's odometry")
+        if after_walking:
+            logger.warning("humanoid tag not seen after walking: using the humanoid's odometry")
+        else:
+            logger.info("humanoid tag not seen: using the humanoid's odometry")
         return robot.humanoid.pose()
     return pose

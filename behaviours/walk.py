@@ -45,4 +45,4 @@ class WalkToChair(SkillBehaviour):
         )
         if not result.reached:
             return self.fail(f"goal not reached ({errors}): {result.reason}")
-        return self.succeed(f"at the goal ({errors}) after {result.seconds:.1f} s")
+        return self.succeed(f"at the goal ({errors}) after {result.seconds:.1f} s robot time")

@@ -48,3 +48,16 @@ def _flush_all() -> None:
         with contextlib.suppress(AttributeError, OSError, ValueError):
             stream.flush()
     ctypes.CDLL(None).fflush(None)
+
+
+def import_pybullet_quietly() -> None:
+    """Imports pybullet with its build banner (``pybullet build time: ...``, printed from
+    C to descriptor 2 at import) kept off the terminal; later imports print nothing.
+
+    Called by the console script before any command, since the first import may come
+    from anywhere (qibullet imports pybullet at its own import).
+    """
+    if "pybullet" in sys.modules:
+        return
+    with silenced_fds(2):
+        import pybullet  # noqa: F401 - imported for its side effect, once

@@ -38,13 +38,20 @@ def register(subparsers: Any) -> None:
         "trials", help="run the paper's evaluation protocol over a folder of chairs"
     )
     parser.add_argument("--chairs", type=Path, required=True, help="folder of chair meshes")
-    parser.add_argument("--protocol", choices=("paper",), default="paper")
+    parser.add_argument(
+        "--protocol", choices=("paper",), default="paper", help="which trials each chair gets"
+    )
     parser.add_argument(
         "--workers",
         type=positive_int,
         help="trials at once (default: 1 with --backend local; the cluster's CPUs with --backend ray)",
     )
-    parser.add_argument("--backend", choices=("local", "ray"), default="local")
+    parser.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="run trials in processes on this machine, or on a Ray cluster",
+    )
     parser.add_argument("--address", help="Ray cluster address (--backend ray); default: local Ray")
     parser.add_argument("--db", type=Path, help="SQLite records (default: OUT/trials.sqlite)")
     parser.add_argument(
@@ -170,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"{len(chairs)} chairs x {len(specs) // len(chairs)} trials = {len(specs)} trials "
             f"({done_before} already recorded in {db_path}); "
-            f"{len(skipped)} mesh(es) skipped; backend {args.backend}, {_workers_text(args)}",
+            f"{left_out_text(skipped)}; backend {args.backend}, {_workers_text(args)}",
             file=sys.stderr,
         )
         result = _run_campaign(args, specs, store, backend, done_before, record)
@@ -187,6 +194,26 @@ def run(args: argparse.Namespace) -> int:
     print(f"report: {args.out / 'report.md'}", file=sys.stderr)
     print(table_text)
     return 0
+
+
+def left_out_text(skipped: list[SkippedChair]) -> str:
+    """The meshes not in the campaign, counted by why: those asked to be left out
+    (``--max-chairs``), those that cannot take part (no front, not in the manifest) and
+    those skipped as unusable (``--skip-bad``); "no mesh left out" when none."""
+    counts: dict[str, int] = {}
+    for chair in skipped:
+        if chair.reason.startswith("beyond --max-chairs"):
+            why = "left out by --max-chairs"
+        elif chair.reason.startswith("unusable: "):
+            why = "skipped as unusable"
+        elif chair.reason == "not in manifest.json":
+            why = "not in manifest.json"
+        else:
+            why = "without a front"
+        counts[why] = counts.get(why, 0) + 1
+    if not counts:
+        return "no mesh left out"
+    return ", ".join(f"{count} {why}" for why, count in counts.items())
 
 
 def _check_arguments(args: argparse.Namespace) -> None:

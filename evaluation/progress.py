@@ -1,19 +1,20 @@
-"""A plain-text progress bar with an ETA, on stderr.
+"""The campaign's progress on stderr: a tqdm bar on a terminal, a line per trial elsewhere.
 
-On a terminal the line is redrawn in place (``\\r``); otherwise (a log file, CI) one
-line per finished trial. The ETA is the session's elapsed time per trial finished in
-this session, times the trials left (so trials running side by side are accounted for).
+On a terminal the bar (tqdm) counts the finished trials with successes, failures and
+the last trial in its postfix, and estimates the time left from this session's pace
+(trials found finished in the records at start count as done, not toward the pace).
+Elsewhere (a log file, CI, a captured stream) there is no bar to redraw: one line per
+finished trial says the same, with the ETA of :meth:`Progress.eta_seconds`.
 """
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 from typing import Any, TextIO
 
 from bearchair.core.userfiles import printable
-
-BAR_WIDTH = 24
 
 
 def format_duration(seconds: float) -> str:
@@ -29,12 +30,12 @@ def format_duration(seconds: float) -> str:
 
 
 class Progress:
-    """Counts finished trials and prints the bar.
+    """Counts finished trials and shows them.
 
     Args:
         total: trials in the campaign.
         already_done: trials found finished in the records (resume).
-        stream: where to print; default stderr.
+        stream: where to show them; default stderr.
         clock: monotonic time source (tests).
     """
 
@@ -53,7 +54,18 @@ class Progress:
         self._clock = clock
         self._start = clock()
         self._session_done = 0
-        self._tty = bool(getattr(self._stream, "isatty", lambda: False)())
+        self._bar: Any = None
+        if _is_terminal(self._stream):
+            from tqdm import tqdm
+
+            self._bar = tqdm(
+                total=total,
+                initial=already_done,
+                desc="trials",
+                unit="trial",
+                file=self._stream,
+                dynamic_ncols=True,
+            )
 
     def eta_seconds(self) -> float | None:
         """Seconds left at the pace of this session; None before the first trial."""
@@ -63,18 +75,18 @@ class Progress:
         return per_trial * (self.total - self.done)
 
     def line(self, last: str = "") -> str:
-        filled = round(BAR_WIDTH * self.done / self.total) if self.total else BAR_WIDTH
-        bar = "#" * filled + "-" * (BAR_WIDTH - filled)
+        """The line written per trial where there is no terminal."""
         eta = self.eta_seconds()
         eta_text = "ETA --" if eta is None else f"ETA {format_duration(eta)}"
         text = (
-            f"[{bar}] {self.done}/{self.total} ok {self.successes} failed {self.failures} "
+            f"trials {self.done}/{self.total} ok {self.successes} failed {self.failures} "
             f"| {format_duration(self._clock() - self._start)} elapsed, {eta_text}"
         )
         return f"{text} | {last}" if last else text
 
     def start(self) -> None:
-        self._print(self.line("starting"))
+        if self._bar is None:
+            self._print(self.line("starting"))
 
     def update(self, record: dict[str, Any]) -> None:
         """Counts one finished trial (a record of ``bearchair.evaluation.store``)."""
@@ -90,24 +102,32 @@ class Progress:
             + (f" at {what}" if record.get("outcome") != "success" and what else "")
             + f" ({record.get('wall_seconds') or 0:.0f} s)"
         )
-        self._print(self.line(last))
+        if self._bar is None:
+            self._print(self.line(last))
+            return
+        try:
+            self._bar.set_postfix_str(
+                f"ok {self.successes} failed {self.failures} | {last}", refresh=False
+            )
+            self._bar.update(1)
+        except (OSError, ValueError):  # nobody reads the terminal any more
+            self._bar = None
 
     def finish(self) -> None:
-        if self._tty:
-            try:
-                self._stream.write("\n")
-                self._stream.flush()
-            except (OSError, ValueError):
-                self._tty = False
+        if self._bar is not None:
+            with contextlib.suppress(OSError, ValueError):
+                self._bar.close()
 
     def _print(self, text: str) -> None:
         # A closed stderr (``2>&1 | head``) must not stop the campaign: the records and
         # the report are what matter, and they go to files.
-        try:
-            if self._tty:
-                self._stream.write("\r\033[K" + text)
-            else:
-                self._stream.write(text + "\n")
+        with contextlib.suppress(OSError, ValueError):
+            self._stream.write(text + "\n")
             self._stream.flush()
-        except (OSError, ValueError):
-            self._tty = False
+
+
+def _is_terminal(stream: TextIO) -> bool:
+    try:
+        return bool(getattr(stream, "isatty", lambda: False)())
+    except (OSError, ValueError):
+        return False

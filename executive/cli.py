@@ -29,6 +29,7 @@ from typing import Any
 
 from bearchair.core.errors import BackendUnavailable, BearchairError, InputError, one_line
 from bearchair.core.provenance import version_line
+from bearchair.core.streams import import_pybullet_quietly
 from bearchair.core.userfiles import printable
 from bearchair.executive import (
     cmd_calibrate_hand_eye,
@@ -47,6 +48,8 @@ from bearchair.executive.cmd_config import (
 from bearchair.executive.console import TolerantStream, lost_output_status
 from bearchair.executive.interrupts import exit_status, handling_signals, received, signal_name
 from bearchair.executive.operator import ask_operator
+from bearchair.executive.step_bars import showing_step_bars
+from bearchair.executive.viewer_links import add_bind_argument
 
 OWN_COMMANDS = (
     cmd_imagine,
@@ -73,15 +76,58 @@ class CommandUnavailableError(BackendUnavailable):
     """A command registered in the installed metadata cannot be loaded (a stale install)."""
 
 
+class DefaultsHelpFormatter(argparse.HelpFormatter):
+    """``--help`` says each option's default, unless its text already does or it has
+    none worth saying (None, False: a flag that is off)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if (
+            "default" in text
+            or default is None
+            or default is False
+            or default == argparse.SUPPRESS
+            or not action.option_strings
+        ):
+            return text
+        return f"{text} (default: %(default)s)"
+
+
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", DefaultsHelpFormatter)
+        super().__init__(*args, **kwargs)
+
     def error(self, message: str) -> None:  # one line, not a usage dump
         raise InputError(f"{self.prog}: {message} (see --help)")
+
+
+LOG_LEVELS = ("debug", "info", "warning", "error")
+
+
+def add_logging_arguments(parser: argparse.ArgumentParser, *, top: bool) -> None:
+    """``-v`` and ``--log-level``, accepted before or after the subcommand: each
+    subcommand has them too, with no default of its own (the top level's stands)."""
+    parser.add_argument(
+        "-v",
+        "--verbose",
+        action="store_true",
+        default=False if top else argparse.SUPPRESS,
+        help="log debug messages (the same as --log-level debug)",
+    )
+    parser.add_argument(
+        "--log-level",
+        choices=LOG_LEVELS,
+        default="warning" if top else argparse.SUPPRESS,
+        help="the least severe log messages shown on the console",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
     assert __doc__ is not None  # only python -OO strips it, and that strips asserts too
     parser = _Parser(prog="bearchair", description=__doc__.split("\n")[0])
-    parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    add_logging_arguments(parser, top=True)
     parser.add_argument(
         "--version", action="version", version=version_line(), help="print the version and exit"
     )
@@ -92,9 +138,24 @@ def build_parser() -> argparse.ArgumentParser:
         "--chair", type=Path, help="chair mesh (OBJ/PLY/STL/OFF/GLB); default: a box chair"
     )
     # Flags left off keep the configuration's values (--config; default: accessible, obeys, 0).
-    run.add_argument("--placement", choices=("accessible", "inaccessible"))
-    run.add_argument("--helper", choices=("obeys", "disobeys", "ignores"))
-    run.add_argument("--seed", type=seed_value)
+    run.add_argument(
+        "--placement",
+        choices=("accessible", "inaccessible"),
+        help="how the simulated chair is placed: its seat reachable by the NAO, or turned so "
+        "that the NAO must ask the helper to rotate it (default: accessible, or --config's)",
+    )
+    run.add_argument(
+        "--helper",
+        choices=("obeys", "disobeys", "ignores"),
+        help="how the simulated helper answers a request to rotate the chair "
+        "(default: obeys, or --config's)",
+    )
+    run.add_argument(
+        "--seed",
+        type=seed_value,
+        help="seeds the world and the skills: the same seed gives the same run "
+        "(default: 0, or --config's)",
+    )
     run.add_argument("--gui", action="store_true", help="watch in the pybullet GUI")
     run.add_argument("--out", type=Path, help="run record directory (default: runs/<time>-seed<N>)")
     run.add_argument(
@@ -103,7 +164,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="print instructions instead of speaking (with --robots: the NAO stays silent)",
     )
     run.add_argument(
-        "--timeout", type=positive_seconds, help="stop after this many seconds (default: 900)"
+        "--timeout",
+        type=positive_seconds,
+        help="stop the mission as failed after this many wall seconds "
+        "(default: 900, or --config's)",
     )
     run.add_argument(
         "--overwrite", action="store_true", help="replace the run record already in --out"
@@ -144,7 +208,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--format",
         choices=("ascii", "unicode", "dot", "svg", "png", "btcpp"),
         default="unicode",
-        help="btcpp: BehaviorTree.CPP v4 XML for Groot2 (docs/btcpp-groot2.md)",
+        help="text on the console (ascii, unicode) or a file (dot, svg, png; btcpp: "
+        "BehaviorTree.CPP v4 XML for Groot2, docs/btcpp-groot2.md)",
     )
     tree.add_argument("--blackboard", action="store_true", help="show blackboard keys and users")
     tree.add_argument(
@@ -158,7 +223,9 @@ def build_parser() -> argparse.ArgumentParser:
     inspect = subparsers.add_parser("inspect", help="replay a recorded run")
     # Not named run_dir: that is where an internal error's traceback would go, and
     # inspect reads a record, it never writes one.
-    inspect.add_argument("record_dir", metavar="run_dir", type=Path)
+    inspect.add_argument(
+        "record_dir", metavar="run_dir", type=Path, help="a run folder written by 'bearchair run'"
+    )
     inspect.add_argument("--tick", type=int, help="show the tree at this tick (default: the last)")
     inspect.add_argument("--blackboard", action="store_true", help="also show the blackboard")
     inspect.add_argument("--timeline", action="store_true", help="show every status change")
@@ -171,6 +238,8 @@ def build_parser() -> argparse.ArgumentParser:
         module.register(subparsers)
     for register in registered_commands():
         register(subparsers)
+    for subparser in subparsers.choices.values():
+        add_logging_arguments(subparser, top=False)
     return parser
 
 
@@ -224,7 +293,7 @@ def _run(args: argparse.Namespace) -> int:
         groot2_port=args.groot2,
         groot2_bind=args.groot2_bind or "127.0.0.1",
     )
-    with _log_to(out_dir / LOG_FILE):
+    with _log_to(out_dir / LOG_FILE), showing_step_bars():
         if mission.robots.used:
             summary = run_on_robots(
                 config,
@@ -282,6 +351,7 @@ def add_recording_arguments(
         help="stream the run to a Rerun viewer as it happens: no value starts the native "
         "viewer, 'web' serves the web viewer, or a viewer's URL (rerun+http://HOST:9876/proxy)",
     )
+    add_bind_argument(parser, configured=True)
 
 
 def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
@@ -511,10 +581,11 @@ def _exit_now(status: int) -> None:
 def _main(argv: list[str] | None) -> int:
     args: argparse.Namespace | None = None
     try:
+        import_pybullet_quietly()
         parser = build_parser()
         args = parser.parse_args(argv)
         logging.basicConfig(
-            level=logging.DEBUG if args.verbose else logging.WARNING,
+            level=logging.DEBUG if args.verbose else getattr(logging, args.log_level.upper()),
             format="%(levelname)s %(name)s: %(message)s",
         )
         return args.func(args)

@@ -44,7 +44,13 @@ def register(subparsers: Any) -> None:
     parser = subparsers.add_parser(
         "check-hardware", help="check the robots of a cell file (moves nothing without --move)"
     )
-    parser.add_argument("--robots", type=Path, required=True, metavar="CELL_JSON")
+    parser.add_argument(
+        "--robots",
+        type=Path,
+        required=True,
+        metavar="CELL_JSON",
+        help="the cell file describing the NAO, the Panda and the camera to check",
+    )
     parser.add_argument(
         "--move", action="store_true", help="also move the arm to its overview view, slowly"
     )

@@ -32,6 +32,7 @@ RUN_FLAGS: dict[str, str] = {
     "snapshots": "outputs.snapshots",
     "record": "outputs.record",
     "live": "outputs.live",
+    "bind": "outputs.bind",
     "robots": "robots.cell_file",
     "tree": "tree.factory",
 }

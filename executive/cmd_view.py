@@ -2,7 +2,8 @@
 
 The native viewer where there is a display; ``--web`` serves Rerun's web viewer on a
 port instead (for a robot's computer reached over ssh, or a machine without a
-screen: open the printed address in a browser). Both run Rerun's own viewer, shipped
+screen: open the printed link in a browser). The web viewer listens on 127.0.0.1
+unless ``--bind`` says otherwise (:mod:`bearchair.executive.viewer_links`). Both run Rerun's own viewer, shipped
 with rerun-sdk (the ``[viewer]`` extra), until it is closed or Ctrl-C.
 """
 
@@ -10,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import socket
 import subprocess
 import sys
 from pathlib import Path
@@ -22,6 +22,15 @@ from bearchair.executive.recording import (
     RECORDING_FILE,
     has_display,
     rerun_available,
+)
+from bearchair.executive.viewer_links import (
+    LOOPBACK,
+    add_bind_argument,
+    free_port,
+    quiet_rerun_environment,
+    rerun_binary,
+    ssh_tunnel_hint,
+    web_viewer_link,
 )
 
 
@@ -43,8 +52,9 @@ def register(subparsers: Any) -> None:
         "--port",
         type=int,
         default=DEFAULT_WEB_PORT,
-        help=f"the web viewer's HTTP port with --web (default {DEFAULT_WEB_PORT})",
+        help="the web viewer's HTTP port with --web (default: %(default)s)",
     )
+    add_bind_argument(parser)
     parser.set_defaults(func=run)
 
 
@@ -64,35 +74,25 @@ def recording_path(run_dir: Path) -> Path:
     return path
 
 
-def rerun_binary() -> str:
-    """The viewer program rerun-sdk ships (what ``python -m rerun`` starts)."""
-    if "RERUN_CLI_PATH" in os.environ:
-        return os.environ["RERUN_CLI_PATH"]
-    import rerun_cli
-
-    folder = Path(rerun_cli.__file__).parent
-    bundled = folder / "Rerun.app" / "Contents" / "MacOS" / "Rerun"
-    if sys.platform == "darwin" and bundled.exists():
-        return str(bundled)
-    return str(folder / ("rerun.exe" if sys.platform.startswith("win") else "rerun"))
-
-
-def viewer_command(path: Path, *, web: bool, port: int) -> list[str]:
+def viewer_command(path: Path, *, web: bool, port: int, bind: str = LOOPBACK) -> list[str]:
     """The command that opens ``path`` in Rerun's viewer.
 
     The web viewer's page is served on ``port``; the data behind it on a free port, so
-    that a viewer already running on Rerun's default port is left alone.
+    that a viewer already running on Rerun's default port is left alone; both on
+    ``bind`` (the native viewer's own server too). The path goes absolute, so that a file named like an option
+    (``--version.rrd``) is read as a file.
     """
-    command = [rerun_binary()]
+    # The native viewer hosts a gRPC server too: it gets the same bind.
+    command = [rerun_binary(), "--bind", bind]
     if web:
-        command += ["--web-viewer", "--web-viewer-port", str(port), "--port", str(_free_port())]
-    return [*command, str(path)]
+        command += ["--web-viewer", "--web-viewer-port", str(port)]
+        command += ["--port", str(free_port(bind))]
+    return [*command, str(path.absolute())]
 
 
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])
+def grpc_port_of(command: list[str]) -> int | None:
+    """The ``--port`` (the data's gRPC port) of a viewer command, if it has one."""
+    return int(command[command.index("--port") + 1]) if "--port" in command else None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -108,13 +108,17 @@ def run(args: argparse.Namespace) -> int:
             "bearchair view: no display for the native viewer; use --web and open the "
             "printed address in a browser"
         )
+    command = viewer_command(path, web=args.web, port=args.port, bind=args.bind)
     if args.web:
+        grpc_port = grpc_port_of(command)
+        assert grpc_port is not None  # a web command always names its data port
         print(
-            f"web viewer: http://127.0.0.1:{args.port} (Ctrl-C to stop)",
+            f"web viewer: {web_viewer_link(args.bind, args.port, grpc_port)} (Ctrl-C to stop)",
             file=sys.stderr,
-            flush=True,
         )
-    command = viewer_command(path, web=args.web, port=args.port)
+        hint = ssh_tunnel_hint(args.bind, args.port, grpc_port)
+        if hint:
+            print(hint, file=sys.stderr, flush=True)
     if not Path(command[0]).is_file():
         raise InputError(
             f"bearchair view: rerun-sdk's viewer is missing ({command[0]}): reinstall it"
@@ -123,8 +127,8 @@ def run(args: argparse.Namespace) -> int:
         # This process becomes the viewer: Ctrl-C and SIGTERM reach it, nothing is orphaned.
         sys.stdout.flush()
         sys.stderr.flush()
-        os.execv(command[0], command)
+        os.execve(command[0], command, quiet_rerun_environment())
     try:
-        return subprocess.run(command).returncode
+        return subprocess.run(command, env=quiet_rerun_environment()).returncode
     except KeyboardInterrupt:
         return 0

@@ -38,6 +38,7 @@ class RunConfig:
         snapshots: in simulation, save a picture whenever a stage ends.
         record: write a Rerun recording, ``out_dir/mission.rrd`` (``bearchair.executive.recording``).
         live: stream to a Rerun viewer while running: ``"spawn"``, ``"web"`` or a URL.
+        bind: the address a live viewer listens on (loopback unless opened, ``--bind``).
         imagination_workers: processes the imagination's drops run in (1: the run's own;
             the result is the same for any number).
         tree_options: how the tree is composed (assistance, rotations, re-scan).
@@ -67,6 +68,7 @@ class RunConfig:
     snapshots: bool = False
     record: bool = False
     live: str | None = None
+    bind: str = "127.0.0.1"
     imagination_workers: int = DEFAULT_WORKERS
     tree_options: TreeOptions = field(default_factory=TreeOptions)
     tree_spec: str = "mission"

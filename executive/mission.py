@@ -35,8 +35,16 @@ if TYPE_CHECKING:
 logger = logging.getLogger(__name__)
 
 
+def stage_seconds_text(wall_s: float, robot_s: float | None) -> str:
+    """``3.2 s wall, 8.9 s robot``: the two clocks a stage is timed on, each named (the
+    robot's runs slower than the wall in simulation, and faster when rendering waits)."""
+    text = f"{wall_s:.1f} s wall"
+    return text if robot_s is None else f"{text}, {robot_s:.1f} s robot"
+
+
 class StageProgress:
-    """Prints a line whenever a stage starts or ends (long stages are the norm here)."""
+    """Prints a line whenever a stage starts or ends (long stages are the norm here),
+    stamped with the run's wall seconds; an ended stage says its wall and robot seconds."""
 
     def __init__(self, stream: TextIO | None = None) -> None:
         self._stream = stream
@@ -50,10 +58,11 @@ class StageProgress:
             if stage.status == "RUNNING":
                 line = f"[{runner.elapsed():7.1f} s] {stage.name} ..."
             else:
-                line = (
-                    f"[{runner.elapsed():7.1f} s] {stage.name}: {stage.status} "
-                    f"({stage.seconds:.1f} s) {printable(stage.feedback, 400)}"
+                took = stage_seconds_text(
+                    stage.seconds,
+                    None if stage.robot_started_s is None else stage.robot_seconds,
                 )
+                line = f"[{runner.elapsed():7.1f} s] {stage.name}: {stage.status} ({took}) {printable(stage.feedback, 400)}"
             try:
                 print(line, file=self._stream or sys.stderr, flush=True)
             except (OSError, ValueError):  # nobody reads stderr any more: the run goes on
@@ -382,11 +391,15 @@ def _run_tree(
     try:
         if skills is None:
             skills = configured_skills(config)
-        recording = open_recording(root, config.out_dir, record=config.record, live=config.live)
+        recording = open_recording(
+            root, config.out_dir, record=config.record, live=config.live, bind=config.bind
+        )
         if recording is not None:
             skills = recording.watch_skills(skills, robot.clock)
             if recording.viewer_url:
                 print(f"live viewer: {recording.viewer_url}", file=sys.stderr, flush=True)
+            if recording.viewer_hint:
+                print(recording.viewer_hint, file=sys.stderr, flush=True)
         groot2 = open_groot2(root, config)
         runner = MissionRunner(
             root,
@@ -509,11 +522,14 @@ def format_summary(summary: dict[str, Any]) -> str:
     lines = [
         f"chair {summary['chair']} | placement {summary['placement']} | helper {summary['helper']} "
         f"| seed {summary['seed']}",
-        f"{'stage':<20} {'status':<8} {'seconds':>8}  outputs",
+        f"{'stage':<20} {'status':<8} {'wall s':>7} {'robot s':>7}  outputs",
     ]
     for stage in summary["stages"]:
+        robot_s = stage.get("robot_seconds")
+        robot_text = "" if robot_s is None else f"{robot_s:.2f}"
         lines.append(
-            f"{stage['name']:<20} {stage['status']:<8} {stage['seconds']:>8.2f}  {stage['message']}"
+            f"{stage['name']:<20} {stage['status']:<8} {stage['seconds']:>7.2f} "
+            f"{robot_text:>7}  {stage['message']}"
         )
     for sentence in summary["instructions"]:
         lines.append(f'said: "{sentence}"')
@@ -525,7 +541,7 @@ def format_summary(summary: dict[str, Any]) -> str:
         )
     outcome = summary["outcome"].upper()
     if summary["outcome"] == "success":
-        lines.append(f"outcome: {outcome} in {summary['wall_seconds']:.1f} s")
+        lines.append(f"outcome: {outcome} in {summary['wall_seconds']:.1f} s wall")
     else:
         where = summary["failed_stage"] or "the start"
         lines.append(f"outcome: {outcome} at {where}: {summary['reason']}")

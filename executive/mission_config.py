@@ -27,6 +27,7 @@ line naming the file and the field; ``bearchair config --schema`` prints the JSO
 
 from __future__ import annotations
 
+import argparse
 import difflib
 import math
 import tomllib
@@ -41,6 +42,7 @@ from bearchair.core.se2 import SE2Pose
 from bearchair.core.userfiles import MAX_JSON_DEPTH, nesting_depth, printable, read_user_text
 from bearchair.executive.cli_types import MAX_SEED
 from bearchair.executive.config import RunConfig
+from bearchair.executive.viewer_links import LOOPBACK, bind_address
 from bearchair.skills.imagination import DEFAULT_WORKERS
 from bearchair.skills.parameters import MIN_SCAN_VIEWS, SCAN_VIEW_COUNT, SkillParameters
 from bearchair.trees.options import TreeOptions
@@ -246,7 +248,20 @@ class OutputsSection(_Section):
     live: str | None = Field(
         default=None, description="stream to a Rerun viewer: spawn, web or a URL"
     )
+    bind: str = Field(
+        default=LOOPBACK,
+        description="the IP address a live viewer listens on: 127.0.0.1 this machine only, "
+        "0.0.0.0 every network",
+    )
     snapshots: bool = Field(default=False, description="a picture whenever a stage ends")
+
+    @model_validator(mode="after")
+    def _bind_is_an_address(self) -> OutputsSection:
+        try:
+            bind_address(self.bind)
+        except argparse.ArgumentTypeError as error:
+            raise ValueError(f"bind: {error}") from None
+        return self
 
 
 class MissionConfig(_Section):
@@ -284,6 +299,7 @@ class MissionConfig(_Section):
             snapshots=self.outputs.snapshots,
             record=self.outputs.record,
             live=self.outputs.live,
+            bind=self.outputs.bind,
             imagination_workers=self.imagination.workers,
             tree_options=self.tree.options(),
             tree_spec=self.tree.factory,

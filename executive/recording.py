@@ -11,8 +11,13 @@ tree's tick count) and ``robot`` (seconds on the robot's clock):
   ``tree/log`` has a line per status change;
 * ``blackboard/<key>``: each blackboard value as JSON text whenever it changes;
 * the scene: the skills' typed results drawn by :mod:`bearchair.executive.recording_scene`
-  when they appear on the blackboard, and two skill calls the blackboard does not
-  keep (the tag's detections, the rotations asked for), seen by :class:`SkillCalls`.
+  when they appear on the blackboard, and the skill calls the blackboard does not
+  keep (the tag's detections, the rotations asked for, the NAO's motions), seen by
+  :class:`bearchair.executive.skill_calls.SkillCalls`;
+* the robots from their URDFs (:mod:`bearchair.executive.recording_robots`), in the
+  layout of :mod:`bearchair.executive.recording_layout`.
+
+A recording is read back with :func:`bearchair.executive.recording_read.read_entity`.
 
 Skills hold no viewer code. Rerun (``rerun-sdk``) is the optional extra ``[viewer]``;
 without it this module imports, and asking for a recording raises
@@ -22,18 +27,19 @@ without it this module imports, and asking for a recording raises
 from __future__ import annotations
 
 import collections
+import contextlib
 import importlib.util
 import json
 import logging
 import math
 import os
+import subprocess
 import sys
 import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
-from urllib.parse import quote
 
 import py_trees
 from py_trees.common import Status
@@ -42,10 +48,26 @@ from bearchair.behaviours import keys
 from bearchair.core.errors import BackendUnavailable
 from bearchair.executive.jsonable import to_jsonable
 from bearchair.executive.record import tree_nodes
+from bearchair.executive.skill_calls import SkillCalls
+from bearchair.executive.tree_labels import node_label
+from bearchair.executive.viewer_links import (
+    LOOPBACK,
+    grpc_url,
+    is_wildcard,
+    reachable_host,
+    serve_web_page,
+    spawn_native_viewer,
+    ssh_tunnel_hint,
+    web_viewer_link,
+)
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from bearchair.core.se2 import SE2Pose
+    from bearchair.executive.recording_robots import JointSampler
     from bearchair.executive.runner import MissionRunner
+    from bearchair.skills.results import SeatingPlan
     from bearchair.skills.toolbox import MissionSkills
 logger = logging.getLogger(__name__)
 
@@ -69,8 +91,6 @@ FEEDBACK_PERIOD_S = 1.0
 """Wall seconds between two logs of the tree when only feedback changed (a running
 leaf's message counts its seconds every tick); status changes are logged at their tick.
 Each log takes about 2 ms of the tick thread, more when the skills' threads hold the GIL."""
-FEEDBACK_LABEL_CHARS = 48
-"""Feedback shown in a node's label is cut here; the full text is in ``tree/log``."""
 
 
 SCENE_LOGGERS: dict[str, str] = {
@@ -113,46 +133,6 @@ def _rerun() -> Any:
     return rerun
 
 
-class SkillCalls:
-    """The mission's skills, passed through, remembering what some calls returned.
-
-    The blackboard keeps results, not every call: the walk looks for the humanoid's
-    tag many times and keeps only how it ended, and only the sentences of the
-    instructions are kept. This proxy queues ``(skill, result, robot seconds)`` for the
-    watched skills; the recording logs them at the next tick, from the tick's thread.
-
-    Args:
-        skills: the :class:`bearchair.skills.toolbox.MissionSkills` the tree uses.
-        clock: the robot's clock (stamps each call).
-    """
-
-    WATCHED = ("locate_humanoid", "compose_instruction")
-
-    def __init__(self, skills: Any, clock: Any) -> None:
-        self._skills = skills
-        self._clock = clock
-        self._events: collections.deque[tuple[str, Any, float]] = collections.deque()
-
-    def __getattr__(self, name: str) -> Any:
-        attribute = getattr(self._skills, name)
-        if name not in self.WATCHED or not callable(attribute):
-            return attribute
-
-        def watched(*args: Any, **kwargs: Any) -> Any:
-            result = attribute(*args, **kwargs)
-            self._events.append((name, result, self._clock.now()))
-            return result
-
-        return watched
-
-    def drain(self) -> list[tuple[str, Any, float]]:
-        """The calls returned since the last drain, oldest first (thread-safe)."""
-        events = []
-        while self._events:
-            events.append(self._events.popleft())
-        return events
-
-
 class MissionRecording:
     """Logs a mission to Rerun from the tick loop (a post-tick hook of MissionRunner).
 
@@ -165,6 +145,8 @@ class MissionRecording:
             operator's laptop while the robots run).
         web_port: the web viewer's HTTP port with ``live="web"``.
         grpc_port: the port a spawned viewer or the web viewer's server listens on.
+        bind: the address the web viewer's two servers (or a spawned viewer's) listen
+            on; loopback unless the user opened it (``--bind``).
 
     Raises:
         RecordingUnavailable: rerun-sdk is missing, or a native viewer was asked for
@@ -179,14 +161,20 @@ class MissionRecording:
         live: str | None = None,
         web_port: int = DEFAULT_WEB_PORT,
         grpc_port: int = DEFAULT_VIEWER_PORT,
+        bind: str = LOOPBACK,
     ) -> None:
         rr = _rerun()
         from bearchair.executive import recording_scene
+        from bearchair.executive.recording_robots import MissionRobots
 
         self._rr = rr
         self._scene = recording_scene
         self.path = None if path is None else Path(path)
         self.viewer_url: str | None = None
+        self.viewer_hint: str | None = None
+        """How to reach a loopback-bound web viewer from another machine (``ssh -L``)."""
+        self._bind = bind
+        self._page_server: subprocess.Popen[bytes] | None = None
         self.seconds = 0.0
         """Wall time spent in the hook so far (what recording costs the run)."""
         self.cpu_seconds = 0.0
@@ -213,6 +201,8 @@ class MissionRecording:
         self._last_pose: SE2Pose | None = None
         self._warned: set[str] = set()
         self._lock = threading.Lock()
+        self._robots = MissionRobots()
+        self._arm_sampler: JointSampler | None = None
         self._log_static()
 
     # -- set-up ---------------------------------------------------------------------
@@ -224,26 +214,41 @@ class MissionRecording:
                 raise RecordingUnavailable(
                     "no display for a native viewer: use --live web (a web viewer on a port)"
                 )
-            self._stream.spawn(port=grpc_port, connect=False)
-            self.viewer_url = f"rerun+http://127.0.0.1:{grpc_port}/proxy"
+            spawn_native_viewer(self._bind, grpc_port)
+            self.viewer_url = grpc_url(
+                LOOPBACK if is_wildcard(self._bind) else self._bind, grpc_port
+            )
             return rr.GrpcSink(self.viewer_url)
         if live == "web":
-            server = rr.GrpcServerSink(port=grpc_port)
-            rr.serve_web_viewer(web_port=web_port, open_browser=False, connect_to=server.uri)
-            self.viewer_url = f"http://127.0.0.1:{web_port}?url={quote(server.uri, safe='')}"
+            # The data in this process, on `bind`; the page from Rerun's program, since
+            # rr.serve_web_viewer listens on every interface (viewer_links).
+            server = rr.GrpcServerSink(bind_ip=self._bind, port=grpc_port)
+            self._page_server = serve_web_page(
+                self._bind, web_port, grpc_url(reachable_host(self._bind), grpc_port)
+            )
+            self.viewer_url = web_viewer_link(self._bind, web_port, grpc_port)
+            self.viewer_hint = ssh_tunnel_hint(self._bind, web_port, grpc_port)
             return server
         self.viewer_url = live
         return rr.GrpcSink(live)
 
     def _log_static(self) -> None:
+        from bearchair.executive.recording_layout import mission_blueprint, tree_layout
+
         rr = self._rr
+        self._stream.send_blueprint(mission_blueprint())
         self._scene.log_world_frame(self._stream)
+        # The robots as they stand before the first tick; where the arena puts the arm's
+        # base is known at the first tick (keys.ARENA).
+        self._stream.set_time("tick", sequence=0)
+        self._stream.set_time("robot", duration=0.0)
+        self._guarded("robots", self._robots.log_static, self._stream, (0.0, 0.0))
         paths = [path for path, _, _ in self._nodes]
         edges = [(path.rsplit("/", 1)[0], path) for path in paths if "/" in path]
         self._stream.log(
             "tree",
             rr.GraphEdges(edges, graph_type=rr.GraphType.Directed),
-            rr.GraphNodes(paths, positions=_tree_layout(self._nodes)),
+            rr.GraphNodes(paths, positions=tree_layout(self._nodes)),
             static=True,
         )
 
@@ -261,12 +266,15 @@ class MissionRecording:
             events = self._skill_calls.drain() if self._skill_calls is not None else []
             tree = self._tree_to_log()
             changed = self._changed_values()
+            arm = self._arm_states(runner)
             # Most ticks change nothing: then nothing reaches Rerun, not even the time
             # (each call into it hands the GIL to the skills' threads and waits for it back).
-            if events or tree is not None or changed:
+            if events or tree is not None or changed or arm:
                 self._stream.set_time("tick", sequence=int(runner.tree.count))
-                # The skill calls returned since the last tick, each at its own time.
+                # The skill calls returned since the last tick, each at its own time;
+                # the arm's states as well.
                 self._guarded("skill calls", self._log_skill_calls, events)
+                self._guarded("arm joints", self._log_arm_states, arm)
                 self._stream.set_time("robot", duration=_robot_seconds(runner))
                 if tree is not None:
                     self._guarded("tree", self._log_tree, *tree)
@@ -274,6 +282,19 @@ class MissionRecording:
                     self._guarded(key, self._log_value, key, value, previous)
         self.seconds += time.perf_counter() - started
         self.cpu_seconds += time.thread_time() - cpu_started
+
+    def _arm_states(self, runner: MissionRunner) -> list[tuple[float, np.ndarray]]:
+        """The arm's joint states read since the last tick (its sampler starts at the first)."""
+        if self._arm_sampler is None:
+            from bearchair.executive.recording_robots import JointSampler
+
+            self._arm_sampler = JointSampler(runner.robot.arm.joint_positions, runner.robot.clock)
+        return self._arm_sampler.drain()
+
+    def _log_arm_states(self, states: list[tuple[float, np.ndarray]]) -> None:
+        for robot_s, joints in states:
+            self._stream.set_time("robot", duration=robot_s)
+            self._robots.log_arm(self._stream, joints)
 
     def cost(self) -> dict[str, Any]:
         """What the recording cost the run so far: the hook's wall seconds, in all and
@@ -300,6 +321,8 @@ class MissionRecording:
     def close(self) -> None:
         """Logs the tree's last feedback, flushes and closes the file (the viewer keeps
         what it received)."""
+        if self._arm_sampler is not None:
+            self._arm_sampler.stop()
         with self._lock:
             tree = self._tree_to_log(force=True)
             if tree is not None:
@@ -309,6 +332,11 @@ class MissionRecording:
             self._stream.disconnect()
         except Exception as error:  # never lose the run record over the recording
             logger.warning("could not close the recording: %s", error)
+        if self._page_server is not None:
+            self._page_server.terminate()
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self._page_server.wait(timeout=5.0)
+            self._page_server = None
 
     # -- what is logged ---------------------------------------------------------------
 
@@ -357,7 +385,7 @@ class MissionRecording:
             rr.GraphNodes(
                 [path for path, _, _ in self._nodes],
                 labels=[
-                    _label(node.name, feedback)
+                    node_label(node.name, feedback)
                     for (_, node, _), (_, feedback) in zip(self._nodes, state, strict=True)
                 ],
                 colors=[STATUS_COLOURS[status] for status, _ in state],
@@ -392,6 +420,8 @@ class MissionRecording:
                 self._scene.log_rotation(self._stream, rotation)
         elif key in SCENE_LOGGERS:
             getattr(self._scene, SCENE_LOGGERS[key])(self._stream, value)
+        if key == keys.ARENA:
+            self._robots.log_arm_base(self._stream, value.arm_base_xy)
 
     def _log_skill_calls(self, events: list[tuple[str, Any, float]]) -> None:
         for name, result, robot_s in events:
@@ -402,6 +432,19 @@ class MissionRecording:
                     self._log_humanoid_pose(result)
             elif name == "compose_instruction":
                 self._scene.log_instruction(self._stream, result)
+            elif name in SkillCalls.MOTIONS:
+                self._log_motion(name, *result)
+
+    def _log_motion(self, name: str, plan: SeatingPlan | None, started_s: float) -> None:
+        """The NAO's joints as a seating or retract motion played them, knot by knot."""
+        if plan is None:
+            return
+        if name == "execute_seating":
+            times, positions = plan.times_s, plan.positions_rad
+        else:
+            times, positions = plan.retract_times_s, plan.retract_positions_rad
+        if len(times):
+            self._robots.log_nao_motion(self._stream, plan.joint_names, times, positions, started_s)
 
     def _log_humanoid_pose(self, pose: SE2Pose) -> None:
         """Moves the NAO to its tracked pose; its path gets a point every 2 cm."""
@@ -420,47 +463,20 @@ class MissionRecording:
 
 
 def open_recording(
-    root: py_trees.behaviour.Behaviour, out_dir: Path, *, record: bool, live: str | None
+    root: py_trees.behaviour.Behaviour,
+    out_dir: Path,
+    *,
+    record: bool,
+    live: str | None,
+    bind: str = LOOPBACK,
 ) -> MissionRecording | None:
-    """The run's recording as asked for (``--record``, ``--live``), or None for neither."""
+    """The run's recording as asked for (``--record``, ``--live``, ``--bind``), or None
+    for neither."""
     if not record and not live:
         return None
-    return MissionRecording(root, path=out_dir / RECORDING_FILE if record else None, live=live)
-
-
-def read_entity(path: Path, entity_path: str) -> list[dict[str, Any]]:
-    """The rows logged to one entity of a recording, in tick order (for tests and tools).
-
-    Each row maps column names (``tick``, ``robot`` in seconds, ``GraphNodes:labels``,
-    ``status``, ...) to Python values; static rows have no ``tick``. The wall-clock
-    ``log_time`` column is left out.
-    """
-    from rerun.chunk import RrdReader
-
-    wanted = "/" + entity_path.strip("/")
-    rows: list[dict[str, Any]] = []
-    for chunk in RrdReader(str(path)).store().stream().to_chunks():
-        if chunk.entity_path != wanted:
-            continue
-        batch = chunk.to_record_batch()
-        names = [n for n in batch.schema.names if n not in ("log_time", "rerun.controls.RowId")]
-        columns = {name: _python_values(batch.column(name)) for name in names}
-        rows.extend(
-            {name: values[i] for name, values in columns.items()} for i in range(batch.num_rows)
-        )
-    rows.sort(key=lambda row: (row.get("tick") is not None, row.get("tick") or 0))
-    return rows
-
-
-def _python_values(column: Any) -> list[Any]:
-    """A column's values; durations (the ``robot`` timeline) as float seconds, since
-    nanoseconds do not fit Python's timedelta."""
-    import pyarrow as pa
-
-    if pa.types.is_duration(column.type):
-        nanoseconds = column.cast(pa.duration("ns")).cast(pa.int64()).to_pylist()
-        return [None if value is None else value / 1e9 for value in nanoseconds]
-    return column.to_pylist()
+    return MissionRecording(
+        root, path=out_dir / RECORDING_FILE if record else None, live=live, bind=bind
+    )
 
 
 def _robot_seconds(runner: MissionRunner) -> float:
@@ -470,44 +486,7 @@ def _robot_seconds(runner: MissionRunner) -> float:
         return runner.elapsed()
 
 
-def _label(name: str, feedback: str) -> str:
-    if not feedback:
-        return name
-    cut = (
-        feedback
-        if len(feedback) <= FEEDBACK_LABEL_CHARS
-        else feedback[: FEEDBACK_LABEL_CHARS - 1] + "…"
-    )
-    return f"{name}\n{cut}"
-
-
 def _text_level(rr: Any, status: str) -> Any:
     if status == Status.FAILURE.value:
         return rr.TextLogLevel.WARN
     return rr.TextLogLevel.INFO
-
-
-def _tree_layout(
-    nodes: list[tuple[str, py_trees.behaviour.Behaviour, int]],
-) -> list[tuple[float, float]]:
-    """A top-down tree layout: leaves side by side, parents centred over their children
-    (graph units; rows 120 apart, leaves 220 apart so that labels fit)."""
-    x_of: dict[str, float] = {}
-    children: dict[str, list[str]] = collections.defaultdict(list)
-    for path, _, _ in nodes:
-        if "/" in path:
-            children[path.rsplit("/", 1)[0]].append(path)
-    next_leaf = 0.0
-
-    def place(path: str) -> float:
-        nonlocal next_leaf
-        if not children[path]:
-            x_of[path] = next_leaf
-            next_leaf += 220.0
-        else:
-            xs = [place(child) for child in children[path]]
-            x_of[path] = (xs[0] + xs[-1]) / 2.0
-        return x_of[path]
-
-    place(nodes[0][0])
-    return [(x_of[path], 120.0 * depth) for path, _, depth in nodes]

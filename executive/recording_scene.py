@@ -18,7 +18,9 @@ world/imagination/drops/<i>           each drop's final agent links as boxes (gr
                                       correct sitting by the SAM, red: not)
 world/sitting_pose                    g = (p, γ) as an arrow from p along γ
 world/accessibility/se2_goal, path    the SE(2) goal and the planned path
-world/nao                             the humanoid's tracked pose (its body as a box)
+world/nao                             the humanoid's tracked pose (the NAO frame, on the floor)
+world/<robot>, transforms/<robot>     the Panda and the NAO from their URDFs, and their
+                                      joint states (:mod:`...recording_robots`)
 world/walk/path, tag_detections       the humanoid's tracked path and the tag's detections
 world/bear                            the bear when judged
 assistance/asked, assistance/measured the rotations asked for and measured by ICP
@@ -58,25 +60,13 @@ ORANGE = (245, 130, 48)
 GREY = (150, 150, 150)
 ARROW_LENGTH_M = 0.3
 """Length of the arrows drawn for headings (metres): about a chair's depth."""
-NAO_BODY_HALF_SIZES_M = (0.07, 0.14, 0.287)
-"""The NAO as a box: 0.574 m tall, about 0.28 m wide across the arms, 0.14 m deep."""
 BEAR_HALF_SIZES_M = (0.06, 0.08, 0.12)
 """The teddy bear as a box, in its own frame (x facing, z up the torso)."""
 
 
 def log_world_frame(stream: rr.RecordingStream) -> None:
-    """The world is z up; the NAO's body box hangs under its pose."""
+    """The world is z up (the robots' models: :mod:`bearchair.executive.recording_robots`)."""
     stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-    stream.log(
-        "world/nao/body",
-        rr.Boxes3D(
-            centers=[(0.0, 0.0, NAO_BODY_HALF_SIZES_M[2])],
-            half_sizes=[NAO_BODY_HALF_SIZES_M],
-            colors=[BLUE],
-            labels=["NAO"],
-        ),
-        static=True,
-    )
 
 
 def log_arena(stream: rr.RecordingStream, arena: Arena) -> None:

@@ -31,20 +31,32 @@ logger = logging.getLogger(__name__)
 
 @dataclass
 class StageTiming:
-    """When one of the root's children started and ended (seconds since the run began)."""
+    """When one of the root's children started and ended: wall seconds since the run
+    began, and seconds on the robot's clock (simulated time in simulation)."""
 
     name: str
     status: str = Status.INVALID.value
     started_s: float | None = None
     ended_s: float | None = None
     feedback: str = ""
+    robot_started_s: float | None = None
+    robot_ended_s: float | None = None
 
     @property
     def seconds(self) -> float:
-        if self.started_s is None:
-            return 0.0
-        end = self.ended_s if self.ended_s is not None else self.started_s
-        return end - self.started_s
+        """The stage's wall seconds."""
+        return _span(self.started_s, self.ended_s)
+
+    @property
+    def robot_seconds(self) -> float:
+        """The stage's seconds on the robot's clock."""
+        return _span(self.robot_started_s, self.robot_ended_s)
+
+
+def _span(started_s: float | None, ended_s: float | None) -> float:
+    if started_s is None:
+        return 0.0
+    return (ended_s if ended_s is not None else started_s) - started_s
 
 
 @dataclass
@@ -107,7 +119,7 @@ class MissionRunner:
         )
         self.tree = py_trees.trees.BehaviourTree(self.timeout)
         self.failures = FailureLog()
-        self.stage_clock = StageClock(root, self.elapsed)
+        self.stage_clock = StageClock(root, self.elapsed, self.robot_seconds)
         self.tree.visitors += [self.stage_clock, self.failures]
         self.skills = skills
         self.robot = robot
@@ -126,7 +138,15 @@ class MissionRunner:
         self._record_error: RecordWriteError | None = None
 
     def elapsed(self) -> float:
+        """Wall seconds since the run began."""
         return time.monotonic() - self._start
+
+    def robot_seconds(self) -> float | None:
+        """The robot's clock now (None when it cannot be read, e.g. at shutdown)."""
+        try:
+            return float(self.robot.clock.now())
+        except Exception:  # a real robot's clock may fail; the wall time still counts
+            return None
 
     def run(self) -> MissionOutcome:
         """Ticks until the root succeeds or fails, the timeout passes, or a stop signal.
@@ -255,6 +275,7 @@ class MissionRunner:
             if stage.status == Status.RUNNING.value and stage.ended_s is None:
                 stage.status = Status.FAILURE.value
                 stage.ended_s = self.elapsed()
+                stage.robot_ended_s = self.robot_seconds()
                 stage.feedback = reason
 
 
@@ -264,20 +285,29 @@ class StageClock(py_trees.visitors.VisitorBase):
 
     Args:
         root: the mission tree; its children are the stages.
-        clock: seconds since the run began.
+        clock: wall seconds since the run began.
+        robot_clock: the robot's clock (None where it cannot be read).
     """
 
-    def __init__(self, root: py_trees.behaviour.Behaviour, clock: Callable[[], float]) -> None:
+    def __init__(
+        self,
+        root: py_trees.behaviour.Behaviour,
+        clock: Callable[[], float],
+        robot_clock: Callable[[], float | None] = lambda: None,
+    ) -> None:
         super().__init__(full=False)
         self.stages = [StageTiming(child.name) for child in root.children]
         self._stage_of = {
             child.id: stage for child, stage in zip(root.children, self.stages, strict=True)
         }
         self._clock = clock
+        self._robot_clock = robot_clock
         self._tick_start_s = 0.0
+        self._tick_robot_start_s: float | None = None
 
     def initialise(self) -> None:
         self._tick_start_s = self._clock()
+        self._tick_robot_start_s = self._robot_clock()
 
     def run(self, behaviour: py_trees.behaviour.Behaviour) -> None:
         stage = self._stage_of.get(behaviour.id)
@@ -285,8 +315,10 @@ class StageClock(py_trees.visitors.VisitorBase):
             return
         if stage.started_s is None:
             stage.started_s = self._tick_start_s
+            stage.robot_started_s = self._tick_robot_start_s
         if behaviour.status in (Status.SUCCESS, Status.FAILURE) and stage.ended_s is None:
             stage.ended_s = self._clock()
+            stage.robot_ended_s = self._robot_clock()
         stage.status = behaviour.status.value
         stage.feedback = _leaf_feedback(behaviour)
 
@@ -352,6 +384,7 @@ def summarise(outcome: MissionOutcome, run_info: dict[str, Any]) -> dict[str, An
                 "name": s.name,
                 "status": s.status,
                 "seconds": round(s.seconds, 3),
+                "robot_seconds": round(s.robot_seconds, 3),
                 "message": s.feedback,
             }
             for s in outcome.stages

@@ -4,7 +4,9 @@
 logged (logger ``bearchair.hardware.speech``, level INFO) whether or not it is heard. It speaks
 only when it is not muted, pyttsx3 (the optional extra ``bearchair[voice]``) is installed
 and starts, and there is an audio device (pyttsx3 2.99 on Linux plays espeak-ng's audio
-through ``aplay``); otherwise it falls back to text with one warning. pyttsx3's
+through ``aplay``); otherwise it falls back to text with one warning (an info line when
+muted: the user asked for it). A sentence not heard is printed (``echo``), so the person
+who must follow an instruction can read it. pyttsx3's
 ``runAndWait`` can hang with a broken audio setup, so the engine lives in its own daemon
 thread and ``say`` waits for it at most ``timeout_s`` per sentence; after a timeout the
 voice falls back to text for good.
@@ -12,17 +14,27 @@ voice falls back to text for good.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import queue
 import shutil
 import subprocess
+import sys
 import threading
+from collections.abc import Callable
 from pathlib import Path
 
 logger = logging.getLogger(__name__)
 
 VOICE_HINT = "pip install 'bearchair[voice]' to hear the instructions"
+
+
+def print_to_stderr(sentence: str) -> None:
+    """Where an unheard sentence goes by default: the console, beside the progress lines."""
+    # Nobody reads stderr any more (a closed pipe): the log has the sentence.
+    with contextlib.suppress(OSError, ValueError):
+        print(f'say (text only): "{sentence}"', file=sys.stderr, flush=True)
 
 
 def audio_device_available() -> bool:
@@ -52,6 +64,7 @@ class TextToSpeech:
         rate_wpm: int = 150,
         timeout_s: float = 10.0,
         record_dir: Path | None = None,
+        echo: Callable[[str], None] | None = print_to_stderr,
     ) -> None:
         """Prepares the voice; never raises for a missing audio setup.
 
@@ -61,18 +74,20 @@ class TextToSpeech:
             timeout_s: longest wait for one spoken sentence, seconds.
             record_dir: when given, each sentence is also saved there as a WAV file by
                 ``espeak-ng -w`` (works without an audio device).
+            echo: shows a sentence that is not heard (None: only logged).
         """
         self.spoken: list[str] = []
         self._rate_wpm = rate_wpm
         self._timeout_s = timeout_s
         self._record_dir = record_dir
+        self._echo = echo
         self._requests: queue.Queue[tuple[str, threading.Event]] = queue.Queue()
         self._worker: threading.Thread | None = None
         self.audible = False
         self._warned = False
         self._failures: list[str] = []
         if mute:
-            self._fall_back("muted")
+            logger.info("speech: muted; instructions are printed")
         elif not audio_device_available():
             self._fall_back("no audio device (no sound card or PulseAudio server, or no aplay)")
         else:
@@ -129,6 +144,8 @@ class TextToSpeech:
         if self._record_dir is not None:
             self._record(self._record_dir, sentence)
         if not self.audible:
+            if self._echo is not None:
+                self._echo(sentence)
             return
         done = threading.Event()
         self._requests.put((sentence, done))

@@ -32,13 +32,9 @@ from bearchair.trees.mission import create_tree
 
 pytest.importorskip("rerun", reason="rerun-sdk (the [viewer] extra) is not installed")
 
-from bearchair.executive.recording import (
-    RECORDING_FILE,
-    STATUS_COLOURS,
-    MissionRecording,
-    SkillCalls,
-    read_entity,
-)
+from bearchair.executive.recording import RECORDING_FILE, STATUS_COLOURS, MissionRecording
+from bearchair.executive.recording_read import read_entity
+from bearchair.executive.skill_calls import SkillCalls
 
 T_WORLD_CHAIR = yaw_transform(0.6, np.array([0.58, 0.08, 0.0]))
 BEAR_AT = yaw_transform(0.3, np.array([0.6, 0.05, 0.3]))
@@ -133,7 +129,12 @@ def test_the_recording_has_every_domain_s_entities(recorded):
         "/world/accessibility/se2_goal",
         "/world/accessibility/path",
         "/world/nao",
-        "/world/nao/body",
+        "/world/panda/visual_geometries/panda_link3/visual_0",
+        "/world/NaoH25V50/visual_geometries/LThigh/LThigh_visual_0",
+        "/transforms/panda/joints",
+        "/transforms/panda/root",
+        "/transforms/nao/joints",
+        "/transforms/nao/root",
         "/world/walk/tag_detections",
         "/world/walk/path",
         "/walk/tag_seen",
@@ -324,7 +325,7 @@ def test_live_web_serves_the_viewer_while_recording_to_a_file(tmp_path):
         root, path=tmp_path / RECORDING_FILE, live="web", web_port=web_port, grpc_port=grpc_port
     )
     try:
-        assert recording.viewer_url.startswith(f"http://127.0.0.1:{web_port}?url=")
+        assert recording.viewer_url.startswith(f"http://127.0.0.1:{web_port}/?url=")
         assert f"%3A{grpc_port}%2Fproxy" in recording.viewer_url
         with urllib.request.urlopen(f"http://127.0.0.1:{web_port}/", timeout=10) as page:
             assert page.status == 200
@@ -445,3 +446,170 @@ def _entity_paths(path) -> set[str]:
 def _rgb(packed: int) -> tuple[int, int, int]:
     """Rerun stores colours as 0xRRGGBBAA."""
     return ((packed >> 24) & 0xFF, (packed >> 16) & 0xFF, (packed >> 8) & 0xFF)
+
+
+def test_the_recording_opens_with_the_mission_layout(recorded):
+    from bearchair.executive.recording_layout import CAMERA_VIEW_TABS, blueprint_views
+
+    views = blueprint_views(recorded[0] / RECORDING_FILE)
+    assert ("3D", "scene", "world") in views
+    assert ("Graph", "tree", "tree") in views
+    assert ("TimeSeries", "rotations (deg)", "assistance") in views
+    assert ("TimeSeries", "seating plan (rad)", "seat/plan") in views
+    assert ("TextLog", "log", "/") in views
+    cameras = {origin for kind, _, origin in views if kind == "2D"}
+    assert cameras == {f"world/scan/views/{i}" for i in range(CAMERA_VIEW_TABS)}
+    # Every view's origin holds data in the recording (no empty panel by a typo).
+    recorded_paths = _entity_paths(recorded[0] / RECORDING_FILE)
+    for kind, name, origin in views:
+        if origin != "/":
+            assert any(p == f"/{origin}" or p.startswith(f"/{origin}/") for p in recorded_paths), (
+                f"{kind} view {name!r}: nothing recorded under {origin}"
+            )
+
+
+def _joint_states(path, robot: str, child_frame: str) -> list[dict]:
+    """Each logged state of one joint: robot time, translation and quaternion (xyzw)."""
+    states = []
+    for row in read_entity(path, f"transforms/{robot}/joints"):
+        children = row["Transform3D:child_frame"]
+        if child_frame in children:
+            index = children.index(child_frame)
+            states.append(
+                {
+                    "robot": row["robot"],
+                    "translation": row["Transform3D:translation"][index],
+                    "quaternion": row["Transform3D:quaternion"][index],
+                }
+            )
+    return states
+
+
+def test_the_robots_move_with_their_joint_states(recorded):
+    out_dir, _, skills, _, _ = recorded
+    path = out_dir / RECORDING_FILE
+    # The Panda's root hangs from the arm's base, the NAO's from its tracked pose.
+    (panda_root,) = read_entity(path, "transforms/panda/root")
+    assert panda_root["Transform3D:parent_frame"] == ["tf#/world/arm_base"]
+    assert panda_root["Transform3D:child_frame"] == ["panda/panda_link0"]
+    nao_roots = read_entity(path, "transforms/nao/root")
+    assert {tuple(row["Transform3D:parent_frame"]) for row in nao_roots} == {("tf#/world/nao",)}
+    # The arm's seven joints were logged as they changed (the fake arm stays still:
+    # once), each from its parent link's frame to its child's.
+    (arm,) = read_entity(path, "transforms/panda/joints")
+    assert arm["Transform3D:child_frame"] == [f"panda/panda_link{i}" for i in range(1, 8)]
+    assert arm["Transform3D:parent_frame"] == [f"panda/panda_link{i}" for i in range(7)]
+    # The NAO's hips as the seating plan and the retract motion played them.
+    plan = skills.calls["execute_seating"][0][0][1]
+    states = _joint_states(path, "nao", "nao/LThigh")
+    moved = states[1:]  # the first: the carrying posture before the first tick
+    assert len(moved) == len(plan.times_s) + len(plan.retract_times_s)
+    seating, retract = moved[: len(plan.times_s)], moved[len(plan.times_s) :]
+    # Each knot at the robot time it was played: the motion's start plus the knot's time
+    # (the scripted skills take no robot time, so both motions start at the same time).
+    started = seating[0]["robot"] - plan.times_s[0]
+    assert [state["robot"] - started for state in seating] == pytest.approx(list(plan.times_s))
+    assert [state["robot"] - started for state in retract] == pytest.approx(
+        list(plan.retract_times_s)
+    )
+
+
+def test_a_played_motion_poses_the_nao_knot_by_knot(tmp_path):
+    import rerun as rr
+    from scipy.spatial.transform import Rotation
+
+    from bearchair.executive.recording_robots import MissionRobots
+
+    robots = MissionRobots()
+    stream = rr.RecordingStream("test")
+    stream.save(str(tmp_path / "motion.rrd"))
+    knees = [0.0, 0.6, 1.2]
+    robots.log_nao_motion(
+        stream, ("LKneePitch", "RKneePitch"), np.array([0.0, 0.5, 1.0]),
+        np.array([[k, k] for k in knees]), started_s=5.0,
+    )  # fmt: skip
+    joint = robots.nao.joints["LKneePitch"]
+    for index, knee in enumerate(knees):  # Rerun's own joint transforms, to compare
+        stream.log(f"rerun/{index}", joint.compute_transform(knee))
+    stream.flush()
+    stream.disconnect()
+    path = tmp_path / "motion.rrd"
+    states = _joint_states(path, "nao", "nao/LTibia")
+    assert [state["robot"] for state in states] == pytest.approx([5.0, 5.5, 6.0])
+    for index, state in enumerate(states):
+        (theirs,) = read_entity(path, f"rerun/{index}")
+        assert state["translation"] == pytest.approx(theirs["Transform3D:translation"][0])
+        ours = Rotation.from_quat(state["quaternion"])
+        assert (
+            Rotation.from_quat(theirs["Transform3D:quaternion"][0]).inv() * ours
+        ).magnitude() < 1e-6
+    # Bending the knees lowers the body: the base sinks towards the floor.
+    heights = [
+        row["Transform3D:translation"][0][2] for row in read_entity(path, "transforms/nao/root")
+    ]
+    assert heights[0] > heights[1] > heights[2] > 0.1
+
+
+def test_forward_kinematics_matches_pybullet():
+    import pybullet
+
+    from bearchair.core.nao_carrying import CARRYING_POSTURE_RAD
+    from bearchair.executive.recording_robots import MissionRobots
+    from bearchair.hardware.sim.bullet import (
+        LockedBullet,
+        T_world_link,
+        joint_index_by_name,
+        link_index_by_name,
+        reset_base_link,
+    )
+
+    robots = MissionRobots()
+    bullet = LockedBullet()
+    try:
+        body = bullet.loadURDF(str(robots.nao_urdf), flags=pybullet.URDF_USE_INERTIA_FROM_FILE)
+        reset_base_link(bullet, body, np.eye(4))
+        joints = {**CARRYING_POSTURE_RAD, "LKneePitch": 1.1, "LHipPitch": -0.6, "LAnklePitch": -0.4}
+        index = joint_index_by_name(bullet, body)
+        for name, value in joints.items():
+            bullet.resetJointState(body, index[name], value)
+        sole = T_world_link(bullet, body, link_index_by_name(bullet, body)["l_sole"])
+    finally:
+        bullet.disconnect_once()
+    ours = robots.nao.chain(robots.nao.root_link, "l_sole", joints)
+    np.testing.assert_allclose(ours, sole, atol=1e-6)
+    # Laid flat: with the legs bent, the left sole is still on the floor, flat.
+    T_feet_sole = robots.T_nao_base(joints) @ ours
+    np.testing.assert_allclose(T_feet_sole[:3, :3], np.eye(3), atol=1e-9)
+    np.testing.assert_allclose(T_feet_sole[:3, 3], [0.0, 0.05, 0.0], atol=1e-9)
+
+
+def test_the_arm_is_sampled_off_the_tick_thread_when_it_moves():
+    import threading
+    import time
+
+    from bearchair.executive.recording_robots import JointSampler
+
+    angles = [np.zeros(7)]
+    readers: set[str] = set()
+
+    def read():
+        readers.add(threading.current_thread().name)
+        return angles[0]
+
+    class Clock:
+        def now(self):
+            return 7.0
+
+    sampler = JointSampler(read, Clock(), period_s=0.01, step_rad=0.01)
+    try:
+        time.sleep(0.1)
+        assert [(t, list(q)) for t, q in sampler.drain()] == [(7.0, [0.0] * 7)]  # once: still
+        angles[0] = np.full(7, 0.005)  # below the step: not kept
+        time.sleep(0.1)
+        angles[0] = np.full(7, 0.5)
+        time.sleep(0.1)
+        kept = sampler.drain()
+        assert len(kept) == 1 and kept[0][1][0] == 0.5
+    finally:
+        sampler.stop()
+    assert readers == {"recording-joints"}

@@ -17,7 +17,9 @@ from bearchair.hardware.speech import TextToSpeech
 SENTENCE = "Please rotate the chair about the vertical axis clockwise for 90 degrees"
 
 
-def test_muted_voice_logs_text_with_one_warning(caplog: pytest.LogCaptureFixture) -> None:
+def test_muted_voice_prints_and_logs_text_without_a_warning(
+    caplog: pytest.LogCaptureFixture, capsys: pytest.CaptureFixture[str]
+) -> None:
     caplog.set_level(logging.INFO, logger="bearchair.hardware.speech")
     voice = TextToSpeech(mute=True)
     assert isinstance(voice, Speaker)
@@ -25,10 +27,18 @@ def test_muted_voice_logs_text_with_one_warning(caplog: pytest.LogCaptureFixture
     voice.say("second")
     assert not voice.audible
     assert voice.spoken == [SENTENCE, "second"]
-    warnings = [r for r in caplog.records if r.levelno == logging.WARNING]
-    assert len(warnings) == 1 and "muted" in warnings[0].getMessage()
+    # Muting is what the user asked for: said once at info level, never as a warning.
+    assert not [r for r in caplog.records if r.levelno >= logging.WARNING]
     said = [r.getMessage() for r in caplog.records if r.levelno == logging.INFO]
-    assert said == [f"say: {SENTENCE}", "say: second"]
+    assert said == ["speech: muted; instructions are printed", f"say: {SENTENCE}", "say: second"]
+    # The person who must follow the instruction reads it on the console.
+    assert capsys.readouterr().err.splitlines() == [
+        f'say (text only): "{SENTENCE}"',
+        'say (text only): "second"',
+    ]
+    shown: list[str] = []
+    TextToSpeech(mute=True, echo=shown.append).say(SENTENCE)
+    assert shown == [SENTENCE]
 
 
 def test_no_audio_device_falls_back(monkeypatch: pytest.MonkeyPatch, caplog) -> None:

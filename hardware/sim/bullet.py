@@ -23,6 +23,7 @@ import pybullet
 from pybullet_utils import bullet_client
 
 from bearchair.core.meshes import cache_dir
+from bearchair.core.streams import silenced_fds
 
 
 def sim_cache_dir() -> Path:
@@ -58,9 +59,11 @@ class LockedBullet:
 
     def __init__(self, gui: bool = False) -> None:
         self.lock = threading.RLock()
-        self.client = bullet_client.BulletClient(
-            connection_mode=pybullet.GUI if gui else pybullet.DIRECT
-        )
+        # BulletClient prints a bare "argv[0]=" (and in GUI mode OpenGL details) from C.
+        with silenced_fds(1):
+            self.client = bullet_client.BulletClient(
+                connection_mode=pybullet.GUI if gui else pybullet.DIRECT
+            )
         self.gui = gui
         self._closed = False
         self._inertial_frames: dict[int, tuple[Any, Any]] = {}

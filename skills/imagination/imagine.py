@@ -66,6 +66,7 @@ import numpy as np
 import trimesh
 
 from bearchair.core.geometry import SittingPose, transform_points, wrap_angle
+from bearchair.core.progress import report as report_progress
 from bearchair.core.runtime import RUNTIME
 from bearchair.skills.imagination import DEFAULT_WORKERS
 from bearchair.skills.imagination.agent import LINKS, agent_urdf_path
@@ -605,13 +606,21 @@ def _run_here(
     tasks: list[TaskSpec], cancel: threading.Event | None
 ) -> tuple[list[list[RawDrop]], float, bool]:
     outcomes, seconds = [], 0.0
+    total = sum(len(task.drops) for task in tasks)
     for task in tasks:
+        _report_drops(outcomes, total)
         if cancel is not None and cancel.is_set():
             return outcomes, seconds, True
         drops, task_seconds = run_task(task)
         outcomes.append(drops)
         seconds += task_seconds
+    _report_drops(outcomes, total)
     return outcomes, seconds, False
+
+
+def _report_drops(outcomes: list[list[RawDrop]], total: int) -> None:
+    """The drops of this batch simulated so far, for a console's progress bar."""
+    report_progress("imagination: drops", sum(len(drops) for drops in outcomes), total)
 
 
 def _run_in_pool(
@@ -619,8 +628,14 @@ def _run_in_pool(
 ) -> tuple[list[list[RawDrop]], float, bool]:
     futures: list[Future] = [pool.submit(run_task, task) for task in tasks]
     pending = set(futures)
+    total = sum(len(task.drops) for task in tasks)
     while pending:
         _, pending = wait(pending, timeout=0.05, return_when=FIRST_COMPLETED)
+        report_progress(
+            "imagination: drops",
+            sum(len(task.drops) for task, f in zip(tasks, futures, strict=True) if f.done()),
+            total,
+        )
         if cancel is not None and cancel.is_set():
             for future in pending:
                 future.cancel()

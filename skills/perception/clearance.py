@@ -30,6 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from bearchair.core.progress import report as report_progress
 from bearchair.hardware.interfaces import RGBDFrame, ScanningArm
 from bearchair.skills.perception.camera import clean_depth, depth_to_world
 from bearchair.skills.perception.errors import PerceptionError
@@ -254,7 +255,8 @@ def capture_planned(
     notes: list[str] = []
     seconds = {"motion": 0.0, "capture": 0.0}
     current: Sequence[float] = home
-    for view in planned:
+    for visited, view in enumerate(planned):
+        report_progress("scan: views", visited, len(planned))
         if cancel is not None and cancel.is_set():
             raise cancelled("chair scan cancelled")
         if view.status == "skipped":
@@ -283,6 +285,7 @@ def capture_planned(
         tick = time.perf_counter()
         frames.append(arm.capture())
         seconds["capture"] += time.perf_counter() - tick
+    report_progress("scan: views", len(planned), len(planned))
     tick = time.perf_counter()
     if tuple(current) != tuple(home):
         arm.move_to(home)
