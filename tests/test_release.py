@@ -36,7 +36,7 @@ def _bear_at(x: float, z: float, lean_rad: float = 0.0) -> np.ndarray:
 def test_a_bear_let_go_over_the_seat_stays_and_one_past_its_front_falls(chair):
     seat = imagine_release(chair, _bear_at(0.02, SEAT_HEIGHT_M + 0.01), 0.0, NAO_POSE)
     assert seat.stays and seat.staying == len(seat.releases) >= 3
-    settled = seat.releases[0].judgement.T_world_bear
+    settled = np.asarray(seat.releases[0].judgement.T_world_bear)
     assert abs(settled[2, 3] - SEAT_HEIGHT_M) < 0.005  # resting on the seat's top
     past_front = imagine_release(chair, _bear_at(0.19, SEAT_HEIGHT_M + 0.01), 0.0, NAO_POSE)
     assert not past_front.stays and "floor" in past_front.reason
