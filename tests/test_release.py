@@ -96,3 +96,29 @@ def test_no_placement_where_the_bear_stays_fails_before_the_release(chair, monke
     monkeypatch.setenv(release_choice.RELEASE_CHECK_ENV, "sometimes")
     with pytest.raises(ValueError, match="BEARCHAIR_RELEASE_CHECK"):
         release_choice.plan_seating_released(chair, SITTING_POSE, NAO_POSE)
+
+
+def test_a_seat_the_scan_lost_under_the_bear_is_taken_from_the_seat_map():
+    import trimesh
+
+    # A seat frame around a 0.3 m hole (what a scan that lost the seat's middle shows).
+    parts = [
+        trimesh.creation.box((w, d, 0.02), trimesh.transformations.translation_matrix(c))
+        for w, d, c in [
+            (0.4, 0.05, (0.0, 0.175, 0.23)),
+            (0.4, 0.05, (0.0, -0.175, 0.23)),
+            (0.05, 0.3, (0.175, 0.0, 0.23)),
+            (0.05, 0.3, (-0.175, 0.0, 0.23)),
+        ]
+    ]
+    holed = trimesh.util.concatenate(parts)
+    bear = _bear_at(0.0, SEAT_HEIGHT_M + 0.01)
+    lost = imagine_release(holed, bear, 0.0, NAO_POSE)
+    assert not lost.stays and not lost.seat_patched
+    mapped = imagine_release(holed, bear, 0.0, NAO_POSE, seat_top_z=SEAT_HEIGHT_M)
+    assert mapped.stays and mapped.seat_patched
+    # Where the scan has the seat, nothing is added.
+    solid = imagine_release(
+        box_chair_mesh(seat_height_m=SEAT_HEIGHT_M), bear, 0.0, NAO_POSE, seat_top_z=SEAT_HEIGHT_M
+    )
+    assert solid.stays and not solid.seat_patched

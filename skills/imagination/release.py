@@ -28,10 +28,11 @@ from pybullet_utils import bullet_client
 
 from bearchair.core.geometry import make_transform, rot_z, yaw_of
 from bearchair.core.meshes import cache_dir, mesh_digest
+from bearchair.core.nao_carrying import BEAR_TORSO_DEPTH_M
 from bearchair.core.se2 import SE2Pose
 from bearchair.core.streams import silenced_fds
 from bearchair.hardware.interfaces import SeatingJudgement
-from bearchair.hardware.sim.bear import T_bear_base, create_bear_body
+from bearchair.hardware.sim.bear import BEAR_PARTS, T_bear_base, create_bear_body
 from bearchair.hardware.sim.bullet import matrix_to_pose, pose_to_matrix
 from bearchair.hardware.sim.clock import PHYSICS_RATE_HZ
 from bearchair.hardware.sim.judge import judge_bear_pose
@@ -51,9 +52,17 @@ REST_HOLD_S = 0.1
 """After ``SETTLE_MIN_S``, a bear moving slower than these for this long is at rest: on a
 scan's bumpy surface it rocks by millimetres for a second more (0.01 m/s, 0.1 rad/s),
 which no longer changes what the judge says."""
+SEAT_PATCH_MARGIN_M = 0.02
+"""How far the seat map's patch reaches beyond the bear's torso footprint (metres)."""
+SEAT_PATCH_SEARCH_M = 0.03
+"""A scanned surface within this of the seat map's top under the footprint counts as the
+seat (metres)."""
 SCAN_HEIGHT_ERROR_M = 0.004
 """How far the scanned seat's top may lie off the true one (2-5 mm above it in the
 campaign trials): a release this much higher is imagined too."""
+
+BEAR_TORSO_WIDTH_M = BEAR_PARTS[0].size[1]
+"""The bear torso's width (metres): the box it sits on, the bear's first part."""
 
 _local = threading.local()
 
@@ -75,6 +84,8 @@ class ReleasePrediction(NamedTuple):
             decided.
         T_world_bear_release: where the plan lets the bear go (world frame).
         seconds: wall time of the imagination.
+        seat_patched: the scan had no surface under part of the bear's footprint, and the
+            seat map's seat was added there (see :func:`imagine_release`).
         cpu_seconds: this thread's CPU time in it (the wall time on a loaded machine is
             longer).
     """
@@ -83,6 +94,7 @@ class ReleasePrediction(NamedTuple):
     releases: tuple[ImaginedRelease, ...]
     T_world_bear_release: np.ndarray
     seconds: float
+    seat_patched: bool = False
     cpu_seconds: float = 0.0
 
     @property
@@ -109,6 +121,7 @@ class ReleasePrediction(NamedTuple):
             "settled_tilt_deg": round(float(settled.torso_tilt_deg), 1),
             "seconds": round(self.seconds, 3),
             "cpu_seconds": round(self.cpu_seconds, 3),
+            "seat_patched": self.seat_patched,
         }
 
 
@@ -162,8 +175,16 @@ def imagine_release(
     *,
     stop_m: float = 0.005,
     stop_rad: float = math.radians(2.5),
+    seat_top_z: float | None = None,
 ) -> ReleasePrediction:
     """Imagines letting the bear go at ``T_world_bear_release`` over the scanned chair.
+
+    A scan can lose part of a seat (a high seat inside the camera's minimum range, a
+    thin or slatted one the TSDF thins out) where the planner's seat map, taken from the
+    scan in a band around p, still has it: the bear would fall through the hole in the
+    imagination but not on the chair. Given ``seat_top_z``, where the scan has no surface
+    near that height under the bear's torso footprint, the seat map's seat is added
+    there as a thin slab (the footprint and ``SEAT_PATCH_MARGIN_M`` around it).
 
     Args:
         chair_mesh: the reconstructed chair, world frame (floor at z = 0).
@@ -171,11 +192,13 @@ def imagine_release(
         sitting_yaw_rad: the imagined sitting direction the bear must face.
         humanoid_pose: where the NAO stands (the walk's stop error is about its frame).
         stop_m, stop_rad: the walk's stop box (half sides).
+        seat_top_z: the seat map's seat top under the bear (metres), if known.
     """
     started, started_cpu = time.perf_counter(), time.thread_time()
     world = _world(chair_mesh)
     T_world_nao = humanoid_pose.as_transform()
     T_nao_bear = np.linalg.inv(T_world_nao) @ T_world_bear_release
+    patched = seat_top_z is not None and world.patch_seat(T_world_bear_release, seat_top_z)
     candidates = perturbations(stop_m, stop_rad)
     releases: list[ImaginedRelease] = []
     for label, T_perturbed in candidates:
@@ -184,12 +207,14 @@ def imagine_release(
         staying = sum(r.judgement.seated for r in releases)
         if 2 * staying >= len(candidates) or 2 * (len(releases) - staying) > len(candidates):
             break  # the majority is decided: the rest cannot change the prediction
+    world.remove_patch()
     stays = 2 * sum(r.judgement.seated for r in releases) >= len(candidates)
     return ReleasePrediction(
         stays,
         tuple(releases),
         T_world_bear_release,
         time.perf_counter() - started,
+        patched,
         time.thread_time() - started_cpu,
     )
 
@@ -216,6 +241,40 @@ class _ReleaseWorld:
         client.changeDynamics(self.chair, -1, lateralFriction=CHAIR_FRICTION)
         self.bear = create_bear_body(client)
         self.T_bear_base = T_bear_base()
+        self.patch: int | None = None
+
+    def patch_seat(self, T_world_bear: np.ndarray, seat_top_z: float) -> bool:
+        """Adds the seat map's seat under the bear's footprint where the scan has no
+        surface near ``seat_top_z``; returns whether it did."""
+        half = np.array([BEAR_TORSO_DEPTH_M / 2.0, BEAR_TORSO_WIDTH_M / 2.0])
+        corners = [np.zeros(2)] + [half * (sx, sy) for sx in (-1, 1) for sy in (-1, 1)]
+        rays_from, rays_to = [], []
+        for corner in corners:
+            x, y = (T_world_bear @ np.array([corner[0], corner[1], 0.0, 1.0]))[:2]
+            rays_from.append([x, y, seat_top_z + SEAT_PATCH_SEARCH_M])
+            rays_to.append([x, y, seat_top_z - SEAT_PATCH_SEARCH_M])
+        hits = self.client.rayTestBatch(rays_from, rays_to)
+        if all(hit[0] == self.chair for hit in hits):
+            return False
+        extents = half + SEAT_PATCH_MARGIN_M
+        shape = self.client.createCollisionShape(
+            pybullet.GEOM_BOX, halfExtents=[extents[0], extents[1], 0.005]
+        )
+        centre = [*T_world_bear[:2, 3], seat_top_z - 0.005]
+        orientation = pybullet.getQuaternionFromEuler([0.0, 0.0, yaw_of(T_world_bear)])
+        self.patch = self.client.createMultiBody(
+            baseMass=0.0,
+            baseCollisionShapeIndex=shape,
+            basePosition=centre,
+            baseOrientation=orientation,
+        )
+        self.client.changeDynamics(self.patch, -1, lateralFriction=CHAIR_FRICTION)
+        return True
+
+    def remove_patch(self) -> None:
+        if self.patch is not None:
+            self.client.removeBody(self.patch)
+            self.patch = None
 
     def release(self, T_world_bear: np.ndarray, sitting_yaw_rad: float) -> SeatingJudgement:
         """Lets the bear go at rest from ``T_world_bear``; the judge's verdict once it rests."""
@@ -236,6 +295,8 @@ class _ReleaseWorld:
         position, orientation = client.getBasePositionAndOrientation(self.bear)
         T_settled = pose_to_matrix(position, orientation) @ np.linalg.inv(self.T_bear_base)
         contacts = client.getContactPoints(self.bear, self.chair)
+        if self.patch is not None:
+            contacts += client.getContactPoints(self.bear, self.patch)
         on_floor = bool(client.getContactPoints(self.bear, self.floor))
         return judge_bear_pose(
             T_settled, [np.asarray(c[5]) for c in contacts], on_floor, sitting_yaw_rad

@@ -31,6 +31,7 @@ from bearchair.skills.imagination.release import (
 from bearchair.skills.planning.wholebody.infeasible import InfeasibleSeating
 from bearchair.skills.planning.wholebody.nao_model import DRIVEN_JOINTS
 from bearchair.skills.planning.wholebody.optimisation import seating_problems
+from bearchair.skills.planning.wholebody.scene import seating_scene
 from bearchair.skills.planning.wholebody.seating import plan_seating, plan_seating_where_standing
 from bearchair.skills.results import SeatingPlan
 
@@ -78,7 +79,11 @@ def predict_release(
 ) -> ReleasePrediction:
     """The release imagination of a plan (see :mod:`bearchair.skills.imagination.release`)."""
     T_release = planned_release_pose(plan, humanoid_pose)
-    return imagine_release(chair_mesh, T_release, sitting_pose.yaw, humanoid_pose)
+    # The seat map the plan was made on: the seat top the goal let the bear go over.
+    seat_top_z = seating_scene(chair_mesh, sitting_pose, humanoid_pose).profile.seat_top_z
+    return imagine_release(
+        chair_mesh, T_release, sitting_pose.yaw, humanoid_pose, seat_top_z=seat_top_z
+    )
 
 
 def plan_seating_released(
