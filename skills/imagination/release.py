@@ -179,8 +179,8 @@ def imagine_release(
 ) -> ReleasePrediction:
     """Imagines letting the bear go at ``T_world_bear_release`` over the scanned chair.
 
-    A scan can lose part of a seat (a 0.35 m high seat lost 16 x 20 cm under the
-    sitting point in one campaign scan; a thin or slatted one the TSDF thins out) where the planner's seat map, taken from the
+    A scan can lose part of a seat under the sitting point (a seat the views saw only in
+    part, a thin or slatted one the TSDF thins out) where the planner's seat map, taken from the
     scan in a band around p, still has it: the bear would fall through the hole in the
     imagination but not on the chair. Given ``seat_top_z``, where the scan has no surface
     near that height under the bear's torso footprint, the seat map's seat is added
