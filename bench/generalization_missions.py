@@ -104,7 +104,8 @@ def print_missions(
     """Seating per family, per condition and per cause; the refusals with the reach check."""
     from bearchair.evaluation.report import failure_cause, failure_kind
 
-    inside = _inside_workspace(chairs)
+    outside_reason = _inside_workspace(chairs)
+    inside = {name: not reason for name, reason in outside_reason.items()}
     rows: dict[str, list[bool]] = defaultdict(list)
     conditions: dict[str, list[bool]] = defaultdict(list)
     causes: Counter[str] = Counter()
@@ -137,13 +138,24 @@ def print_missions(
         print(f"  {n:3d} x {cause}")
     outside = [c for c in chairs if not inside[c.name]]
     print(f"\nchairs outside the workspace (reach check on the true chair): {len(outside)}")
+    for chair in outside:
+        mission = next(r for r in records if r["chair"] == chair.name + ".obj")
+        verdict = (
+            "refused" if mission.get("failed_stage") == "CheckSeatReachable" else "NOT refused"
+        )
+        print(
+            f"  {chair.name} (seat {chair.seat_height_m:.3f} m): {outside_reason[chair.name]};"
+            f" the mission: {verdict}"
+        )
+    print("refused by the mission:")
     for chair, cause, was_inside in refused:
         note = "" if not was_inside else " (the true chair passes the reach check)"
         print(f"  refused {chair.name} (seat {chair.seat_height_m:.3f} m){note}: {cause}")
 
 
-def _inside_workspace(chairs: list[GeneratedChair]) -> dict[str, bool]:
-    """Chair name -> the reach check passes on its true mesh and sitting pose."""
+def _inside_workspace(chairs: list[GeneratedChair]) -> dict[str, str]:
+    """Chair name -> "" when the reach check passes on its true mesh and sitting pose,
+    else its reason."""
     from generalization import ground_truth_pose
 
     from bearchair.skills.planning.stance import check_seat_reachable
@@ -151,7 +163,7 @@ def _inside_workspace(chairs: list[GeneratedChair]) -> dict[str, bool]:
     out = {}
     for chair in chairs:
         reach = check_seat_reachable(chair.mesh, ground_truth_pose(chair))
-        out[chair.name] = bool(reach.reachable)
+        out[chair.name] = "" if reach.reachable else reach.reason or "unreachable"
     return out
 
 
