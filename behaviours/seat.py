@@ -69,9 +69,15 @@ class SeatBear(SkillBehaviour):
     def conclude(self, plan: SeatingPlan) -> Status:
         self.blackboard.set(keys.SEATING_PLAN, plan, overwrite=True)
         solve_s = sum(plan.seconds.values())
+        release = getattr(plan, "release", None)
+        predicted = (
+            ""
+            if release is None
+            else f"; release imagined: stays in {release.staying}/{len(release.releases)}"
+        )
         return self.succeed(
             f"bear placed: {len(plan.times_s)} knots over {float(plan.times_s[-1]):.1f} s "
-            f"(planned in {solve_s:.2f} s)"
+            f"(planned in {solve_s:.2f} s{predicted})"
         )
 
 

@@ -23,6 +23,9 @@ the worst families. Usage::
     .venv/bin/python bench/generalization.py [--chairs 200] [--seed 0] [--imagine]
         [--seat] [--family sled] [--workers 2] [--verbose]
     .venv/bin/python bench/generalization.py --calibration 24
+    .venv/bin/python bench/generalization.py --missions 200 [--workers 2] [--out DIR]
+
+``--missions N`` runs whole simulated missions instead (``bench/generalization_missions.py``).
 """
 
 from __future__ import annotations
@@ -306,7 +309,23 @@ def main(argv: list[str] | None = None) -> int:
         metavar="N",
         help="instead: the reach check on the first N calibration chairs with a front",
     )
+    parser.add_argument(
+        "--missions",
+        type=int,
+        metavar="N",
+        help="instead: whole simulated missions over N generated chairs (the paper's six "
+        "conditions in rotation)",
+    )
+    parser.add_argument(
+        "--out", type=Path, default=Path("generalization-missions"), help="--missions' records"
+    )
+    parser.add_argument("--timeout", type=float, default=300.0, help="--missions: s per mission")
     args = parser.parse_args(argv)
+    if args.missions:
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        from generalization_missions import run_missions
+
+        return run_missions(args.missions, args.seed, args.workers, args.out, args.timeout)
     if args.calibration:
         calibration_reach(args.calibration)
         return 0

@@ -40,6 +40,7 @@ from scipy.spatial import cKDTree
 
 from bearchair.core.geometry import wrap_angle, yaw_of, yaw_transform
 from bearchair.core.se2 import SE2Pose
+from bearchair.evaluation.protocol import SEAT_KINDS
 from bearchair.hardware.sim.world import SimConfig, SimWorld
 from bearchair.skills.perception import PerceptionError, measure_chair_rotation, scan_chair
 from bearchair.skills.perception.tags import estimate_tag_pose
@@ -77,7 +78,7 @@ def seat_height_m(mesh: trimesh.Trimesh, floor_z: float = 0.0) -> float:
 
 def chair_entries(limit: int) -> list[dict]:
     manifest = json.loads((CHAIRS / "manifest.json").read_text())
-    chairs = [e for e in manifest["meshes"] if e["kind"] == "chair"]
+    chairs = [e for e in manifest["meshes"] if e.get("kind", "chair") in SEAT_KINDS]
     return chairs[:limit] if limit else chairs
 
 

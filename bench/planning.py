@@ -39,6 +39,7 @@ import trimesh
 from bearchair.core.arena import DEFAULT_ARENA, Arena, accessible_sitting_yaws
 from bearchair.core.geometry import SittingPose, yaw_transform
 from bearchair.core.meshes import box_chair_mesh, load_mesh
+from bearchair.evaluation.protocol import SEAT_KINDS
 from bearchair.skills.assistance import compose_instruction
 from bearchair.skills.planning.preplan import reach_validator
 from bearchair.skills.planning.se2 import check_accessibility
@@ -79,7 +80,7 @@ def load_chairs() -> list[Chair]:
         return []
     chairs = []
     for entry in json.loads(manifest.read_text())["meshes"]:
-        if entry["kind"] != "chair" or entry["front_yaw_deg"] is None:
+        if entry.get("kind", "chair") not in SEAT_KINDS or entry["front_yaw_deg"] is None:
             continue
         chair = chair_from_mesh(
             entry["file"], load_mesh(SHARED_CHAIRS / entry["file"]), entry["front_yaw_deg"]

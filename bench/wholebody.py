@@ -40,6 +40,7 @@ import trimesh
 from bearchair.core.geometry import SittingPose, make_transform, rot_z, wrap_angle
 from bearchair.core.meshes import box_chair_mesh, load_mesh
 from bearchair.core.se2 import SE2Pose
+from bearchair.evaluation.protocol import SEAT_KINDS
 from bearchair.skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from bearchair.skills.planning.preplan import wholebody_validator
 from bearchair.skills.planning.seat import seat_support_heights
@@ -80,7 +81,7 @@ def calibration_chairs() -> list[tuple[str, Path, float]]:
     return [
         (entry["file"], CHAIRS_DIR / entry["file"], float(entry["front_yaw_deg"]))
         for entry in entries
-        if entry["kind"] == "chair" and entry["front_yaw_deg"] is not None
+        if entry.get("kind", "chair") in SEAT_KINDS and entry["front_yaw_deg"] is not None
     ]
 
 

@@ -190,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
         )
         return exit_status()
     # The report goes to its file first: a closed stdout must not lose it.
-    table_text = write_report(args, records, skipped)
+    table_text = write_report(args, records, skipped, chairs)
     print(f"report: {args.out / 'report.md'}", file=sys.stderr)
     print(table_text)
     return 0
@@ -299,7 +299,10 @@ def _run_campaign(
 
 
 def write_report(
-    args: argparse.Namespace, records: list[dict[str, Any]], skipped: list[SkippedChair]
+    args: argparse.Namespace,
+    records: list[dict[str, Any]],
+    skipped: list[SkippedChair],
+    chairs: list[ChairEntry] | None = None,
 ) -> str:
     """Writes OUT/report.md and the pictures; returns the table as text."""
     from bearchair.evaluation.pictures import copy_trial_scenes, render_chair_pictures
@@ -332,6 +335,7 @@ def write_report(
         title="bearchair trials",
         settings=settings,
         chair_pictures={c: str(p.relative_to(args.out)) for c, p in chair_pictures.items()},
+        seat_heights_m={c.name: c.seat_height_m for c in chairs or [] if c.seat_height_m},
     )
     write_text_atomic(args.out / "report.md", markdown)
     return format_table(table)

@@ -42,18 +42,36 @@ PROTOCOLS: dict[str, tuple[str, ...]] = {
 """Protocol name -> the experiment of each trial index, per chair."""
 
 
+SEAT_KINDS = frozenset({"chair", "sofa", "stool", "bench"})
+"""The manifest kinds that are seats a child sits on. The paper's chairs afford sitting
+by the interaction-based definition (a seat at sitting height with the back supported);
+a campaign also needs a front to place the chair accessibly or not, so a seat takes part
+only with a ``front_yaw_deg`` (a stool or a bench without a back has none). Every other
+kind (``table``, ``box``, ``shelf``, ``cabinet``, ``toy``, any kind not listed here) is
+not a chair, front or not: skipped with the reason. An entry without ``kind`` is a chair
+(manifests written before kinds existed)."""
+
+DEFAULT_KIND = "chair"
+"""The kind of a manifest entry that names none."""
+
+
 class ChairEntry(NamedTuple):
     """A chair that takes part in the campaign.
 
     Attributes:
         path: the mesh file.
-        kind: the manifest's kind ("chair", "stool", ...), "unknown" without a manifest.
+        kind: the manifest's kind, one of :data:`SEAT_KINDS`.
         front_yaw_deg: the manifest's sitting direction in the mesh frame (degrees), if any.
+        seat_height_m: the manifest's seat height (m) where it gives one: for the report's
+            refusals against the reach model, never for the mission.
+        style: the manifest's style ("folding", "lounge", ...) where it gives one.
     """
 
     path: Path
     kind: str
     front_yaw_deg: float | None
+    seat_height_m: float | None = None
+    style: str | None = None
 
     @property
     def name(self) -> str:
@@ -166,16 +184,24 @@ def read_manifest(chairs_dir: Path) -> dict[str, dict[str, Any]] | None:
 def manifest_entry_problem(entry: dict[str, Any]) -> str | None:
     """What is wrong with a manifest entry's values, or None.
 
-    ``front_yaw_deg`` must be a finite number of degrees or null; ``kind`` a string.
+    ``front_yaw_deg`` must be a finite number of degrees or null; ``kind`` and ``style``
+    strings; ``seat_height_m`` a positive number of metres or null. Other fields are
+    tolerated.
     """
     front = entry.get("front_yaw_deg")
-    if front is not None and (
-        isinstance(front, bool) or not isinstance(front, int | float) or not math.isfinite(front)
-    ):
+    if front is not None and not _finite_number(front):
         return f"front_yaw_deg is {json.dumps(front)[:40]}, not a number of degrees or null"
-    if "kind" in entry and not isinstance(entry["kind"], str):
-        return f"kind is {json.dumps(entry['kind'])[:40]}, not a string"
+    seat = entry.get("seat_height_m")
+    if seat is not None and not (_finite_number(seat) and seat > 0.0):
+        return f"seat_height_m is {json.dumps(seat)[:40]}, not a positive number of metres or null"
+    for field in ("kind", "style"):
+        if field in entry and entry[field] is not None and not isinstance(entry[field], str):
+            return f"{field} is {json.dumps(entry[field])[:40]}, not a string"
     return None
+
+
+def _finite_number(value: Any) -> bool:
+    return not isinstance(value, bool) and isinstance(value, int | float) and math.isfinite(value)
 
 
 def discover_chairs(
@@ -190,7 +216,7 @@ def discover_chairs(
     Every file with a supported mesh suffix is a candidate. The folder must have a
     ``manifest.json``: the simulated world needs each chair's front to place it
     accessibly or not (without it "inaccessible" trials would be placed at random).
-    Only meshes with a front (``front_yaw_deg`` not null) take part. ``max_chairs``
+    Only seats (:data:`SEAT_KINDS`) with a front (``front_yaw_deg`` not null) take part. ``max_chairs``
     keeps the first N that take part (deterministic), the rest are listed as skipped.
 
     Args:
@@ -284,7 +310,11 @@ def _verdict(
     if problem is not None:
         return f"{chairs_dir / 'manifest.json'}: {path.name}: {problem}"
     front = info.get("front_yaw_deg")
-    kind = str(info.get("kind", "unknown"))
+    kind = info.get("kind") or DEFAULT_KIND
+    if kind not in SEAT_KINDS:
+        return SkippedChair(
+            path.name, f"not a chair: kind {kind!r} (seats: {', '.join(sorted(SEAT_KINDS))})"
+        )
     if front is None:
         return SkippedChair(path.name, f"{kind} without a front (front_yaw_deg null)")
     if max_chairs is not None and chosen_so_far >= max_chairs:
@@ -294,7 +324,10 @@ def _verdict(
             load_chair_mesh(path)
         except MeshLoadError as error:
             return str(error)
-    return ChairEntry(path, kind, float(front))
+    seat = info.get("seat_height_m")
+    return ChairEntry(
+        path, kind, float(front), None if seat is None else float(seat), info.get("style")
+    )
 
 
 class BadChairsError(ChairSetError):

@@ -217,14 +217,19 @@ def markdown_report(
     title: str = "Trials",
     settings: dict[str, Any] | None = None,
     chair_pictures: dict[str, str] | None = None,
+    seat_heights_m: dict[str, float] | None = None,
 ) -> str:
-    """The campaign report in Markdown: Table 1, stage medians, failures, every trial."""
+    """The campaign report in Markdown: Table 1, stage medians, failures, every trial.
+
+    ``seat_heights_m`` (chair -> the manifest's seat height, where it gives one) puts the
+    true seat height beside each refusal, to read it against the reach model.
+    """
     out = [f"# {title}", ""]
     if settings:
         out += [", ".join(f"{k}: {_md(v)}" for k, v in settings.items()), ""]
     out += _md_table_1(table)
     out += _md_stage_medians(table, len(records))
-    out += _md_failures(table)
+    out += _md_failures(table, seat_heights_m or {})
     if skipped:
         out += ["", "## Meshes not in the campaign", ""]
         out += [f"- {_md(s.name)}: {_md(s.reason)}" for s in skipped]
@@ -280,14 +285,15 @@ def _md_stage_medians(table: TrialsTable, trials: int) -> list[str]:
     return out
 
 
-def _md_failures(table: TrialsTable) -> list[str]:
+def _md_failures(table: TrialsTable, seat_heights_m: dict[str, float]) -> list[str]:
     """The report's lines of the refused chairs and the causes of failure."""
     out: list[str] = []
     if table.refusals:
         out += ["", "## Refused chairs (no stance reaches the seat)", ""]
-        out += [
-            f"- {_md(chair)} ({n} trials): {_md(reason)}" for chair, reason, n in table.refusals
-        ]
+        for chair, reason, n in table.refusals:
+            seat = seat_heights_m.get(chair)
+            known = f", manifest seat {seat:.3f} m" if seat is not None else ""
+            out.append(f"- {_md(chair)} ({n} trials{known}): {_md(reason)}")
     out += ["", "## Causes of failure", ""]
     if not table.failure_causes:
         out.append("None.")

@@ -397,5 +397,6 @@ def summarise(outcome: MissionOutcome, run_info: dict[str, Any]) -> dict[str, An
         "accessible": bool(getattr(board.get(keys.ACCESSIBILITY), "accessible", False)),
         "walk": to_jsonable(board.get(keys.WALK)),
         "judgement": to_jsonable(judgement),
+        "release_prediction": to_jsonable(getattr(board.get(keys.SEATING_PLAN), "release", None)),
         "failures": list(outcome.failures),
     }

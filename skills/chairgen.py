@@ -17,7 +17,11 @@ Families (:data:`FAMILIES`):
 * ``box_base``: seat on a closed box down to the floor (a plastic toddler chair);
 * ``footrest``: four legs and a footrest bar sticking out in front (a high chair);
 * ``stool``: round or square seat, no back;
-* ``bench``: a wide seat, no back.
+* ``bench``: a wide seat, no back;
+* and :mod:`bearchair.skills.chairgen_families`' real chairs' harder shapes: ``x_frame``
+  (folding, sling seat, armrest rails), ``basket`` (dished round seat), ``swivel_tub``,
+  ``rocking``, ``small_plain`` (0.20-0.30 m wide seats), ``lounge`` (deep, low,
+  reclined), ``slatted``, ``spindle_back``, ``sofa``.
 
 Usage::
 
@@ -34,6 +38,8 @@ from typing import NamedTuple, cast
 import numpy as np
 import trimesh
 
+from bearchair.skills.chairgen_families import FAMILY_SEATS, ROUND_FAMILIES, family_parts
+
 FAMILIES: tuple[str, ...] = (
     "four_legs",
     "armchair",
@@ -44,8 +50,10 @@ FAMILIES: tuple[str, ...] = (
     "footrest",
     "stool",
     "bench",
+    *FAMILY_SEATS,
 )
-"""Every family :func:`generate_chair` makes."""
+"""Every family :func:`generate_chair` makes (the harder shapes of real chairs from
+:mod:`bearchair.skills.chairgen_families` last)."""
 
 SEAT_HEIGHT_RANGE_M = (0.18, 0.45)
 """Seat heights drawn (metres): children's chairs, and a few beyond the NAO's reach."""
@@ -180,6 +188,8 @@ def generate_chair(seed: int, family: str | None = None) -> GeneratedChair:
         family = str(rng.choice(FAMILIES))
     if family not in FAMILIES:
         raise ValueError(f"unknown chair family {family!r} (known: {', '.join(FAMILIES)})")
+    if family in FAMILY_SEATS:
+        return _harder_shape(rng, family, seed)
     seat = _draw_seat(rng, family)
     if seat.round:
         parts = [_cylinder(seat.depth / 2.0, seat.bottom, seat.top)]
@@ -218,6 +228,22 @@ def _draw_seat(rng: np.random.Generator, family: str) -> _Seat:
     if round_seat:
         width = depth
     return _Seat(seat_top, seat_bottom, thickness, depth, width, round_seat)
+
+
+def _harder_shape(rng: np.random.Generator, family: str, seed: int) -> GeneratedChair:
+    """A chair of one of :data:`FAMILY_SEATS`' families (its own seat ranges)."""
+    heights, depths, widths = FAMILY_SEATS[family]
+    top = float(rng.uniform(*heights))
+    thickness = float(rng.uniform(0.02, 0.04))
+    depth = float(rng.uniform(*depths))
+    round_seat = family in ROUND_FAMILIES
+    width = depth if round_seat else float(rng.uniform(*widths))
+    seat = _Seat(top, top - thickness, thickness, depth, width, round_seat)
+    parts = family_parts(rng, family, seat)
+    low = np.concatenate([part.vertices for part in parts])
+    low = low[low[:, 2] < seat.top - 0.05]
+    protrusion = max(0.0, float(low[:, 0].max()) - seat.front_x) if len(low) else 0.0
+    return _placed(parts, family, seed, 0.0, seat, protrusion)
 
 
 def _base(

@@ -16,6 +16,7 @@ from bearchair.skills.parameters import SkillParameters
 from bearchair.skills.perception.reconstruction import ReconstructionConfig
 from bearchair.skills.planning import se2, stance, wholebody
 from bearchair.skills.planning.wholebody.optimisation import start_building_problems
+from bearchair.skills.planning.wholebody.release_choice import plan_seating_released
 
 
 class DefaultSkills:
@@ -37,7 +38,7 @@ class DefaultSkills:
     compose_instruction = staticmethod(assistance.compose_instruction)
     walk_path = staticmethod(control.walk_path)
     raise_bear = staticmethod(wholebody.raise_bear)
-    plan_seating = staticmethod(wholebody.plan_seating_where_standing)
+    plan_seating = staticmethod(plan_seating_released)
     execute_seating = staticmethod(wholebody.execute_seating)
     release_and_stand = staticmethod(wholebody.release_and_stand)
 

@@ -352,6 +352,9 @@ class SeatingPlan(NamedTuple):
         retract_positions_rad: (M, J) the motion after release: hands back, body upright.
         retract_times_s: M knot times of the retract motion.
         seconds: solve wall time per problem (``goal``, ``trajectory``).
+        release: what the release imagination predicts for this plan's release
+            (``bearchair.skills.imagination.release.ReleasePrediction``), None when not
+            imagined.
     """
 
     joint_names: tuple[str, ...]
@@ -360,13 +363,17 @@ class SeatingPlan(NamedTuple):
     retract_times_s: np.ndarray
     retract_positions_rad: np.ndarray
     seconds: dict[str, float]
+    release: Any = None
 
     def summary(self) -> dict[str, Any]:
-        return {
+        out = {
             "knots": len(self.times_s),
             "duration_s": round(float(self.times_s[-1]), 2) if len(self.times_s) else 0.0,
             "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
         }
+        if self.release is not None:
+            out["release"] = self.release.summary()
+        return out
 
 
 def _se2_json(pose: SE2Pose | None) -> dict[str, float] | None:

@@ -185,11 +185,45 @@ def test_manifest_keeps_meshes_with_a_front_in_sorted_order(tmp_path: Path):
     assert [c.name for c in chosen] == ["a-chair.stl", "c-chair.obj", "d-chair.ply"]
     assert chosen[2].front_yaw_deg == 0.0  # a front of 0 deg is a front
     reasons = dict(skipped)
-    assert "front_yaw_deg null" in reasons["b-table.obj"]
+    assert "not a chair: kind 'table'" in reasons["b-table.obj"]
     assert "not in manifest" in reasons["e-extra.obj"]
     chosen, skipped = discover_chairs(folder, max_chairs=2)
     assert [c.name for c in chosen] == ["a-chair.stl", "c-chair.obj"]
     assert "--max-chairs 2" in dict(skipped)["d-chair.ply"]
+
+
+def test_only_seats_with_a_front_take_part_and_the_new_fields_are_read(tmp_path: Path):
+    names = [f"{kind}.obj" for kind in ("box", "shelf", "cabinet", "toy", "hammock")]
+    names += ["sofa.obj", "bench.obj", "stool.obj", "old.obj", "backless-bench.obj"]
+    manifest = {"meshes": [{"file": n, "kind": n[:-4], "front_yaw_deg": 45.0} for n in names]}
+    manifest["meshes"][-2] = {"file": "old.obj", "front_yaw_deg": 45.0}  # no kind: a chair
+    manifest["meshes"][-1] = {"file": "backless-bench.obj", "kind": "bench", "front_yaw_deg": None}
+    manifest["meshes"][5].update(seat_height_m=0.234, style="sofa")
+    chosen, skipped = discover_chairs(write_chairs(tmp_path / "chairs", names, manifest))
+    assert sorted(c.name for c in chosen) == ["bench.obj", "old.obj", "sofa.obj", "stool.obj"]
+    sofa = next(c for c in chosen if c.name == "sofa.obj")
+    assert (sofa.kind, sofa.seat_height_m, sofa.style) == ("sofa", 0.234, "sofa")
+    assert next(c for c in chosen if c.name == "old.obj").kind == "chair"
+    reasons = dict(skipped)
+    for kind in ("box", "shelf", "cabinet", "toy", "hammock"):  # with a front, still no chair
+        assert reasons[f"{kind}.obj"].startswith(f"not a chair: kind '{kind}'")
+    assert "bench without a front" in reasons["backless-bench.obj"]
+
+
+@pytest.mark.parametrize(
+    "values, message",
+    [
+        ({"seat_height_m": -0.2}, "seat_height_m is -0.2, not a positive number"),
+        ({"seat_height_m": "low"}, 'seat_height_m is "low"'),
+        ({"style": 4}, "style is 4, not a string"),
+    ],
+)
+def test_bad_new_manifest_fields_are_named(values: dict, message: str):
+    from bearchair.evaluation.protocol import manifest_entry_problem
+
+    entry = {"file": "a.obj", "kind": "chair", "front_yaw_deg": 0.0, **values}
+    assert message in (manifest_entry_problem(entry) or "")
+    assert manifest_entry_problem({**entry, **dict.fromkeys(values)}) is None  # null is fine
 
 
 def test_a_folder_needs_a_manifest_and_every_listed_mesh_takes_part(tmp_path: Path):
@@ -695,6 +729,8 @@ def test_refused_chairs_are_a_cause_of_their_own():
     assert "Refused (no stance reaches the seat): 3 trial(s) on 1 chair(s)" in text
     assert f"tall.obj (3): {reason}" in text
     assert "## Refused chairs" in markdown_report(table, records)
+    markdown = markdown_report(table, records, seat_heights_m={"tall.obj": 0.4325})
+    assert "tall.obj (3 trials, manifest seat 0.432 m)" in markdown
 
 
 def test_a_scan_that_cannot_tell_the_reach_is_not_a_refusal():

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import pybullet
@@ -23,6 +23,9 @@ from bearchair.hardware.sim.bullet import (
 from bearchair.hardware.sim.clock import SimClock
 
 BEAR_MASS_KG = 0.2
+BEAR_LATERAL_FRICTION = 0.9
+"""Plush on wood or plastic."""
+BEAR_ROLLING_FRICTION = 0.001
 HOLD_FORCE_N = 60.0
 _BROWN = (0.55, 0.35, 0.17, 1.0)
 _LIGHT = (0.8, 0.65, 0.45, 1.0)
@@ -69,6 +72,39 @@ def bear_centre_of_mass() -> np.ndarray:
     return (volumes[:, None] * centres).sum(axis=0) / volumes.sum()
 
 
+def T_bear_base() -> np.ndarray:
+    """The bear body's base frame (its centre of mass, axes of the bear frame) in the bear
+    frame."""
+    transform = np.eye(4)
+    transform[:3, 3] = bear_centre_of_mass()
+    return transform
+
+
+def create_bear_body(bullet: Any) -> int:
+    """Adds the bear (shape, mass, friction) to a pybullet client and returns its body id.
+
+    The one description of the bear: the simulated world builds its bear with it, and the
+    release imagination (:mod:`bearchair.skills.imagination.release`) its model of the
+    bear. The body's base frame is :func:`T_bear_base` in the bear frame.
+
+    Args:
+        bullet: a pybullet client (``LockedBullet`` or ``BulletClient``); hold its lock.
+    """
+    com = bear_centre_of_mass()
+    shapes = [_part_shapes(bullet, part, com) for part in BEAR_PARTS]
+    body = _compound_body(
+        bullet, [collision for collision, _ in shapes], [visual for _, visual in shapes]
+    )
+    for link in range(-1, len(BEAR_PARTS) - 1):
+        bullet.changeDynamics(
+            body,
+            link,
+            lateralFriction=BEAR_LATERAL_FRICTION,
+            rollingFriction=BEAR_ROLLING_FRICTION,
+        )
+    return body
+
+
 class SimBear:
     """The bear body, optionally held by a moving anchor (the NAO's hands).
 
@@ -79,16 +115,9 @@ class SimBear:
 
     def __init__(self, bullet: LockedBullet, clock: SimClock, T_world_bear: np.ndarray) -> None:
         self._bullet = bullet
-        com = bear_centre_of_mass()
         with bullet.lock:
-            shapes = [_part_shapes(bullet, part, com) for part in BEAR_PARTS]
-            self.body = _compound_body(
-                bullet, [collision for collision, _ in shapes], [visual for _, visual in shapes]
-            )
-            for link in range(-1, len(BEAR_PARTS) - 1):
-                bullet.changeDynamics(self.body, link, lateralFriction=0.9, rollingFriction=0.001)
-        self._T_bear_base = np.eye(4)
-        self._T_bear_base[:3, 3] = com
+            self.body = create_bear_body(bullet)
+        self._T_bear_base = T_bear_base()
         self._constraint: int | None = None
         self._anchor: Callable[[], np.ndarray] | None = None
         self._T_anchor_bear = np.eye(4)
@@ -206,7 +235,7 @@ class SimBear:
         )
 
 
-def _part_shapes(bullet: LockedBullet, part: BearPart, com: np.ndarray) -> tuple[int, int]:
+def _part_shapes(bullet: Any, part: BearPart, com: np.ndarray) -> tuple[int, int]:
     """(collision shape id, visual shape id) of one part, placed relative to the bear's
     centre of mass ``com`` (the multibody's base frame)."""
     position = list(np.asarray(part.centre) - com)
@@ -236,7 +265,7 @@ def _part_shapes(bullet: LockedBullet, part: BearPart, com: np.ndarray) -> tuple
     return collision, visual
 
 
-def _compound_body(bullet: LockedBullet, collision_ids: list[int], visual_ids: list[int]) -> int:
+def _compound_body(bullet: Any, collision_ids: list[int], visual_ids: list[int]) -> int:
     """A compound of primitives: one multibody with one fixed link per extra part, half
     the bear's mass in the base and half shared by the links."""
     links = len(BEAR_PARTS) - 1

@@ -63,44 +63,62 @@ class SimJudge:
             sitting_yaw_rad = true_yaw
         with self._bullet.lock:
             chair_contacts = self._bullet.getContactPoints(self._bear.body, self._chair_body)
-            on_chair = bool(chair_contacts)
             on_floor = bool(self._bullet.getContactPoints(self._bear.body, self._floor_body))
             T_world_bear = self._bear.T_world_bear()
-        up = T_world_bear[:3, 2]
-        tilt_deg = math.degrees(math.acos(float(np.clip(up[2], -1.0, 1.0))))
-        forward = T_world_bear[:3, 0]
-        heights_up_bear = [
-            float(np.dot(np.asarray(contact[5]) - T_world_bear[:3, 3], up))
-            for contact in chair_contacts
-        ]
-        back_supported = any(h >= BACK_SUPPORT_HEIGHT_M for h in heights_up_bear)
-        max_tilt_deg = (
-            MAX_RECLINE_DEG if back_supported and _leans_back(up, forward) else MAX_TILT_DEG
+        return judge_bear_pose(
+            T_world_bear, [np.asarray(c[5]) for c in chair_contacts], on_floor, sitting_yaw_rad
         )
-        if math.hypot(forward[0], forward[1]) < 1e-6:
-            facing_deg = 180.0
-        else:
-            facing_deg = abs(
-                math.degrees(wrap_angle(math.atan2(forward[1], forward[0]) - sitting_yaw_rad))
-            )
-        on_seat = on_chair and not on_floor
-        reasons = []
-        if not on_chair:
-            reasons.append("the bear does not touch the chair")
-        if on_floor:
-            reasons.append("the bear touches the floor")
-        if tilt_deg > max_tilt_deg:
-            reasons.append(f"torso tilted {tilt_deg:.0f} deg > {max_tilt_deg:.0f}")
-        if facing_deg > MAX_FACING_ERROR_DEG:
-            reasons.append(f"facing off by {facing_deg:.0f} deg > {MAX_FACING_ERROR_DEG:.0f}")
-        return SeatingJudgement(
-            seated=not reasons,
-            on_seat=on_seat,
-            torso_tilt_deg=tilt_deg,
-            facing_error_deg=facing_deg,
-            reason="; ".join(reasons),
-            T_world_bear=T_world_bear,
+
+
+def judge_bear_pose(
+    T_world_bear: np.ndarray,
+    chair_contact_points: list[np.ndarray],
+    on_floor: bool,
+    sitting_yaw_rad: float,
+) -> SeatingJudgement:
+    """The judge's criteria (see :class:`SimJudge`) on a bear at rest.
+
+    The one definition of "seated": the judge applies it to the world's bear, the release
+    imagination (:mod:`bearchair.skills.imagination.release`) to its model's.
+
+    Args:
+        T_world_bear: the bear frame in the world.
+        chair_contact_points: world points where the bear touches the chair.
+        on_floor: the bear touches the floor.
+        sitting_yaw_rad: the sitting direction the bear must face.
+    """
+    up = T_world_bear[:3, 2]
+    tilt_deg = math.degrees(math.acos(float(np.clip(up[2], -1.0, 1.0))))
+    forward = T_world_bear[:3, 0]
+    heights_up_bear = [
+        float(np.dot(np.asarray(point) - T_world_bear[:3, 3], up)) for point in chair_contact_points
+    ]
+    back_supported = any(h >= BACK_SUPPORT_HEIGHT_M for h in heights_up_bear)
+    max_tilt_deg = MAX_RECLINE_DEG if back_supported and _leans_back(up, forward) else MAX_TILT_DEG
+    if math.hypot(forward[0], forward[1]) < 1e-6:
+        facing_deg = 180.0
+    else:
+        facing_deg = abs(
+            math.degrees(wrap_angle(math.atan2(forward[1], forward[0]) - sitting_yaw_rad))
         )
+    on_chair = bool(chair_contact_points)
+    reasons = []
+    if not on_chair:
+        reasons.append("the bear does not touch the chair")
+    if on_floor:
+        reasons.append("the bear touches the floor")
+    if tilt_deg > max_tilt_deg:
+        reasons.append(f"torso tilted {tilt_deg:.0f} deg > {max_tilt_deg:.0f}")
+    if facing_deg > MAX_FACING_ERROR_DEG:
+        reasons.append(f"facing off by {facing_deg:.0f} deg > {MAX_FACING_ERROR_DEG:.0f}")
+    return SeatingJudgement(
+        seated=not reasons,
+        on_seat=on_chair and not on_floor,
+        torso_tilt_deg=tilt_deg,
+        facing_error_deg=facing_deg,
+        reason="; ".join(reasons),
+        T_world_bear=T_world_bear,
+    )
 
 
 def _leans_back(up: np.ndarray, forward: np.ndarray) -> bool:

@@ -524,10 +524,10 @@ def _blocked_above_reason(chair: ChairAlongRay, ray: SeatRay) -> str:
     overhang = chair.above_seat_m + BEAR_DEPTH_M / 2.0 - float(ray.slides_m[-1])
     return (
         f"the seat is closed in the NAO's way: something on it within "
-        f"{BAND_HALF_WIDTH_M:.2f} m of the sitting ray (armrests, a backrest) leaves no room "
-        f"for the bear ({BEAR_DEPTH_M:.2f} m deep) on the seat's front "
-        f"({overhang:.2f} m short); the NAO's hands hold the bear "
-        f"{BAND_HALF_WIDTH_M:.2f} m either side of it"
+        f"{BAND_HALF_WIDTH_M:.3f} m of the sitting ray (armrests, a backrest) leaves no room "
+        f"for the bear ({BEAR_DEPTH_M:.3f} m deep) on the seat's front "
+        f"({overhang:.3f} m short); the NAO's hands hold the bear "
+        f"{BAND_HALF_WIDTH_M:.3f} m either side of it"
     )
 
 
@@ -539,13 +539,13 @@ def _out_of_reach_reason(
     highest, lowest = model.max_seat_height_m(), model.min_seat_height_m()
     if height > highest:
         return (
-            f"seat too high for the NAO: seat {height:.2f} m, the NAO places a bear at most "
-            f"{highest:.2f} m high"
+            f"seat too high for the NAO: seat {height:.3f} m, the NAO places a bear at most "
+            f"{highest:.3f} m high"
         )
     if height < lowest:
         return (
-            f"seat too low for the NAO: seat {height:.2f} m, the NAO places a bear on seats "
-            f"at least {lowest:.2f} m high"
+            f"seat too low for the NAO: seat {height:.3f} m, the NAO places a bear on seats "
+            f"at least {lowest:.3f} m high"
         )
     # The stance that comes closest: the nearest sitting point against the reach there.
     best = (math.inf, math.nan, math.nan)
@@ -555,10 +555,10 @@ def _out_of_reach_reason(
         if not math.isnan(d_max) and needed - d_max < best[0]:
             best = (needed - d_max, needed, d_max)
     if math.isnan(best[1]):
-        return f"seat out of the NAO's reach: no posture places a bear on a {height:.2f} m seat"
+        return f"seat out of the NAO's reach: no posture places a bear on a {height:.3f} m seat"
     return (
-        f"seat out of the NAO's reach: the nearest supported sitting point is {best[1]:.2f} m "
-        f"ahead of the NAO at best, which reaches {best[2]:.2f} m there on a {height:.2f} m "
+        f"seat out of the NAO's reach: the nearest supported sitting point is {best[1]:.3f} m "
+        f"ahead of the NAO at best, which reaches {best[2]:.3f} m there on a {height:.3f} m "
         f"seat"
     )
 
