@@ -102,7 +102,7 @@ def test_skip_bad_with_every_chair_bad_gives_each_reason(tmp_path, capsys):
     line = refused(trials(folder, tmp_path, "--skip-bad"), capsys)
     assert "none of its 2 meshes takes part" in line
     assert "a.obj: unusable" in line and 'front_yaw_deg is "east"' in line
-    assert "b.obj: unknown without a front (front_yaw_deg null)" in line
+    assert "b.obj: chair without a front (front_yaw_deg null)" in line  # no kind: a chair
     assert "usable front" not in line
 
 

@@ -284,7 +284,7 @@ def test_trials_on_a_two_node_cluster_write_every_record_under_the_heads_out(tmp
     assert trials.returncode == 0, trials.stderr
     assert "3 node(s), 2 CPU(s); 2 trial(s) at once" in trials.stderr
     # Only our lines on stderr: the header, the cluster, the progress, the report.
-    ours = ("bearchair trials:", "[", "report:", "1 chairs x 6 trials")
+    ours = ("bearchair trials:", "[", "report:", "1 chairs x 6 trials", "trials ")
     assert [line for line in trials.stderr.splitlines() if not line.startswith(ours)] == []
     with TrialStore(out / "trials.sqlite") as store:
         records = store.records()

@@ -236,7 +236,7 @@ def slow_stop():  # the first stop hangs, as a robot that does not answer would
 
 robot.emergency_stop = slow_stop
 
-def fake_run(config, skills_=None, on_tick=None):
+def fake_run(config, skills_=None, on_tick=None, tree=None):
     root = create_tree()
     recorder = RunRecorder(config.out_dir, root)
     info = {"chair": "stub", "placement": "accessible", "helper": "obeys", "seed": 0}
