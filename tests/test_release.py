@@ -122,3 +122,17 @@ def test_a_seat_the_scan_lost_under_the_bear_is_taken_from_the_seat_map():
         box_chair_mesh(seat_height_m=SEAT_HEIGHT_M), bear, 0.0, NAO_POSE, seat_top_z=SEAT_HEIGHT_M
     )
     assert solid.stays and not solid.seat_patched
+
+
+def test_the_runtime_reset_closes_every_release_world():
+    # An open release world changed how another pybullet client's chair tipped
+    # (test_imagination's support-hull test, after any release test): it is process state.
+    from bearchair.core.meshes import box_chair_mesh
+    from bearchair.core.runtime import RUNTIME
+    from bearchair.skills.imagination import release
+
+    world = release._world(box_chair_mesh())
+    assert "release worlds" in RUNTIME.names()
+    RUNTIME.reset()
+    assert world.closed
+    assert release._world(box_chair_mesh()) is not world

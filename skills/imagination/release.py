@@ -29,6 +29,7 @@ from pybullet_utils import bullet_client
 from bearchair.core.geometry import make_transform, rot_z, yaw_of
 from bearchair.core.meshes import cache_dir, mesh_digest
 from bearchair.core.nao_carrying import BEAR_TORSO_DEPTH_M
+from bearchair.core.runtime import RUNTIME
 from bearchair.core.se2 import SE2Pose
 from bearchair.core.streams import silenced_fds
 from bearchair.hardware.interfaces import SeatingJudgement
@@ -242,6 +243,7 @@ class _ReleaseWorld:
         self.bear = create_bear_body(client)
         self.T_bear_base = T_bear_base()
         self.patch: int | None = None
+        self.closed = False
 
     def patch_seat(self, T_world_bear: np.ndarray, seat_top_z: float) -> bool:
         """Adds the seat map's seat under the bear's footprint where the scan has no
@@ -303,6 +305,7 @@ class _ReleaseWorld:
         )
 
     def close(self) -> None:
+        self.closed = True
         with contextlib.suppress(pybullet.error):
             self.client.disconnect()
 
@@ -310,12 +313,36 @@ class _ReleaseWorld:
 def _world(chair_mesh: trimesh.Trimesh) -> _ReleaseWorld:
     """This thread's release world for ``chair_mesh`` (rebuilt when the chair changes)."""
     world: _ReleaseWorld | None = getattr(_local, "world", None)
-    if world is not None and world.digest == mesh_digest(chair_mesh):
+    if world is not None and not world.closed and world.digest == mesh_digest(chair_mesh):
         return world
     if world is not None:
         world.close()
     _local.world = _ReleaseWorld(chair_mesh)
+    with _worlds_lock:
+        _worlds[:] = [w for w in _worlds if not w.closed] + [_local.world]
     return _local.world
+
+
+_worlds: list[_ReleaseWorld] = []
+"""Every thread's open release world, so the runtime can close them all."""
+_worlds_lock = threading.Lock()
+
+
+def close_release_worlds() -> None:
+    """Disconnects every release world's pybullet client (the runtime's reset and
+    shutdown): an open one is process state that other pybullet users then share."""
+    with _worlds_lock:
+        worlds, _worlds[:] = list(_worlds), []
+    for world in worlds:
+        world.close()
+
+
+def _shutdown_release_worlds(_bound_s: float) -> bool:
+    close_release_worlds()  # a disconnect does not wait
+    return True
+
+
+RUNTIME.register("release worlds", reset=close_release_worlds, shutdown=_shutdown_release_worlds)
 
 
 def _mesh_file(mesh: trimesh.Trimesh, digest: str) -> os.PathLike:
