@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import gc
 import logging
 import multiprocessing
 import multiprocessing.resource_tracker
@@ -163,6 +164,9 @@ def stop_resource_tracker(timeout_s: float) -> bool:
     tracker: Any = multiprocessing.resource_tracker._resource_tracker  # pyright: ignore[reportAttributeAccessIssue]  # private
     if multiprocessing.active_children():
         return False
+    # Semaphores of stopped pools that are garbage but not yet collected would unregister
+    # after the tracker has gone, and that starts a new tracker nobody stops.
+    gc.collect()
     with tracker._lock:
         fd, pid = tracker._fd, tracker._pid
         if fd is None or pid is None:

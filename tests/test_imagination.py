@@ -151,7 +151,9 @@ def test_chair_stands_and_tips_over_on_its_support_hull(box_chair: trimesh.Trime
     assert rotation[2, 2] > math.cos(math.radians(0.1))
     top = [float(chair.com_obb_m[0]), float(chair.com_obb_m[1]), chair.z_top_m]
     for _ in range(30):  # a shove at the top, far more than the chair's weight resists
-        p.applyExternalForce(body, -1, [0, 20.0 * chair.mass_kg, 0], top, p.WORLD_FRAME)
+        p.applyExternalForce(
+            body, -1, [0, 20.0 * chair.mass_kg, 0], top, p.WORLD_FRAME, physicsClientId=cid
+        )
         p.stepSimulation(physicsClientId=cid)
     for _ in range(240):
         p.stepSimulation(physicsClientId=cid)

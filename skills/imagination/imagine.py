@@ -703,6 +703,13 @@ def shutdown_workers(timeout_s: float = 30.0) -> bool:
         for workers_asked, pool in list(_pools.items()):
             if pool in pools:
                 del _pools[workers_asked]
+    # The executor's manager thread holds the pool's queues, whose named semaphores
+    # unregister from the resource tracker when they are collected; joined here, the
+    # queues go now, not after the tracker has stopped (which would start a new one).
+    for pool in pools:
+        manager = getattr(pool, "_executor_manager_thread", None)  # private field
+        if manager is not None:
+            manager.join(max(deadline - time.monotonic(), 0.0))
     return not late
 
 
