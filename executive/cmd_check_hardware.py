@@ -74,6 +74,14 @@ def check_hardware(args: argparse.Namespace) -> int:
     from bearchair.hardware.real import SDK_DISTRIBUTIONS, sdk_versions
     from bearchair.hardware.real.panda import into_walls
 
+    # Imported before any device is waited on (it imports open3d, about a second): a stop
+    # signal is handled between bytecodes, so it would wait for an import in progress.
+    from bearchair.skills.perception.views import (
+        HOME_CONFIGURATION,
+        OVERVIEW_CONFIGURATION,
+        SCAN_CONFIGURATIONS,
+    )
+
     if not args.timeout > 0:
         from bearchair.core.errors import InputError
 
@@ -98,12 +106,6 @@ def check_hardware(args: argparse.Namespace) -> int:
     # The devices first: an unreachable one is reported before the slower checks.
     session = _check_nao(cell, args.timeout, report) if cell.nao_url is not None else None
     arm = _check_panda(cell, args.timeout, report) if cell.panda_host is not None else None
-
-    from bearchair.skills.perception.views import (
-        HOME_CONFIGURATION,
-        OVERVIEW_CONFIGURATION,
-        SCAN_CONFIGURATIONS,
-    )
 
     views = {"HOME": HOME_CONFIGURATION, "OVERVIEW": OVERVIEW_CONFIGURATION}
     views.update({f"scan{i}": q for i, q in enumerate(SCAN_CONFIGURATIONS)})
