@@ -476,7 +476,7 @@ def test_a_bear_reclining_against_a_reclined_back_is_seated(tmp_path):
     import trimesh
 
     from bearchair.core.geometry import make_transform, rot_z
-    from bearchair.hardware.sim.judge import MAX_RECLINE_DEG, MAX_TILT_DEG, _leans_back
+    from bearchair.hardware.seating_criteria import MAX_RECLINE_DEG, MAX_TILT_DEG, _leans_back
 
     # A garden chair: seat top 0.24 m, its backrest reclined 38 deg from vertical.
     seat = trimesh.creation.box(extents=(0.28, 0.32, 0.03)).apply_translation((0, 0, 0.225))

@@ -24,13 +24,14 @@ import trimesh
 from PIL import Image
 
 from bearchair.core.arena import DEFAULT_ARENA, HUMANOID_TAG, Arena, accessible_sitting_yaws
+from bearchair.core.bullet_poses import matrix_to_pose, pose_to_matrix
 from bearchair.core.geometry import make_transform, rot_z, wrap_angle, yaw_of
 from bearchair.core.meshes import box_chair_mesh, load_mesh
 from bearchair.core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, PALM_IN_WRIST_M
 from bearchair.core.se2 import SE2Pose
 from bearchair.hardware.interfaces import CameraIntrinsics, Robot, Speaker
 from bearchair.hardware.sim.bear import SimBear
-from bearchair.hardware.sim.bullet import LockedBullet, matrix_to_pose, pose_to_matrix
+from bearchair.hardware.sim.bullet import LockedBullet
 from bearchair.hardware.sim.camera import SceneFrame, render_view
 from bearchair.hardware.sim.chair import SimChair
 from bearchair.hardware.sim.clock import SimClock

@@ -2,13 +2,13 @@
 
 The paper imagines the sitting by dropping a virtual child onto the scanned chair; this
 imagines the release the same way. The bear model is the simulated world's own bear
-(:func:`bearchair.hardware.sim.bear.create_bear_body`: shape, mass, friction), put where
+(:func:`bearchair.hardware.bear_model.create_bear_body`: shape, mass, friction), put where
 the planned goal posture holds it and let go onto the *reconstructed* chair (a static
 body colliding as the scan's triangle mesh, as the world's chair collides as its mesh),
 once as planned and once for each perturbation the real release will see: the walk
 stops anywhere within its stop box (:class:`bearchair.skills.control.walk.WalkGains`),
 and the scanned seat's height is a few millimetres off. Each settled bear is judged by
-the judge's own criteria (:func:`bearchair.hardware.sim.judge.judge_bear_pose`) against
+the judge's own criteria (:func:`bearchair.hardware.seating_criteria.judge_bear_pose`) against
 the imagined sitting direction. Nothing here sees the simulated world's true chair.
 """
 
@@ -26,18 +26,20 @@ import pybullet
 import trimesh
 from pybullet_utils import bullet_client
 
+from bearchair.core.bullet_poses import matrix_to_pose, pose_to_matrix
 from bearchair.core.geometry import make_transform, rot_z, yaw_of
 from bearchair.core.meshes import cache_dir, mesh_digest
 from bearchair.core.nao_carrying import BEAR_TORSO_DEPTH_M
 from bearchair.core.runtime import RUNTIME
 from bearchair.core.se2 import SE2Pose
 from bearchair.core.streams import silenced_fds
+from bearchair.hardware.bear_model import BEAR_PARTS, T_bear_base, create_bear_body
 from bearchair.hardware.interfaces import SeatingJudgement
-from bearchair.hardware.sim.bear import BEAR_PARTS, T_bear_base, create_bear_body
-from bearchair.hardware.sim.bullet import matrix_to_pose, pose_to_matrix
-from bearchair.hardware.sim.clock import PHYSICS_RATE_HZ
-from bearchair.hardware.sim.judge import judge_bear_pose
+from bearchair.hardware.seating_criteria import judge_bear_pose
 
+PHYSICS_RATE_HZ = 240.0
+"""The release's physics steps per second: pybullet's default step (1/240 s), the one the
+simulated world steps at too."""
 CHAIR_FRICTION = 0.8
 """Friction of a chair's surface (wood, plastic or fabric against plush): the simulated
 world's chairs have the same."""

@@ -41,6 +41,7 @@ from bearchair.core.nao_carrying import (
     PLACEMENT_TOLERANCE_M,
 )
 from bearchair.core.runtime import RUNTIME
+from bearchair.hardware.bear_model import BEAR_MASS_KG
 from bearchair.skills.planning.wholebody.nao_model import PlanarNao, link_transforms, planar_nao
 
 # The bear (0.25 m tall, 0.2 kg, its frame at its seat point: the bottom centre of its
@@ -51,11 +52,10 @@ from bearchair.skills.planning.wholebody.nao_model import PlanarNao, link_transf
 BEAR_HEIGHT_M = 0.25
 BEAR_DEPTH_M = 0.10
 """Fore-aft extent of the bear's outline (torso and head; its short legs are ignored)."""
-BEAR_MASS_KG = 0.2
 BEAR_SNOUT_M = 0.03
 """How far the bear's snout and nose stand out of its outline's front (toward the NAO),
 metres, over the heights ``BEAR_SNOUT_Z_M`` above its base (the simulated bear,
-``hardware/sim/bear.py``, has its nose 0.076 m ahead of its centre, 0.145-0.18 m up)."""
+``hardware/bear_model.py``, has its nose 0.076 m ahead of its centre, 0.145-0.18 m up)."""
 BEAR_SNOUT_Z_M = (0.14, 0.19)
 
 BEAR_TILT_GOAL_RAD = math.radians(8.0)
