@@ -85,8 +85,8 @@ def main(argv: list[str] | None = None) -> int:
 
     from bearchair.core.meshes import load_mesh
     from bearchair.skills.imagination import imagine_sitting_details, warm_up
-    from bearchair.skills.imagination.imagine import choose_sitting_pose
     from bearchair.skills.imagination.sam import score_drop
+    from bearchair.skills.imagination.vote import choose_sitting_pose
 
     rows = []
     saved: dict[str, tuple] = {}
@@ -180,8 +180,8 @@ def _generated_chairs(count: int, seed: int, families: list[str]):
 def _generated(args: argparse.Namespace) -> int:
     from bearchair.skills.chairgen import FAMILIES
     from bearchair.skills.imagination import imagine_sitting_details, warm_up
-    from bearchair.skills.imagination.imagine import choose_sitting_pose
     from bearchair.skills.imagination.sam import score_drop
+    from bearchair.skills.imagination.vote import choose_sitting_pose
 
     families = [f for f in (args.families.split(",") if args.families else FAMILIES) if f]
     saved: dict[str, tuple] = {}

@@ -465,7 +465,7 @@ def _failed(rotation: int):
 
 
 def _choose(drops):
-    from bearchair.skills.imagination.imagine import choose_sitting_pose
+    from bearchair.skills.imagination.vote import choose_sitting_pose
 
     return choose_sitting_pose(_prepared_identity(), tuple(drops), {"total": 0.0})
 

@@ -65,7 +65,7 @@ def test_a_named_memo_is_reset_by_the_runtime_and_an_unnamed_one_is_not():
 
 def test_the_process_wide_memos_and_pool_are_registered():
     import bearchair.skills.imagination.chair
-    import bearchair.skills.imagination.imagine
+    import bearchair.skills.imagination.workers
     import bearchair.skills.planning.preplan  # noqa: F401 - registers the pre-plan memo
 
     assert {
@@ -95,7 +95,7 @@ def test_the_imagination_pool_stops_with_its_workers_and_resource_tracker():
     script = (
         "import os, multiprocessing, time\n"
         "from bearchair.core.runtime import RUNTIME\n"
-        "from bearchair.skills.imagination.imagine import warm_up\n"
+        "from bearchair.skills.imagination.workers import warm_up\n"
         "warm_up(2)\n"
         "print(len(multiprocessing.active_children()), flush=True)\n"
         "print(RUNTIME.shutdown(30.0), flush=True)\n"

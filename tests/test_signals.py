@@ -181,7 +181,7 @@ def test_ctrl_c_while_the_world_is_built_leaves_a_record_inspect_replays(
 SECOND_SIGNAL_ON_A_POOL = """
 import sys, time
 from bearchair.executive import interrupts
-from bearchair.skills.imagination.imagine import warm_up
+from bearchair.skills.imagination.workers import warm_up
 warm_up(2)
 with interrupts.handling_signals():
     try:

@@ -1,7 +1,8 @@
 """Sitting imagination: find how to sit on an unseen chair by physical simulation.
 
 Public entry point: :func:`imagine_sitting` (the ``imagine_sitting`` skill of
-``bearchair.skills.toolbox``). See ``imagine.py`` for the procedure, ``agent.py`` for the
+``bearchair.skills.toolbox``). See ``imagine.py`` for the procedure, ``vote.py`` for the choice of the rotation,
+``workers.py`` for the worker processes, ``parameters.py`` for the drops' numbers, ``agent.py`` for the
 generated child-sized agent, ``chair.py`` for g_obb and the chair's preparation,
 ``simulation.py`` for the drops and ``sam.py`` for the sitting affordance model.
 
@@ -20,9 +21,8 @@ if TYPE_CHECKING:
         ImaginationDetails,
         imagine_sitting,
         imagine_sitting_details,
-        shutdown_workers,
-        warm_up,
     )
+    from bearchair.skills.imagination.workers import shutdown_workers, warm_up
 
 DEFAULT_WORKERS = 2
 """Worker processes the imagination drops in unless told otherwise (1: the caller's own);
@@ -39,5 +39,6 @@ __all__ = [
 
 def __getattr__(name: str) -> Any:
     if name in __all__:
-        return getattr(importlib.import_module("bearchair.skills.imagination.imagine"), name)
+        module = "workers" if name in ("shutdown_workers", "warm_up") else "imagine"
+        return getattr(importlib.import_module(f"bearchair.skills.imagination.{module}"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
