@@ -71,7 +71,7 @@ from bearchair.skills.imagination.chair import (
     horizontal_area_m2,
     prepare_chair,
 )
-from bearchair.skills.imagination.parameters import (
+from bearchair.skills.imagination.drop_parameters import (
     EXTRA_POSITIONS,
     FIRST_POSITIONS,
     JITTER_POSITION_M,

@@ -10,7 +10,7 @@ import numpy as np
 
 from bearchair.core.geometry import SittingPose, transform_points, wrap_angle
 from bearchair.skills.imagination.chair import PreparedChair
-from bearchair.skills.imagination.parameters import (
+from bearchair.skills.imagination.drop_parameters import (
     MIN_CORRECT,
     N_ROTATIONS,
     PULL_MIN_RAD,
