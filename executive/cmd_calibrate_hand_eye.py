@@ -102,7 +102,7 @@ class View(NamedTuple):
         detection: the board's pose in the camera frame, None when it was not seen.
         note: why the board was not seen.
         depth_ratio: the depth image's distance to the board over its pose's
-            (:func:`bearchair.skills.perception.hand_eye.board_depth_ratio`), None without depth.
+            (:func:`bearchair.skills.perception.charuco.board_depth_ratio`), None without depth.
     """
 
     name: str
@@ -120,7 +120,7 @@ def _error(message: str) -> Exception:
 
 
 def _board(args: argparse.Namespace, recorded: dict[str, Any] | None = None) -> Any:
-    from bearchair.skills.perception.hand_eye import CALIBRATION_BOARD, BoardSpec
+    from bearchair.skills.perception.charuco import CALIBRATION_BOARD, BoardSpec
 
     board = CALIBRATION_BOARD
     if recorded is not None:
@@ -170,7 +170,7 @@ def _write_board(args: argparse.Namespace) -> int:
     import cv2
 
     from bearchair.executive.outputs import atomic_path, check_output_file
-    from bearchair.skills.perception.hand_eye import board_image
+    from bearchair.skills.perception.charuco import board_image
 
     if args.views is not None or args.yes or args.out is not None:
         raise _error("--board-png writes the board only; no --views, --yes or --out")
@@ -278,8 +278,8 @@ def _visit_views(
 def _detect(
     name: str, joints: np.ndarray, T_base_flange: np.ndarray, frame: Any, board: Any
 ) -> View:
+    from bearchair.skills.perception.charuco import board_depth_ratio, detect_board
     from bearchair.skills.perception.errors import BoardNotSeenError
-    from bearchair.skills.perception.hand_eye import board_depth_ratio, detect_board
 
     configuration = tuple(round(float(q), 4) for q in joints)
     try:
@@ -428,7 +428,7 @@ def _load_views(path: Path) -> tuple[Any, list[View]]:
             f"--from {printable(path)}: {len(record['views'])} views, more than the "
             f"{MAX_VIEWS} a calibration uses (A X = X B pairs grow as the square of the views)"
         )
-    from bearchair.skills.perception.hand_eye import BoardDetection, BoardSpec
+    from bearchair.skills.perception.charuco import BoardDetection, BoardSpec
 
     try:
         board = BoardSpec(**record["board"])

@@ -16,16 +16,18 @@ from scipy.spatial.transform import Rotation
 from bearchair.executive.cli import main
 from bearchair.hardware.real.camera import CARMINE_INTRINSICS
 from bearchair.hardware.real.standins import panda_flange_pose
+from bearchair.skills.perception.charuco import (
+    CALIBRATION_BOARD,
+    board_depth_ratio,
+    board_image,
+    detect_board,
+)
 from bearchair.skills.perception.errors import BoardNotSeenError, HandEyeError
 from bearchair.skills.perception.hand_eye import (
     BOARD_CENTRE_BASE_XY_M,
-    CALIBRATION_BOARD,
     CALIBRATION_CONFIGURATIONS,
     MIN_ROTATION_DIVERSITY_DEG,
-    board_depth_ratio,
-    board_image,
     board_pose_residuals,
-    detect_board,
     rotation_diversity_deg,
     solve_hand_eye,
 )

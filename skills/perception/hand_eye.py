@@ -3,7 +3,8 @@
 Eye-in-hand: the camera rides on the Panda's flange and looks at a board lying still in
 the cell. For every view ``i`` the arm gives ``T_base_flange_i`` (libfranka's
 ``O_T_EE @ inv(F_T_EE)``, as :class:`bearchair.hardware.real.panda.PandaArm` computes it) and the
-camera sees the board at ``T_camera_board_i`` (:func:`detect_board`). The board does
+camera sees the board at ``T_camera_board_i``
+(:func:`bearchair.skills.perception.charuco.detect_board`). The board does
 not move, so for every view
 
     T_base_board = T_base_flange_i @ T_flange_camera @ T_camera_board_i,
@@ -37,7 +38,8 @@ the views: zero for perfect data, and the honest measure of how far to trust it,
 for the board's scale: a square printed smaller than its nominal size moves every board
 pose proportionally closer, which the views, all about as far from the board, absorb
 into the camera's offset along its optical axis without a residual.
-:func:`board_depth_ratio` checks that scale against the depth image instead.
+:func:`bearchair.skills.perception.charuco.board_depth_ratio` checks that scale against
+the depth image instead.
 
 Frames: the board's frame is OpenCV's ChArUco frame: origin at the board's outer
 top-left chessboard corner as printed, x along its rows (``squares_x``), y down its
@@ -50,15 +52,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from functools import lru_cache
-from typing import Any, NamedTuple, cast
+from typing import Any, NamedTuple
 
-import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from bearchair.hardware.interfaces import CameraIntrinsics
-from bearchair.skills.perception.errors import BoardNotSeenError, HandEyeError
+from bearchair.skills.perception.errors import HandEyeError
 
 MIN_VIEWS = 3
 """Fewest (T_base_flange, T_camera_board) pairs solved: two motions about different axes
@@ -69,14 +68,6 @@ MIN_ROTATION_DIVERSITY_DEG = 5.0
 motions about one axis the rotation about it and the translation along it are free; near
 that, noise in the board's pose is amplified by about the inverse of this angle. The
 stored :data:`CALIBRATION_CONFIGURATIONS` give about 16 degrees."""
-
-MIN_BOARD_CORNERS = 6
-"""Fewest ChArUco corners from which a board pose is computed (PnP needs 4 on a plane;
-6, not on one line, leave some redundancy against one bad corner)."""
-
-MAX_REPROJECTION_PX = 2.0
-"""A board pose whose corners reproject worse than this (RMS, pixels) is refused: the
-intrinsics are wrong, the board is bent, or a corner was misdetected."""
 
 MAX_SPREAD_MM = 8.0
 """Acceptance (``bearchair calibrate-hand-eye``): the board's position over the views
@@ -89,48 +80,12 @@ deviation from the mean); 1 degree moves a point 0.5 m away by 9 mm, again one v
 
 MAX_SCALE_ERROR = 0.02
 """Acceptance: the depth camera's distance to the board and the distance its printed
-size gives (:func:`board_depth_ratio`) agree within 2 %. The residuals cannot see a
+size gives (:func:`~bearchair.skills.perception.charuco.board_depth_ratio`) agree within 2 %. The residuals cannot see a
 wrong square size: with every view about as far from the board, a board printed 3 %
 small moves every board pose 3 % closer, which the solve absorbs as a camera 14 mm
 farther along its optical axis, with residuals as small as before. 2 % (10 mm at
 0.5 m) is above the structured-light depth's own error there and below the 3-6 % a
 "fit to page" print loses."""
-
-MIN_DEPTH_PIXELS = 200
-"""Fewest valid depth pixels on the board for :func:`board_depth_ratio`."""
-
-
-class BoardSpec(NamedTuple):
-    """A printed ChArUco board.
-
-    Attributes:
-        squares_x: squares along the board's x axis (its long side).
-        squares_y: squares along its y axis.
-        square_m: side of one chessboard square as printed, metres (measure the print).
-        marker_m: side of one ArUco marker inside a white square, metres.
-        dictionary: the ``cv2.aruco`` predefined dictionary of the markers.
-    """
-
-    squares_x: int = 7
-    squares_y: int = 5
-    square_m: float = 0.030
-    marker_m: float = 0.022
-    dictionary: str = "DICT_5X5_50"
-
-    def printed_at(self, square_m: float) -> BoardSpec:
-        """The same board printed at another scale (a printer that shrinks the page)."""
-        return self._replace(square_m=square_m, marker_m=self.marker_m * square_m / self.square_m)
-
-    @property
-    def corners(self) -> int:
-        """Inner chessboard corners: the points a detection can find."""
-        return (self.squares_x - 1) * (self.squares_y - 1)
-
-
-CALIBRATION_BOARD = BoardSpec()
-"""7 x 5 squares of 30 mm (21 x 15 cm: on A4 with its margins), 22 mm markers from
-DICT_5X5_50: another dictionary than the NAO's head tag (DICT_4X4_50), so neither
-detector mistakes a marker of the other for its own."""
 
 BOARD_CENTRE_BASE_XY_M = (0.6, 0.0)
 """Where the board lies for :data:`CALIBRATION_CONFIGURATIONS`: flat on the floor, face
@@ -168,21 +123,6 @@ CALIBRATION_CONFIGURATIONS: tuple[tuple[float, ...], ...] = (
 )
 """Nine arm configurations (radians) looking at the board from different sides; the
 first three already turn about different axes, so ``--views 3`` is solvable."""
-
-
-class BoardDetection(NamedTuple):
-    """The board's pose in one camera frame.
-
-    Attributes:
-        T_camera_board: 4x4, the board's frame in the camera's optical frame (metres).
-        corners: ChArUco corners found (of :attr:`BoardSpec.corners`).
-        reprojection_rms_px: RMS distance between the found corners and the pose's
-            projection of the board's corners, pixels.
-    """
-
-    T_camera_board: np.ndarray
-    corners: int
-    reprojection_rms_px: float
 
 
 class HandEyeResiduals(NamedTuple):
@@ -256,170 +196,6 @@ class HandEyeCalibration(NamedTuple):
         T = np.round(self.T_flange_camera, 6)
         T[3] = (0.0, 0.0, 0.0, 1.0)
         return {"T_flange_camera": (T + 0.0).tolist()}  # + 0.0: no "-0.0" in the file
-
-
-@lru_cache(maxsize=8)
-def charuco_board(board: BoardSpec) -> cv2.aruco.CharucoBoard:
-    """The OpenCV board object of a :class:`BoardSpec` (OpenCV >= 4.7's ChArUco API)."""
-    dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, board.dictionary))
-    return cv2.aruco.CharucoBoard(
-        (board.squares_x, board.squares_y), board.square_m, board.marker_m, dictionary
-    )
-
-
-@lru_cache(maxsize=8)
-def _detector(board: BoardSpec) -> cv2.aruco.CharucoDetector:
-    return cv2.aruco.CharucoDetector(charuco_board(board))
-
-
-def board_image(
-    board: BoardSpec = CALIBRATION_BOARD, pixels_per_square: int = 354, margin_squares: float = 0.5
-) -> np.ndarray:
-    """The printable board (grey uint8), with a white margin of ``margin_squares``.
-
-    At the default 354 pixels per 30 mm square the picture is 300 dpi: print it at 100 %
-    and measure a square (``bearchair calibrate-hand-eye --square-mm``). Board point
-    (X, Y) lies at pixel ``margin + (X, Y) * pixels_per_square / square_m`` (pixel
-    centres at integers minus one half: OpenCV's convention).
-    """
-    margin = round(margin_squares * pixels_per_square)
-    size = (
-        board.squares_x * pixels_per_square + 2 * margin,
-        board.squares_y * pixels_per_square + 2 * margin,
-    )
-    return charuco_board(board).generateImage(size, marginSize=margin, borderBits=1)
-
-
-def detect_board(
-    rgb: np.ndarray,
-    intrinsics: CameraIntrinsics,
-    board: BoardSpec = CALIBRATION_BOARD,
-    distortion: np.ndarray | None = None,
-) -> BoardDetection:
-    """The board's pose in the camera frame from one colour image.
-
-    Finds the ArUco markers, interpolates the ChArUco corners between them (sub-pixel),
-    and fits the pose by PnP for a plane (IPPE: both solutions of the planar ambiguity,
-    the better kept), refined by Levenberg-Marquardt on the reprojection error.
-
-    Args:
-        rgb: (H, W, 3) uint8 colour image (or (H, W) grey).
-        intrinsics: the camera's pinhole model in pixels.
-        board: the printed board.
-        distortion: OpenCV distortion coefficients; None for an undistorted image (the
-            Carmine's and RealSense's registered images, with their factory models).
-
-    Raises:
-        BoardNotSeenError: fewer than :data:`MIN_BOARD_CORNERS` corners, corners on one
-            line, no pose, or a pose that reprojects worse than :data:`MAX_REPROJECTION_PX`.
-    """
-    object_points, image_points, found = _board_corners(rgb, board)
-    K = intrinsics.matrix()
-    dist = np.zeros(5) if distortion is None else np.asarray(distortion, dtype=float)
-    rvec, tvec = _planar_pose(object_points, image_points, K, dist, found)
-    projected, _ = cv2.projectPoints(object_points, rvec, tvec, K, dist)
-    offsets = projected.reshape(-1, 2) - np.asarray(image_points).reshape(-1, 2)
-    rms = float(np.sqrt(np.mean(np.sum(offsets**2, axis=1))))
-    if rms > MAX_REPROJECTION_PX:
-        raise BoardNotSeenError(
-            f"calibration board: its {found} corners reproject {rms:.2f} px RMS from the best "
-            f"pose (at most {MAX_REPROJECTION_PX} px): wrong intrinsics or a bent board"
-        )
-    T_camera_board = np.eye(4)
-    T_camera_board[:3, :3] = cv2.Rodrigues(rvec)[0]
-    T_camera_board[:3, 3] = np.asarray(tvec).reshape(3)
-    return BoardDetection(T_camera_board, found, rms)
-
-
-def _board_corners(rgb: np.ndarray, board: BoardSpec) -> tuple[np.ndarray, np.ndarray, int]:
-    """The ChArUco corners found in the image: (board points, image points, how many).
-
-    Raises:
-        BoardNotSeenError: fewer than :data:`MIN_BOARD_CORNERS` corners, or on one line.
-    """
-    image = np.ascontiguousarray(rgb)
-    gray = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) if image.ndim == 3 else image
-    corners_px, ids, _, marker_ids = _detector(board).detectBoard(gray)
-    found = 0 if ids is None else len(ids)
-    markers = 0 if marker_ids is None else len(marker_ids)
-    if found < MIN_BOARD_CORNERS:
-        raise BoardNotSeenError(
-            f"calibration board not seen: {found} of its {board.corners} corners found "
-            f"({markers} markers), at least {MIN_BOARD_CORNERS} needed"
-        )
-    cv_board = charuco_board(board)
-    if cv_board.checkCharucoCornersCollinear(ids):
-        raise BoardNotSeenError(
-            f"calibration board seen edge-on: its {found} corners found lie on one line"
-        )
-    # cv2's stubs type an InputArrayOfArrays as a sequence; the (N, 1, 2) array is one.
-    object_points, image_points = cv_board.matchImagePoints(
-        cast(Sequence[np.ndarray], corners_px), ids
-    )
-    return object_points, image_points, found
-
-
-def _planar_pose(
-    object_points: np.ndarray,
-    image_points: np.ndarray,
-    K: np.ndarray,
-    dist: np.ndarray,
-    found: int,
-) -> tuple[np.ndarray, np.ndarray]:
-    """(rvec, tvec) of the board from its ``found`` corners: the better IPPE solution,
-    refined by Levenberg-Marquardt.
-
-    Raises:
-        BoardNotSeenError: no pose fits the corners.
-    """
-    count, rvecs, tvecs, errors = cv2.solvePnPGeneric(
-        object_points, image_points, K, dist, flags=cv2.SOLVEPNP_IPPE
-    )
-    if not count:
-        raise BoardNotSeenError(f"calibration board: no pose fits its {found} corners")
-    best = int(np.argmin(np.asarray(errors).reshape(-1)))
-    return cv2.solvePnPRefineLM(object_points, image_points, K, dist, rvecs[best], tvecs[best])
-
-
-def board_depth_ratio(
-    detection: BoardDetection,
-    depth_m: np.ndarray,
-    intrinsics: CameraIntrinsics,
-    board: BoardSpec = CALIBRATION_BOARD,
-) -> float | None:
-    """The depth image's distance to the board over the distance its pose gives.
-
-    Over the pixels of the chessboard's inner 80 % (away from its edges' mixed depths),
-    the median of measured depth over the depth of the board's plane at that pixel. 1
-    when the printed size, the colour intrinsics and the depth agree; a board printed
-    ``s`` times its nominal size (with the nominal size given) reads ``s``.
-
-    Returns:
-        The ratio, or None with fewer than :data:`MIN_DEPTH_PIXELS` valid depth pixels.
-    """
-    T = detection.T_camera_board
-    width, height = board.squares_x * board.square_m, board.squares_y * board.square_m
-    centre = np.array([width / 2.0, height / 2.0, 0.0])
-    outline = np.array(
-        [[0.0, 0.0, 0.0], [width, 0.0, 0.0], [width, height, 0.0], [0.0, height, 0.0]]
-    )
-    inner = centre + 0.8 * (outline - centre)
-    in_camera = (T[:3, :3] @ inner.T).T + T[:3, 3]
-    if np.any(in_camera[:, 2] <= 0.0):
-        return None
-    K = intrinsics.matrix()
-    pixels = (K @ in_camera.T).T
-    pixels = pixels[:, :2] / pixels[:, 2:]
-    depth = np.asarray(depth_m, dtype=np.float64)
-    mask = np.zeros(depth.shape, dtype=np.uint8)
-    cv2.fillConvexPoly(mask, np.round(pixels).astype(np.int32), 1)
-    rows, cols = np.nonzero((mask > 0) & np.isfinite(depth) & (depth > 0.0))
-    if len(rows) < MIN_DEPTH_PIXELS:
-        return None
-    rays = np.linalg.inv(K) @ np.vstack((cols, rows, np.ones(len(rows))))
-    normal = T[:3, 2]
-    plane_depth = float(normal @ T[:3, 3]) / (normal @ rays)
-    return float(np.median(depth[rows, cols] / plane_depth))
 
 
 def _rigid(T: Any, name: str) -> np.ndarray:

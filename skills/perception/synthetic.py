@@ -35,7 +35,7 @@ from bearchair.hardware.sim.camera import (
 )
 
 if TYPE_CHECKING:
-    from bearchair.skills.perception.hand_eye import BoardSpec
+    from bearchair.skills.perception.charuco import BoardSpec
 
 
 class SyntheticScene:
@@ -123,7 +123,7 @@ class SyntheticScene:
         outer top-left chessboard corner, x along its rows, y down its columns, z into the
         board; the printed face looks along -z.
         """
-        from bearchair.skills.perception.hand_eye import board_image
+        from bearchair.skills.perception.charuco import board_image
 
         pixels_per_square = 60
         image = board_image(board, pixels_per_square=pixels_per_square, margin_squares=0.5)
@@ -276,12 +276,12 @@ def board_view(
 ) -> np.ndarray:
     """A camera's (H, W, 3) uint8 picture of a printed board at ``T_camera_board``.
 
-    The printed board (:func:`bearchair.skills.perception.hand_eye.board_image`) is mapped by the
+    The printed board (:func:`bearchair.skills.perception.charuco.board_image`) is mapped by the
     plane's homography ``K [r1 r2 t]`` at twice the resolution and averaged down 2 x 2
     (so edges are anti-aliased as a lens and sensor would), on a grey background, with
     Gaussian grey noise. Exact pinhole geometry, no distortion, no lighting.
     """
-    from bearchair.skills.perception.hand_eye import board_image
+    from bearchair.skills.perception.charuco import board_image
 
     pixels_per_square = 120
     margin_px = pixels_per_square // 2
