@@ -4,14 +4,11 @@ Everything works on :class:`bearchair.hardware.interfaces.RGBDFrame` from any ca
 functions taking a :class:`bearchair.hardware.interfaces.ScanningArm` move it and capture.
 """
 
+from bearchair.skills.perception.chair_turn import measure_chair_rotation
 from bearchair.skills.perception.errors import PerceptionError, RegistrationError
 from bearchair.skills.perception.motion import wait_until_chair_still
 from bearchair.skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
-from bearchair.skills.perception.registration import (
-    RegistrationConfig,
-    measure_chair_rotation,
-    register_chair,
-)
+from bearchair.skills.perception.registration import RegistrationConfig, register_chair
 from bearchair.skills.perception.scan import ScanCancelled, scan_chair
 from bearchair.skills.perception.tags import estimate_tag_pose, locate_humanoid
 
