@@ -11,7 +11,7 @@ import functools
 import threading
 
 from bearchair.skills import assistance, control, imagination, perception
-from bearchair.skills.imagination.simulation import SimulationSettings
+from bearchair.skills.imagination.drop_records import SimulationSettings
 from bearchair.skills.parameters import SkillParameters
 from bearchair.skills.perception.reconstruction import ReconstructionConfig
 from bearchair.skills.planning import se2, stance, wholebody

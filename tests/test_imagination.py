@@ -112,12 +112,8 @@ def test_the_chair_memory_keeps_the_most_recently_used_chairs(tmp_path, monkeypa
 
 
 def test_chair_stands_and_tips_over_on_its_support_hull(box_chair: trimesh.Trimesh) -> None:
-    from bearchair.skills.imagination.simulation import (
-        ChairBody,
-        SimulationSettings,
-        _connection,
-        add_chair,
-    )
+    from bearchair.skills.imagination.drop_records import ChairBody, SimulationSettings
+    from bearchair.skills.imagination.simulation import _connection, add_chair
 
     chair = prepare_chair(box_chair)
     p, cid = _connection()
@@ -346,13 +342,9 @@ def test_a_table_top_gets_no_upright_sitters() -> None:
 
 def test_the_righting_torque_balances_on_a_stool_but_not_on_a_post() -> None:
     from bearchair.skills.chairgen import generate_chair
+    from bearchair.skills.imagination.drop_records import DropSpec, SimulationSettings, TaskSpec
     from bearchair.skills.imagination.sam import score_drop
-    from bearchair.skills.imagination.simulation import (
-        DropSpec,
-        SimulationSettings,
-        TaskSpec,
-        run_task,
-    )
+    from bearchair.skills.imagination.simulation import run_task
 
     # A 6 cm post with its top at sitting height: the agent's weight falls outside it
     # by more than the righting torque's lean.

@@ -83,19 +83,19 @@ from bearchair.skills.imagination.drop_parameters import (
     SPLIT_SETTLE_REPEATS,
     WINDOW_HALF_WIDTH,
 )
-from bearchair.skills.imagination.sam import (
-    DEFAULT_THRESHOLDS,
-    SamThresholds,
-    score_drop,
-)
-from bearchair.skills.imagination.simulation import (
+from bearchair.skills.imagination.drop_records import (
     ChairBody,
     DropSpec,
     RawDrop,
     SimulationSettings,
     TaskSpec,
-    _pybullet,
 )
+from bearchair.skills.imagination.sam import (
+    DEFAULT_THRESHOLDS,
+    SamThresholds,
+    score_drop,
+)
+from bearchair.skills.imagination.simulation import _pybullet
 from bearchair.skills.imagination.vote import (
     choose_sitting_pose,
     correct_by_rotation,

@@ -48,7 +48,7 @@ from typing import NamedTuple
 import numpy as np
 
 from bearchair.skills.imagination.agent import JOINTS, LINKS
-from bearchair.skills.imagination.simulation import RawDrop
+from bearchair.skills.imagination.drop_records import RawDrop
 from bearchair.skills.results import DropOutcome
 
 

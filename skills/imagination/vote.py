@@ -16,8 +16,8 @@ from bearchair.skills.imagination.drop_parameters import (
     PULL_MIN_RAD,
     WINDOW_HALF_WIDTH,
 )
+from bearchair.skills.imagination.drop_records import RawDrop
 from bearchair.skills.imagination.sam import failed_criteria
-from bearchair.skills.imagination.simulation import RawDrop
 from bearchair.skills.results import DropOutcome, ImaginationResult, RotationVote
 
 

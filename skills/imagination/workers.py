@@ -18,13 +18,8 @@ from multiprocessing.process import BaseProcess
 from bearchair.core.progress import report as report_progress
 from bearchair.core.runtime import RUNTIME
 from bearchair.skills.imagination import DEFAULT_WORKERS
-from bearchair.skills.imagination.simulation import (
-    RawDrop,
-    TaskSpec,
-    ping,
-    run_task,
-    worker_initializer,
-)
+from bearchair.skills.imagination.drop_records import RawDrop, TaskSpec
+from bearchair.skills.imagination.simulation import ping, run_task, worker_initializer
 
 Runner = Callable[[list[TaskSpec], threading.Event | None], tuple[list[list[RawDrop]], float, bool]]
 """Runs tasks until cancelled: (the drops per task run, physics seconds, cancelled)."""
