@@ -93,22 +93,6 @@ leaf's message counts its seconds every tick); status changes are logged at thei
 Each log takes about 2 ms of the tick thread, more when the skills' threads hold the GIL."""
 
 
-SCENE_LOGGERS: dict[str, str] = {
-    keys.ARENA: "log_arena",
-    keys.CHAIR_SCAN: "log_scan",
-    keys.CHAIR_MESH: "log_chair",
-    keys.IMAGINATION: "log_imagination",
-    keys.SITTING_POSE: "log_sitting_pose",
-    keys.REACHABILITY: "log_reachability",
-    keys.ACCESSIBILITY: "log_accessibility",
-    keys.WALK: "log_walk",
-    keys.SEATING_PLAN: "log_seating_plan",
-    keys.JUDGEMENT: "log_judgement",
-}
-"""The blackboard keys drawn in the scene, each with its function in
-:mod:`bearchair.executive.recording_scene`."""
-
-
 class RecordingUnavailable(BackendUnavailable):
     """A recording was asked for but cannot be made (no rerun-sdk, no display)."""
 
@@ -418,8 +402,8 @@ class MissionRecording:
         elif key == keys.MEASURED_ROTATIONS:
             for rotation in value[len(previous or []) :]:
                 self._scene.log_rotation(self._stream, rotation)
-        elif key in SCENE_LOGGERS:
-            getattr(self._scene, SCENE_LOGGERS[key])(self._stream, value)
+        elif key in self._scene.SCENE_LOGGERS:
+            self._scene.SCENE_LOGGERS[key](self._stream, value)
         if key == keys.ARENA:
             self._robots.log_arm_base(self._stream, value.arm_base_xy)
 

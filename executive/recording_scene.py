@@ -32,12 +32,14 @@ seat/judgement                        the judge's verdict
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import rerun as rr
 from scipy.spatial.transform import Rotation
 
+from bearchair.behaviours import keys
 from bearchair.core.arena import Arena, Box2D
 from bearchair.core.geometry import SittingPose
 from bearchair.core.se2 import SE2Pose
@@ -404,3 +406,18 @@ def _link_boxes(links: Any) -> tuple[np.ndarray, np.ndarray]:
         half_sizes.append(half)
         centres.append(np.asarray(link.centre_m, dtype=float))
     return np.array(half_sizes), np.array(centres)
+
+
+SCENE_LOGGERS: dict[str, Callable[[rr.RecordingStream, Any], None]] = {
+    keys.ARENA: log_arena,
+    keys.CHAIR_SCAN: log_scan,
+    keys.CHAIR_MESH: log_chair,
+    keys.IMAGINATION: log_imagination,
+    keys.SITTING_POSE: log_sitting_pose,
+    keys.REACHABILITY: log_reachability,
+    keys.ACCESSIBILITY: log_accessibility,
+    keys.WALK: log_walk,
+    keys.SEATING_PLAN: log_seating_plan,
+    keys.JUDGEMENT: log_judgement,
+}
+"""The blackboard keys drawn in the scene, each with the function that draws its value."""
