@@ -29,7 +29,6 @@ class DefaultSkills:
     """
 
     scan_chair = staticmethod(perception.scan_chair)
-    locate_humanoid = staticmethod(perception.locate_humanoid)
     wait_until_chair_still = staticmethod(perception.wait_until_chair_still)
     measure_chair_rotation = staticmethod(perception.measure_chair_rotation)
     check_seat_reachable = staticmethod(stance.check_seat_reachable)
@@ -50,6 +49,11 @@ class DefaultSkills:
         parameters = parameters or SkillParameters()
         self.imagination_workers = imagination_workers
         self.parameters = parameters
+        # Where this mission last saw the NAO's tag: the next tracking frame is read out
+        # around it (the walk's 10 Hz loop).
+        self.locate_humanoid = functools.partial(
+            perception.locate_humanoid, sightings=perception.TagSightings()
+        )
         settings = _simulation_settings(parameters)
         self.imagine_sitting = functools.partial(
             imagination.imagine_sitting,

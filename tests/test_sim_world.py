@@ -51,7 +51,7 @@ def test_world_builds_with_the_box_chair_and_protocols(world):
 
 
 def test_a_window_of_the_image_is_the_full_frame_cropped_and_tracks_the_tag():
-    from bearchair.skills.perception.tags import locate_humanoid
+    from bearchair.skills.perception.tags import TagSightings, locate_humanoid
 
     with SimWorld(SimConfig(seed=3, camera_noise=False)) as quiet:
         full = quiet.panda.capture()
@@ -60,10 +60,14 @@ def test_a_window_of_the_image_is_the_full_frame_cropped_and_tracks_the_tag():
             quiet.panda.capture_region(600, 0, 100, 10)
         # Where the walk passes, 1.3 m from the arm: a full frame first, then a window.
         quiet.place_nao(SE2Pose(1.3, 0.2, 2.8))
-        first = locate_humanoid(quiet.panda)
+        sightings = TagSightings()
+        first = locate_humanoid(quiet.panda, sightings=sightings)
         first_shape = quiet.panda.last_view.rgb.shape[:2]
-        second = locate_humanoid(quiet.panda)
+        second = locate_humanoid(quiet.panda, sightings=sightings)
         second_shape = quiet.panda.last_view.rgb.shape[:2]
+        # Without a record of sightings every frame is a full one.
+        locate_humanoid(quiet.panda)
+        unrecorded_shape = quiet.panda.last_view.rgb.shape[:2]
         truth = quiet.nao.true_pose()
     assert window.rgb.shape == (90, 120, 3) and window.depth_m.shape == (90, 120)
     assert window.intrinsics.cx == pytest.approx(full.intrinsics.cx - 200)
@@ -77,6 +81,7 @@ def test_a_window_of_the_image_is_the_full_frame_cropped_and_tracks_the_tag():
 
     assert first is not None and first_shape == (480, 640)
     assert second_shape[0] * second_shape[1] < 0.1 * 480 * 640
+    assert unrecorded_shape == (480, 640)
     assert second is not None and second.distance_to(truth) < 0.02
     assert abs(wrap_angle(second.theta - truth.theta)) < math.radians(3.0)
     assert second.distance_to(first) < 0.01

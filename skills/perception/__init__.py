@@ -10,7 +10,7 @@ from bearchair.skills.perception.motion import wait_until_chair_still
 from bearchair.skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
 from bearchair.skills.perception.registration import RegistrationConfig, register_chair
 from bearchair.skills.perception.scan import ScanCancelled, scan_chair
-from bearchair.skills.perception.tags import estimate_tag_pose, locate_humanoid
+from bearchair.skills.perception.tags import TagSightings, estimate_tag_pose, locate_humanoid
 
 __all__ = [
     "PerceptionError",
@@ -18,6 +18,7 @@ __all__ = [
     "RegistrationConfig",
     "RegistrationError",
     "ScanCancelled",
+    "TagSightings",
     "estimate_tag_pose",
     "locate_humanoid",
     "measure_chair_rotation",

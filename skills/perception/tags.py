@@ -192,9 +192,28 @@ class _Sighting(NamedTuple):
     image_height: int
 
 
-_sightings: weakref.WeakKeyDictionary[object, _Sighting] = weakref.WeakKeyDictionary()
-"""The last sighting per arm: the next tag frame is read out around it (arms that can).
-Weak keys: an arm's entry goes with the arm, so there are as many as live arms."""
+class TagSightings:
+    """Where the tag was last seen by each arm's camera, for :func:`locate_humanoid`: the
+    next frame is read out around it (arms that can). Owned by whoever tracks the
+    humanoid (the mission's skills object, one per mission), not by the process.
+
+    Weak keys: an arm's entry goes with the arm.
+    """
+
+    def __init__(self) -> None:
+        self._last: weakref.WeakKeyDictionary[object, _Sighting] = weakref.WeakKeyDictionary()
+
+    def get(self, arm: object) -> _Sighting | None:
+        """The last sighting by this arm, or None."""
+        return self._last.get(arm)
+
+    def remember(self, arm: object, sighting: _Sighting) -> None:
+        """This arm saw the tag in ``sighting``'s window."""
+        self._last[arm] = sighting
+
+    def forget(self, arm: object) -> None:
+        """This arm moved or lost the tag: the next frame is a full one."""
+        self._last.pop(arm, None)
 
 
 def _window_around(corners_px: np.ndarray, image_width: int, image_height: int) -> _Sighting:
@@ -213,43 +232,47 @@ def locate_humanoid(
     *,
     tag: TagSpec = HUMANOID_TAG,
     configuration: tuple[float, ...] = OVERVIEW_CONFIGURATION,
+    sightings: TagSightings | None = None,
 ) -> SE2Pose | None:
     """Moves the arm to the overview through HOME (unless already there), captures and
     finds the tag.
 
     An arm whose camera can read out a window of its image (``capture_region(x0, y0,
     width, height)``, as the simulated one can) is asked only for the window around the
-    tag's last sighting (:data:`WINDOW_MARGIN_PX`) while the arm has not moved since; if
-    the tag is not in it, a full frame is taken. Only where the mission last saw the tag
-    chooses the window.
+    tag's last sighting in ``sightings`` (:data:`WINDOW_MARGIN_PX`) while the arm has not
+    moved since; if the tag is not in it, a full frame is taken. Only where the mission
+    last saw the tag chooses the window; without ``sightings`` every frame is full.
 
     Returns:
         The humanoid's SE(2) pose in the world frame from this capture, or None when the
         tag is not in it.
     """
+    sightings = sightings or TagSightings()
     current = np.asarray(arm.joint_positions(), dtype=np.float64)
     wanted = np.asarray(configuration, dtype=np.float64)
     if current.shape != wanted.shape or np.max(np.abs(current - wanted)) > AT_CONFIGURATION_RAD:
-        _sightings.pop(arm, None)
+        sightings.forget(arm)
         arm.move_to(HOME_CONFIGURATION)
         arm.move_to(configuration)
     capture_region = getattr(arm, "capture_region", None)
-    sighting = _sightings.get(arm)
+    sighting = sightings.get(arm)
     if sighting is not None and capture_region is not None:
         frame = capture_region(sighting.x0, sighting.y0, sighting.width, sighting.height)
         pose, corners = _tag_pose_and_corners(frame, tag)
         if pose is not None:
             assert corners is not None  # found with the pose
             offset = np.array([sighting.x0, sighting.y0], dtype=np.float64)
-            _sightings[arm] = _window_around(
-                corners + offset, sighting.image_width, sighting.image_height
+            sightings.remember(
+                arm, _window_around(corners + offset, sighting.image_width, sighting.image_height)
             )
             return pose
     frame = arm.capture()
     pose, corners = _tag_pose_and_corners(frame, tag)
     if pose is None:
-        _sightings.pop(arm, None)
+        sightings.forget(arm)
     elif capture_region is not None:
         assert corners is not None  # found with the pose
-        _sightings[arm] = _window_around(corners, frame.intrinsics.width, frame.intrinsics.height)
+        sightings.remember(
+            arm, _window_around(corners, frame.intrinsics.width, frame.intrinsics.height)
+        )
     return pose
