@@ -30,7 +30,7 @@ def same(a: SE2Pose, b: SE2Pose, tol: float = 1e-12) -> bool:
     )
 
 
-@pytest.mark.parametrize("a,b", zip(random_poses(20, 1), random_poses(20, 2), strict=True))
+@pytest.mark.parametrize("a,b", list(zip(random_poses(20, 1), random_poses(20, 2), strict=True)))
 def test_compose_is_the_matrix_product(a, b):
     product = a.as_matrix() @ b.as_matrix()
     assert np.allclose((a @ b).as_matrix(), product, atol=1e-12)
