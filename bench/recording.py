@@ -20,6 +20,7 @@ costs <= 10 % of a run's wall time.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import statistics
 import sys
 import tempfile
@@ -46,17 +47,12 @@ def main(argv: list[str] | None = None) -> int:
     cpus: dict[bool, list[float]] = {False: [], True: []}
     hooks: list[float] = []
     hook_cpus: list[float] = []
+    base = RunConfig(chair_path=args.chair, seed=args.seed, mute=True)
     with tempfile.TemporaryDirectory(prefix="bench-recording-") as folder:
         for index in range(args.runs):
             for record in (False, True):
                 out_dir = Path(folder) / f"{'with' if record else 'without'}-{index}"
-                config = RunConfig(
-                    chair_path=args.chair,
-                    seed=args.seed,
-                    out_dir=out_dir,
-                    mute=True,
-                    record=record,
-                )
+                config = dataclasses.replace(base, out_dir=out_dir, record=record)
                 cpu_start = time.process_time()
                 summary = run_in_simulation(config)
                 cpu = time.process_time() - cpu_start
