@@ -156,9 +156,9 @@ def run_one(payload: dict[str, Any], started: float = PROCESS_STARTED) -> dict[s
     meter.finish()
     result = {
         "label": payload["label"],
-        "outcome": summary["outcome"],
-        "failed_stage": summary["failed_stage"],
-        "reason": summary["reason"][:200],
+        "outcome": summary.outcome,
+        "failed_stage": summary.failed_stage,
+        "reason": summary.reason[:200],
         "stages": meter.rows,
         "wall_s": time.perf_counter() - started,
         "peak_process_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,

@@ -13,13 +13,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from bearchair.core.errors import OutputError
+from bearchair.core.errors import OutputError, RunRecordError
 from bearchair.core.userfiles import printable
 from bearchair.evaluation.backends import Backend, Job
 from bearchair.evaluation.progress import Progress
 from bearchair.evaluation.protocol import TrialSpec
 from bearchair.evaluation.store import TrialStore, record_from_error, record_from_summary
 from bearchair.evaluation.worker_process import WorkerOutcome
+from bearchair.executive.run_summary import RunSummary
 from bearchair.skills.imagination import DEFAULT_WORKERS
 
 
@@ -164,14 +165,13 @@ def _row(spec: TrialSpec, outcome: WorkerOutcome, run_dir: str) -> dict[str, Any
     of the wrong shape is this trial's failure, named, not the campaign's."""
     if outcome.summary is not None:
         try:
-            return record_from_summary(
-                spec, outcome.summary, outcome.wall_seconds, run_dir, outcome.attempts
-            )
-        except (TypeError, ValueError, KeyError, AttributeError, OverflowError) as error:
+            summary = RunSummary.from_json(outcome.summary)
+        except RunRecordError as error:
             reason = f"the worker's summary is malformed ({type(error).__name__}: {error})"
             return record_from_error(
                 spec, printable(reason, 300), outcome.wall_seconds, run_dir, outcome.attempts
             )
+        return record_from_summary(spec, summary, outcome.wall_seconds, run_dir, outcome.attempts)
     return record_from_error(
         spec,
         outcome.error or "unknown error",

@@ -25,6 +25,7 @@ from bearchair.core.errors import RecordStoreError
 from bearchair.core.provenance import software_versions
 from bearchair.core.userfiles import parse_json, printable
 from bearchair.evaluation.protocol import TrialSpec
+from bearchair.executive.run_summary import RunSummary
 
 logger = logging.getLogger(__name__)
 
@@ -261,43 +262,39 @@ def _from_row(row: sqlite3.Row, db_path: Path) -> dict[str, Any]:
 
 def record_from_summary(
     spec: TrialSpec,
-    summary: dict[str, Any],
+    summary: RunSummary,
     wall_seconds: float,
     run_dir: str | None,
     attempts: int = 1,
 ) -> dict[str, Any]:
-    """A row from a finished mission's ``summary.json`` (see ``bearchair.executive.mission``)."""
-    judgement = summary.get("judgement") or {}
-    instructions = len(summary.get("instructions") or [])
-    accessible = bool(summary.get("accessible", False))
-    interrupted = bool(summary.get("interrupted", False))
+    """A row from a finished mission's ``summary.json`` (``bearchair.executive.run_summary``)."""
+    judgement = summary.judgement
+    instructions = len(summary.instructions)
     return {
         **_spec_columns(spec),
-        "outcome": "success" if summary.get("outcome") == "success" else "failure",
-        "failed_stage": summary.get("failed_stage"),
-        "reason": summary.get("reason") or "",
-        "rotations": int(summary.get("rotations") or 0),
+        "outcome": "success" if summary.succeeded else "failure",
+        "failed_stage": summary.failed_stage,
+        "reason": summary.reason,
+        "rotations": summary.rotations,
         "instructions": instructions,
-        "accessible_final": accessible,
-        "accessible_after_assistance": accessible if instructions > 0 else None,
+        "accessible_final": summary.accessible,
+        "accessible_after_assistance": summary.accessible if instructions > 0 else None,
         "stage_seconds": {
-            stage["name"]: float(stage["seconds"])
-            for stage in summary.get("stages", [])
-            if stage.get("status") not in (None, "INVALID")
+            stage.name: stage.seconds for stage in summary.stages if stage.status != "INVALID"
         },
-        "seated": _optional_bool(judgement.get("seated")),
-        "on_seat": _optional_bool(judgement.get("on_seat")),
-        "torso_tilt_deg": _optional_float(judgement.get("torso_tilt_deg")),
-        "facing_error_deg": _optional_float(judgement.get("facing_error_deg")),
-        "judgement_reason": judgement.get("reason"),
-        "sitting_pose": summary.get("sitting_pose"),
-        "mission_seconds": _optional_float(summary.get("wall_seconds")),
+        "seated": None if judgement is None else judgement.seated,
+        "on_seat": None if judgement is None else judgement.on_seat,
+        "torso_tilt_deg": None if judgement is None else judgement.torso_tilt_deg,
+        "facing_error_deg": None if judgement is None else judgement.facing_error_deg,
+        "judgement_reason": None if judgement is None else judgement.reason,
+        "sitting_pose": None if summary.sitting_pose is None else summary.sitting_pose.to_json(),
+        "mission_seconds": summary.wall_seconds,
         "wall_seconds": round(wall_seconds, 3),
-        "error": "the mission was interrupted inside the worker" if interrupted else None,
+        "error": "the mission was interrupted inside the worker" if summary.interrupted else None,
         "attempts": attempts,
         "run_dir": run_dir,
         "finished_at": _now(),
-        "software": summary.get("software") or software_versions(),
+        "software": summary.software or software_versions(),
     }
 
 
@@ -334,17 +331,6 @@ def _spec_columns(spec: TrialSpec) -> dict[str, Any]:
         "experiment": spec.experiment,
         "chair_path": str(spec.chair_path),
     }
-
-
-def _optional_bool(value: Any) -> bool | None:
-    return None if value is None else bool(value)
-
-
-def _optional_float(value: Any) -> float | None:
-    try:
-        return None if value is None else float(value)
-    except (TypeError, ValueError):
-        return None
 
 
 def _now() -> str:

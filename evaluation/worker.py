@@ -132,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
         message = {"error": f"{type(error).__name__}: {error}".splitlines()[0][:300]}
         print(RESULT_MARKER + json.dumps(message), flush=True)
         return 3
-    print(RESULT_MARKER + json.dumps({"summary": summary}, default=str), flush=True)
+    print(RESULT_MARKER + json.dumps({"summary": summary.to_json()}), flush=True)
     return 0
 
 

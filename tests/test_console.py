@@ -19,6 +19,7 @@ from bearchair.core.se2 import SE2Pose
 from bearchair.evaluation.cli import left_out_text
 from bearchair.evaluation.protocol import SkippedChair, discover_chairs
 from bearchair.executive.mission import StageProgress, format_summary, stage_seconds_text
+from bearchair.executive.run_summary import RunSummary
 from bearchair.executive.runner import StageClock, StageTiming
 
 
@@ -110,7 +111,7 @@ def test_stage_lines_and_the_table_name_their_clocks():
                     "robot_seconds": 8.9, "message": "at the goal"}],
         "instructions": [], "outcome": "success", "wall_seconds": 30.0,
     }  # fmt: skip
-    table = format_summary(summary)
+    table = format_summary(RunSummary.from_json(summary))
     assert "wall s robot s" in table and "3.20    8.90" in table
     assert table.endswith("outcome: SUCCESS in 30.0 s wall")
 

@@ -29,6 +29,7 @@ from bearchair.evaluation.store import TrialStore, campaign_lock
 from bearchair.executive import cli, mission
 from bearchair.executive.inspect_run import RecordedRun
 from bearchair.executive.record import RunRecorder
+from bearchair.executive.run_summary import RunInfo
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.skills.scripted import ScriptedSkills
 from bearchair.trees.mission import create_tree
@@ -56,7 +57,7 @@ class FakeMission:
     def __call__(self, config, skills=None, on_tick=None, tree=None):
         root = (tree or create_tree)(config.tree_options)
         recorder = RunRecorder(config.out_dir, root)
-        run_info = {"chair": "stub", "placement": "accessible", "helper": "obeys", "seed": 0}
+        run_info = RunInfo(chair="stub", placement="accessible", helper="obeys", seed=0)
         return mission._run_tree(
             root, recorder, self.robot, config, run_info, self.skills, self.on_tick, None
         )
@@ -326,7 +327,7 @@ def recorded_run(tmp_path_factory) -> Path:
         recorder=recorder,
         tick_period_s=0.002,
     )
-    recorder.write_summary(summarise(runner.run(), {"chair": "stub"}))
+    recorder.write_summary(summarise(runner.run(), RunInfo(chair="stub")))
     recorder.close()
     return out
 

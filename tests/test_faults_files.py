@@ -23,6 +23,7 @@ from bearchair.core.errors import OutputError
 from bearchair.evaluation.store import TrialStore, campaign_lock
 from bearchair.executive import cli, operator, outputs
 from bearchair.executive.record import RecordWriteError, RunRecorder
+from bearchair.executive.run_summary import RunSummary
 from bearchair.trees.mission import create_tree
 from tests.test_bad_inputs import refused
 from tests.test_faults_inspect import recorded_run
@@ -449,6 +450,6 @@ def test_the_run_summary_prints_a_hostile_chair_name_escaped():
         "failed_stage": "ScanChair",
         "reason": "\x1b[2J",
     }
-    text = format_summary(summary)
+    text = format_summary(RunSummary.from_json(summary))
     assert "\x1b" not in text and "\x07" not in text
     assert not any(line.startswith("[  ok] forged") for line in text.splitlines())

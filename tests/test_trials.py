@@ -31,6 +31,7 @@ from bearchair.evaluation.protocol import (
 from bearchair.evaluation.report import compute_table, failure_kind, format_table, markdown_report
 from bearchair.evaluation.store import TrialStore, record_from_error, record_from_summary
 from bearchair.executive import cli
+from bearchair.executive.run_summary import RunSummary
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -512,7 +513,7 @@ def test_records_from_a_summary_and_from_an_error():
         "judgement": None,
         "wall_seconds": 55.1,
     }
-    record = record_from_summary(spec, summary, 61.0, "/runs/x")
+    record = record_from_summary(spec, RunSummary.from_json(summary), 61.0, "/runs/x")
     assert record["stage_seconds"] == {"ScanChair": 7.1, "WalkToChair": 20.0}
     assert record["accessible_after_assistance"] is True and record["instructions"] == 2
     assert record["seated"] is None and record["error"] is None
