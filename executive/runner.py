@@ -393,9 +393,9 @@ def summarise(outcome: MissionOutcome, info: RunInfo) -> RunSummary:
         stages=tuple(_stage_record(stage) for stage in outcome.stages),
         sitting_pose=_view_record(SittingPoseRecord, board.get(keys.SITTING_POSE)),
         se2_goal=to_jsonable(board.get(keys.SE2_GOAL)),
-        instructions=tuple(board.get(keys.INSTRUCTIONS, [])),
+        instructions=tuple(str(sentence) for sentence in board.get(keys.INSTRUCTIONS, [])),
         rotations=int(board.get(keys.ROTATIONS, 0)),
-        measured_rotations=tuple(to_jsonable(board.get(keys.MEASURED_ROTATIONS, []))),
+        measured_rotations=_as_tuple(to_jsonable(board.get(keys.MEASURED_ROTATIONS, []))),
         accessible=bool(getattr(board.get(keys.ACCESSIBILITY), "accessible", False)),
         walk=to_jsonable(board.get(keys.WALK)),
         judgement=_view_record(JudgementRecord, board.get(keys.JUDGEMENT)),
@@ -404,6 +404,11 @@ def summarise(outcome: MissionOutcome, info: RunInfo) -> RunSummary:
         ),
         failures=tuple(outcome.failures),
     )
+
+
+def _as_tuple(view: Any) -> tuple[Any, ...]:
+    """A JSON view as the record's tuple: a list's items, else the one value."""
+    return tuple(view) if isinstance(view, list) else (view,)
 
 
 def _stage_record(stage: StageTiming) -> StageRecord:
