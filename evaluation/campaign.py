@@ -11,7 +11,7 @@ import os
 import shutil
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 from bearchair.core.errors import OutputError, RunRecordError
 from bearchair.core.userfiles import printable
@@ -19,6 +19,7 @@ from bearchair.evaluation.backends import Backend, Job
 from bearchair.evaluation.progress import Progress
 from bearchair.evaluation.protocol import TrialSpec
 from bearchair.evaluation.store import TrialStore, record_from_error, record_from_summary
+from bearchair.evaluation.trial_record import TrialRecord
 from bearchair.evaluation.worker_process import WorkerOutcome
 from bearchair.executive.run_summary import RunSummary
 from bearchair.skills.imagination import DEFAULT_WORKERS
@@ -45,7 +46,7 @@ def run_campaign(
     runs_dir: Path,
     timeout_s: float,
     progress: Progress | None = None,
-    on_record: Callable[[dict[str, Any]], None] | None = None,
+    on_record: Callable[[TrialRecord], None] | None = None,
     record: bool = False,
     imagination_workers: int = DEFAULT_WORKERS,
     tree: str = "mission",
@@ -160,7 +161,7 @@ def check_inside(folder: Path, path: Path) -> None:
             raise OutputError(f"{printable(current)} is a file where a run folder goes: remove it")
 
 
-def _row(spec: TrialSpec, outcome: WorkerOutcome, run_dir: str) -> dict[str, Any]:
+def _row(spec: TrialSpec, outcome: WorkerOutcome, run_dir: str) -> TrialRecord:
     """The record of a finished trial: from its summary, else from its error. A summary
     of the wrong shape is this trial's failure, named, not the campaign's."""
     if outcome.summary is not None:

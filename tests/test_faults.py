@@ -496,7 +496,7 @@ def test_a_database_that_fails_mid_campaign_keeps_the_finished_trials(
     command = fake_worker_command(tmp_path, monkeypatch)
     folder = write_chairs(tmp_path / "chairs", ["a.obj"])
     real_add = TrialStore.add
-    added: list[dict] = []
+    added: list = []
 
     def add(self, record):
         if len(added) == 2:  # the disk fills up at the third trial
@@ -535,13 +535,13 @@ def test_a_killed_worker_is_retried_once_and_marked(tmp_path, monkeypatch):
     specs = expand_protocol(chairs, "paper", 0)
     with TrialStore(tmp_path / "t.sqlite") as store:
         run_campaign(specs, store, LocalBackend(2, 30, command), tmp_path / "runs", 30)
-        records = {(r["chair"], r["trial_index"]): r for r in store.records()}
+        records = {(r.chair, r.trial_index): r for r in store.records()}
     flaky = [r for (chair, _), r in records.items() if chair == "flaky.obj"]
-    assert all(r["attempts"] == 2 and r["error"] is None for r in flaky)  # retried, then fine
+    assert all(r.attempts == 2 and r.error is None for r in flaky)  # retried, then fine
     crashed = records[("crash.obj", 1)]
-    assert crashed["attempts"] == 2 and "retried once" in crashed["error"]
-    assert "SIGSEGV" in crashed["error"]
-    assert records[("crash.obj", 0)]["attempts"] == 1
+    assert crashed.attempts == 2 and "retried once" in crashed.error
+    assert "SIGSEGV" in crashed.error
+    assert records[("crash.obj", 0)].attempts == 1
 
 
 def test_a_sigkilled_campaign_resumes_to_the_same_table_with_no_orphan(tmp_path, monkeypatch):
@@ -587,7 +587,7 @@ def test_a_sigkilled_campaign_resumes_to_the_same_table_with_no_orphan(tmp_path,
     with TrialStore(db) as store, TrialStore(tmp_path / "straight" / "trials.sqlite") as other:
         assert len(store.records()) == 6
         assert table_without_timing(store.records()) == table_without_timing(other.records())
-        run_dirs = {Path(r["run_dir"]) for r in store.records()}
+        run_dirs = {Path(r.run_dir) for r in store.records()}
     # Every run folder on disk belongs to a recorded trial: the killed ones were redone.
     on_disk = {p for p in (out / "runs").glob("*/*") if p.is_dir()}
     assert on_disk == run_dirs

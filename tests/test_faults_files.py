@@ -110,10 +110,10 @@ def test_a_worker_summary_of_the_wrong_shape_fails_that_trial_only(campaign, tmp
     )
     assert cli.main(argv) == 0
     with TrialStore(out / "trials.sqlite") as store:
-        records = {r["trial_index"]: r for r in store.records()}
+        records = {r.trial_index: r for r in store.records()}
     assert len(records) == 6
-    assert "the worker's summary is malformed" in records[3]["error"]
-    assert all(records[i]["error"] is None for i in (0, 1, 2, 4, 5))
+    assert "the worker's summary is malformed" in records[3].error
+    assert all(records[i].error is None for i in (0, 1, 2, 4, 5))
 
 
 def test_chair_names_in_the_report_are_escaped(campaign, tmp_path, capsys):

@@ -72,8 +72,8 @@ def test_every_trial_row_carries_the_software(tmp_path):
             )
         )
         store.add(record_from_error(second, "worker crashed", 1.0, None))
-        rows = {row["trial_index"]: row for row in store.records()}
+        rows = {row.trial_index: row for row in store.records()}
     finally:
         store.close()
-    assert rows[first.trial_index]["software"] == made_by  # the worker's own summary
-    assert rows[second.trial_index]["software"]["bearchair"] == provenance.bearchair_version()
+    assert rows[first.trial_index].software == made_by  # the worker's own summary
+    assert (rows[second.trial_index].software or {})["bearchair"] == provenance.bearchair_version()
