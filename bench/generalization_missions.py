@@ -17,7 +17,6 @@ import json
 import sys
 from collections import Counter, defaultdict
 from pathlib import Path
-from typing import Any
 
 from bearchair.evaluation.protocol import (
     EXPERIMENT_SETTINGS,
@@ -25,6 +24,7 @@ from bearchair.evaluation.protocol import (
     TrialSpec,
     trial_seed,
 )
+from bearchair.evaluation.trial_record import TrialRecord
 from bearchair.skills.chairgen import GeneratedChair, generate_chairs
 
 
@@ -97,7 +97,7 @@ def run_missions(count: int, seed: int, workers: int, out: Path, timeout_s: floa
 
 
 def print_missions(
-    records: list[dict[str, Any]],
+    records: list[TrialRecord],
     by_chair: dict[str, GeneratedChair],
     chairs: list[GeneratedChair],
 ) -> None:
@@ -111,15 +111,15 @@ def print_missions(
     causes: Counter[str] = Counter()
     refused = []
     for record in records:
-        chair = by_chair[record["chair"]]
-        seated = record["outcome"] == "success"
+        chair = by_chair[record.chair]
+        seated = record.succeeded
         if inside[chair.name]:
             rows[chair.family].append(seated)
-            conditions[record["experiment"]].append(seated)
+            conditions[record.experiment].append(seated)
         if not seated:
             cause = failure_cause(record)
             causes[failure_kind(cause)] += 1
-            if record.get("failed_stage") == "CheckSeatReachable":
+            if record.failed_stage == "CheckSeatReachable":
                 refused.append((chair, cause, inside[chair.name]))
     total = [s for values in rows.values() for s in values]
     print(
@@ -139,10 +139,8 @@ def print_missions(
     outside = [c for c in chairs if not inside[c.name]]
     print(f"\nchairs outside the workspace (reach check on the true chair): {len(outside)}")
     for chair in outside:
-        mission = next(r for r in records if r["chair"] == chair.name + ".obj")
-        verdict = (
-            "refused" if mission.get("failed_stage") == "CheckSeatReachable" else "NOT refused"
-        )
+        mission = next(r for r in records if r.chair == chair.name + ".obj")
+        verdict = "refused" if mission.failed_stage == "CheckSeatReachable" else "NOT refused"
         print(
             f"  {chair.name} (seat {chair.seat_height_m:.3f} m): {outside_reason[chair.name]};"
             f" the mission: {verdict}"

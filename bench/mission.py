@@ -43,6 +43,7 @@ import time
 PROCESS_STARTED = time.perf_counter()
 
 import argparse  # noqa: E402  (the clock above starts before the imports are paid)
+import dataclasses  # noqa: E402
 import json  # noqa: E402
 import os  # noqa: E402
 import resource  # noqa: E402
@@ -150,22 +151,14 @@ def run_one(payload: dict[str, Any], started: float = PROCESS_STARTED) -> dict[s
     from bearchair.executive.mission import run_in_simulation
 
     meter = StageMeter(started)
-    config = RunConfig(
-        chair_path=Path(payload["chair_path"]) if payload.get("chair_path") else None,
-        placement=payload["placement"],
-        helper=payload["helper"],
-        seed=int(payload["seed"]),
-        out_dir=Path(payload["out_dir"]),
-        mute=True,
-        timeout_s=float(payload.get("timeout_s", 600.0)),
-    )
+    config = dataclasses.replace(RunConfig.from_payload({"timeout_s": 600.0, **payload}), mute=True)
     summary = run_in_simulation(config, on_tick=meter)
     meter.finish()
     result = {
         "label": payload["label"],
-        "outcome": summary["outcome"],
-        "failed_stage": summary["failed_stage"],
-        "reason": summary["reason"][:200],
+        "outcome": summary.outcome,
+        "failed_stage": summary.failed_stage,
+        "reason": summary.reason[:200],
         "stages": meter.rows,
         "wall_s": time.perf_counter() - started,
         "peak_process_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,

@@ -20,6 +20,7 @@ costs <= 10 % of a run's wall time.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import statistics
 import sys
 import tempfile
@@ -46,40 +47,37 @@ def main(argv: list[str] | None = None) -> int:
     cpus: dict[bool, list[float]] = {False: [], True: []}
     hooks: list[float] = []
     hook_cpus: list[float] = []
+    base = RunConfig(chair_path=args.chair, seed=args.seed, mute=True)
     with tempfile.TemporaryDirectory(prefix="bench-recording-") as folder:
         for index in range(args.runs):
             for record in (False, True):
                 out_dir = Path(folder) / f"{'with' if record else 'without'}-{index}"
-                config = RunConfig(
-                    chair_path=args.chair,
-                    seed=args.seed,
-                    out_dir=out_dir,
-                    mute=True,
-                    record=record,
-                )
+                config = dataclasses.replace(base, out_dir=out_dir, record=record)
                 cpu_start = time.process_time()
                 summary = run_in_simulation(config)
                 cpu = time.process_time() - cpu_start
-                wall = float(summary["wall_seconds"])
+                wall = summary.wall_seconds
                 walls[record].append(wall)
                 cpus[record].append(cpu)
                 line = (
                     f"run {index} {'with   ' if record else 'without'} recording: "
-                    f"{summary['outcome']:<7} wall {wall:7.1f} s, cpu {cpu:7.1f} s"
+                    f"{summary.outcome:<7} wall {wall:7.1f} s, cpu {cpu:7.1f} s"
                 )
+                cost = summary.recording
                 if record:
-                    cost = summary["recording"]
-                    hooks.append(float(cost["seconds"]))
-                    hook_cpus.append(float(cost["cpu_seconds"]))
+                    if cost is None:
+                        raise SystemExit("bench/recording.py: a recorded run without its cost")
+                    hooks.append(cost.seconds)
+                    hook_cpus.append(cost.cpu_seconds)
                     size_mb = (out_dir / RECORDING_FILE).stat().st_size / 1e6
-                    parts = ", ".join(f"{k} {v:.2f}" for k, v in cost["seconds_by_part"].items())
+                    parts = ", ".join(f"{k} {v:.2f}" for k, v in cost.seconds_by_part.items())
                     line += (
-                        f", hook {cost['seconds']:6.2f} s ({cost['seconds'] / wall:5.1%}; cpu "
-                        f"{cost['cpu_seconds']:.2f} s), "
+                        f", hook {cost.seconds:6.2f} s ({cost.seconds / wall:5.1%}; cpu "
+                        f"{cost.cpu_seconds:.2f} s), "
                         f"{size_mb:.1f} MB; parts (s): {parts}"
                     )
-                if summary["outcome"] != "success":
-                    line += f"\n    failed at {summary['failed_stage']}: {summary['reason']}"
+                if not summary.succeeded:
+                    line += f"\n    failed at {summary.failed_stage}: {summary.reason}"
                 print(line, flush=True)
     without, with_ = statistics.median(walls[False]), statistics.median(walls[True])
     cpu_without, cpu_with = statistics.median(cpus[False]), statistics.median(cpus[True])

@@ -19,7 +19,10 @@ import json
 import statistics
 import sys
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import NamedTuple
+
+from bearchair.core.errors import RunRecordError
+from bearchair.executive.run_summary import RunSummary
 
 
 class Release(NamedTuple):
@@ -58,25 +61,24 @@ def releases(folders: list[Path]) -> list[Release]:
 
 def _release(path: Path) -> Release | None:
     try:
-        summary = json.loads(path.read_text())
-    except (OSError, ValueError):
+        summary = RunSummary.from_json(json.loads(path.read_text()))
+    except (OSError, ValueError, RunRecordError):
         return None
-    predicted: dict[str, Any] | None = summary.get("release_prediction")
-    judgement: dict[str, Any] | None = summary.get("judgement")
-    if not predicted or not judgement or judgement.get("T_world_bear") is None:
+    predicted, judgement = summary.release_prediction, summary.judgement
+    if predicted is None or judgement is None or judgement.T_world_bear is None:
         return None
-    actual = [row[3] for row in judgement["T_world_bear"][:3]]
-    error = sum((a - b) ** 2 for a, b in zip(actual, predicted["settled_at_m"], strict=True))
-    seat_bear = next((s["seconds"] for s in summary["stages"] if s["name"] == "SeatBear"), None)
+    actual = [row[3] for row in judgement.T_world_bear[:3]]
+    error = sum((a - b) ** 2 for a, b in zip(actual, predicted.settled_at_m, strict=True))
+    seat_bear = summary.stage("SeatBear")
     return Release(
         str(path.parent),
-        bool(predicted["stays"]),
-        bool(judgement["seated"]),
+        predicted.stays,
+        judgement.seated,
         error**0.5,
-        float(predicted["seconds"]),
-        float(predicted.get("cpu_seconds", predicted["seconds"])),
-        seat_bear,
-        judgement.get("reason", ""),
+        predicted.seconds,
+        predicted.seconds if predicted.cpu_seconds is None else predicted.cpu_seconds,
+        None if seat_bear is None else seat_bear.seconds,
+        judgement.reason,
     )
 
 

@@ -69,8 +69,8 @@ def main() -> int:
         return status
     with TrialStore(args.out / "trials.sqlite") as store:
         records = store.records()
-    walls = [r["wall_seconds"] for r in records if r["wall_seconds"] is not None]
-    missions = [r["mission_seconds"] for r in records if r["mission_seconds"] is not None]
+    walls = [r.wall_seconds for r in records if r.wall_seconds is not None]
+    missions = [r.mission_seconds for r in records if r.mission_seconds is not None]
     print()
     print(
         f"trials: {len(records)} in {elapsed:.0f} s of wall time (this call; resumed trials excluded)"
@@ -82,7 +82,7 @@ def main() -> int:
         )
     if missions:
         print(f"mission time (tick loop): median {statistics.median(missions):.1f} s")
-    successes = sum(r["outcome"] == "success" for r in records)
+    successes = sum(r.succeeded for r in records)
     print(f"seating success: {successes}/{len(records)}")
     print(f"report: {args.out / 'report.md'}")
     return 0

@@ -98,6 +98,15 @@ class SE2Pose(NamedTuple):
             self.theta,
         )
 
+    def to_json(self) -> dict[str, float]:
+        """The pose for a run record, units in the keys: ``x_m``, ``y_m`` (metres, to
+        0.1 mm) and ``theta_deg`` (degrees, to 0.01°)."""
+        return {
+            "x_m": round(self.x, 4),
+            "y_m": round(self.y, 4),
+            "theta_deg": round(math.degrees(self.theta), 2),
+        }
+
     def distance_to(self, other: SE2Pose) -> float:
         """Euclidean distance in metres between the two positions."""
         return math.hypot(self.x - other.x, self.y - other.y)

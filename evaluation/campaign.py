@@ -11,15 +11,17 @@ import os
 import shutil
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
-from bearchair.core.errors import OutputError
+from bearchair.core.errors import OutputError, RunRecordError
 from bearchair.core.userfiles import printable
 from bearchair.evaluation.backends import Backend, Job
 from bearchair.evaluation.progress import Progress
 from bearchair.evaluation.protocol import TrialSpec
 from bearchair.evaluation.store import TrialStore, record_from_error, record_from_summary
+from bearchair.evaluation.trial_record import TrialRecord
 from bearchair.evaluation.worker_process import WorkerOutcome
+from bearchair.executive.run_summary import RunSummary
 from bearchair.skills.imagination import DEFAULT_WORKERS
 
 
@@ -44,7 +46,7 @@ def run_campaign(
     runs_dir: Path,
     timeout_s: float,
     progress: Progress | None = None,
-    on_record: Callable[[dict[str, Any]], None] | None = None,
+    on_record: Callable[[TrialRecord], None] | None = None,
     record: bool = False,
     imagination_workers: int = DEFAULT_WORKERS,
     tree: str = "mission",
@@ -159,19 +161,18 @@ def check_inside(folder: Path, path: Path) -> None:
             raise OutputError(f"{printable(current)} is a file where a run folder goes: remove it")
 
 
-def _row(spec: TrialSpec, outcome: WorkerOutcome, run_dir: str) -> dict[str, Any]:
+def _row(spec: TrialSpec, outcome: WorkerOutcome, run_dir: str) -> TrialRecord:
     """The record of a finished trial: from its summary, else from its error. A summary
     of the wrong shape is this trial's failure, named, not the campaign's."""
     if outcome.summary is not None:
         try:
-            return record_from_summary(
-                spec, outcome.summary, outcome.wall_seconds, run_dir, outcome.attempts
-            )
-        except (TypeError, ValueError, KeyError, AttributeError, OverflowError) as error:
+            summary = RunSummary.from_json(outcome.summary)
+        except RunRecordError as error:
             reason = f"the worker's summary is malformed ({type(error).__name__}: {error})"
             return record_from_error(
                 spec, printable(reason, 300), outcome.wall_seconds, run_dir, outcome.attempts
             )
+        return record_from_summary(spec, summary, outcome.wall_seconds, run_dir, outcome.attempts)
     return record_from_error(
         spec,
         outcome.error or "unknown error",

@@ -25,6 +25,7 @@ if TYPE_CHECKING:
     from bearchair.evaluation.campaign import CampaignResult
     from bearchair.evaluation.protocol import ChairEntry, SkippedChair, TrialSpec
     from bearchair.evaluation.store import TrialStore
+    from bearchair.evaluation.trial_record import TrialRecord
 
 DEFAULT_OUT = Path("trials")
 DEFAULT_TIMEOUT_S = 300.0
@@ -300,7 +301,7 @@ def _run_campaign(
 
 def write_report(
     args: argparse.Namespace,
-    records: list[dict[str, Any]],
+    records: list[TrialRecord],
     skipped: list[SkippedChair],
     chairs: list[ChairEntry] | None = None,
 ) -> str:

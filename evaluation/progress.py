@@ -15,6 +15,7 @@ import time
 from typing import Any, TextIO
 
 from bearchair.core.userfiles import printable
+from bearchair.evaluation.trial_record import TrialRecord
 
 
 def format_duration(seconds: float) -> str:
@@ -88,19 +89,19 @@ class Progress:
         if self._bar is None:
             self._print(self.line("starting"))
 
-    def update(self, record: dict[str, Any]) -> None:
+    def update(self, record: TrialRecord) -> None:
         """Counts one finished trial (a record of ``bearchair.evaluation.store``)."""
         self.done += 1
         self._session_done += 1
-        if record.get("outcome") == "success":
+        if record.succeeded:
             self.successes += 1
         else:
             self.failures += 1
-        what = record.get("failed_stage") or ("error" if record.get("error") else "")
+        what = record.failed_stage or ("error" if record.error else "")
         last = (
-            f"{printable(record['chair'])} #{record['trial_index']} {record['outcome']}"
-            + (f" at {what}" if record.get("outcome") != "success" and what else "")
-            + f" ({record.get('wall_seconds') or 0:.0f} s)"
+            f"{printable(record.chair)} #{record.trial_index} {record.outcome}"
+            + (f" at {what}" if not record.succeeded and what else "")
+            + f" ({record.wall_seconds or 0:.0f} s)"
         )
         if self._bar is None:
             self._print(self.line(last))

@@ -22,6 +22,7 @@ from bearchair.behaviours.accessibility import REFUSED
 from bearchair.core.userfiles import printable
 from bearchair.evaluation.pictures import trial_picture_name
 from bearchair.evaluation.protocol import EXPERIMENT_LABELS, EXPERIMENTS, SkippedChair
+from bearchair.evaluation.trial_record import TrialRecord
 from bearchair.trees.mission import STAGES
 
 
@@ -68,24 +69,22 @@ class TrialsTable(NamedTuple):
     refusals: tuple[tuple[str, str, int], ...] = ()
 
 
-def compute_table(records: list[dict[str, Any]]) -> TrialsTable:
+def compute_table(records: list[TrialRecord]) -> TrialsTable:
     """Table 1, stage medians and failure causes from records of ``bearchair.evaluation.store``."""
     seating = []
     for experiment in EXPERIMENTS:
-        rows = [r for r in records if r["experiment"] == experiment]
-        successes = sum(r["outcome"] == "success" for r in rows)
+        rows = [r for r in records if r.experiment == experiment]
+        successes = sum(r.succeeded for r in rows)
         seating.append(RateRow(EXPERIMENT_LABELS[experiment], len(rows), successes))
-    seating.append(RateRow("Total", len(records), sum(r["outcome"] == "success" for r in records)))
+    seating.append(RateRow("Total", len(records), sum(r.succeeded for r in records)))
 
     assistance = []
     for experiment, label in (
         ("inaccessible_obeys", "Obeys"),
         ("inaccessible_disobeys", "Disobeys"),
     ):
-        assisted = [
-            r for r in records if r["experiment"] == experiment and (r.get("instructions") or 0) > 0
-        ]
-        accessible = sum(bool(r.get("accessible_after_assistance")) for r in assisted)
+        assisted = [r for r in records if r.experiment == experiment and (r.instructions or 0) > 0]
+        accessible = sum(bool(r.accessible_after_assistance) for r in assisted)
         assistance.append(RateRow(label, len(assisted), accessible))
     assistance.append(
         RateRow("Total", sum(r.n for r in assistance), sum(r.count for r in assistance))
@@ -93,7 +92,7 @@ def compute_table(records: list[dict[str, Any]]) -> TrialsTable:
 
     durations: dict[str, list[float]] = {}
     for record in records:
-        for stage, seconds in (record.get("stage_seconds") or {}).items():
+        for stage, seconds in record.stage_seconds.items():
             durations.setdefault(stage, []).append(float(seconds))
     ordered = [s for s in STAGES if s in durations] + sorted(
         s for s in durations if s not in STAGES
@@ -101,9 +100,9 @@ def compute_table(records: list[dict[str, Any]]) -> TrialsTable:
     stage_median_s = {
         stage: (statistics.median(durations[stage]), len(durations[stage])) for stage in ordered
     }
-    walls = [r["wall_seconds"] for r in records if r.get("wall_seconds") is not None]
+    walls = [r.wall_seconds for r in records if r.wall_seconds is not None]
 
-    failed = [r for r in records if r["outcome"] != "success"]
+    failed = [r for r in records if not r.succeeded]
     causes = Counter(failure_cause(r) for r in failed)
     stages = Counter(failure_cause(r).split(":", 1)[0] for r in failed)
     kinds = Counter(failure_kind(failure_cause(r)) for r in failed)
@@ -115,9 +114,9 @@ def compute_table(records: list[dict[str, Any]]) -> TrialsTable:
         failure_stages=sorted(stages.items(), key=lambda item: (-item[1], item[0])),
         failure_kinds=sorted(kinds.items(), key=lambda item: (-item[1], item[0])),
         failure_causes=sorted(causes.items(), key=lambda item: (-item[1], item[0])),
-        errors=sum(bool(r.get("error")) for r in records),
+        errors=sum(bool(r.error) for r in records),
         assisted_accessible_trials=sum(
-            r["experiment"] == "accessible" and (r.get("instructions") or 0) > 0 for r in records
+            r.experiment == "accessible" and (r.instructions or 0) > 0 for r in records
         ),
         refusals=_refusals(failed),
     )
@@ -127,16 +126,16 @@ REFUSING_STAGE = "CheckSeatReachable"
 """The stage that refuses a seat out of the NAO's reach (trees.mission)."""
 
 
-def _refusals(failed: list[dict[str, Any]]) -> tuple[tuple[str, str, int], ...]:
+def _refusals(failed: list[TrialRecord]) -> tuple[tuple[str, str, int], ...]:
     """(chair, reason, trials) of the refused trials, by chair: failed at
     :data:`REFUSING_STAGE` with a refusal (not, say, a scan that cannot tell)."""
     by_chair: dict[str, list[str]] = {}
     for record in failed:
-        if record.get("failed_stage") != REFUSING_STAGE:
+        if record.failed_stage != REFUSING_STAGE:
             continue
         message = failure_cause(record).split(": ", 1)[1]
         if message.startswith(REFUSED):
-            by_chair.setdefault(record["chair"], []).append(message.removeprefix(REFUSED))
+            by_chair.setdefault(record.chair, []).append(message.removeprefix(REFUSED))
     return tuple(
         (chair, Counter(reasons).most_common(1)[0][0], len(reasons))
         for chair, reasons in sorted(by_chair.items())
@@ -148,12 +147,12 @@ def failure_kind(cause: str) -> str:
     return re.sub(r"-?\d+(\.\d+)?", "#", cause)
 
 
-def failure_cause(record: dict[str, Any]) -> str:
+def failure_cause(record: TrialRecord) -> str:
     """``failed_stage: reason`` (the reason without its leaf prefix), or the crash error."""
-    if record.get("error") and not record.get("failed_stage"):
-        return f"harness: {record['error']}"
-    stage = record.get("failed_stage") or "unknown stage"
-    reason = (record.get("reason") or "").strip()
+    if record.error and not record.failed_stage:
+        return f"harness: {record.error}"
+    stage = record.failed_stage or "unknown stage"
+    reason = (record.reason or "").strip()
     # summarise() writes "<leaf name>: <message>": the leaf is often the stage itself.
     if reason.startswith(f"{stage}: "):
         reason = reason[len(stage) + 2 :]
@@ -212,7 +211,7 @@ def format_table(table: TrialsTable) -> str:
 
 def markdown_report(
     table: TrialsTable,
-    records: list[dict[str, Any]],
+    records: list[TrialRecord],
     skipped: list[SkippedChair] | None = None,
     title: str = "Trials",
     settings: dict[str, Any] | None = None,
@@ -309,7 +308,7 @@ def _md_failures(table: TrialsTable, seat_heights_m: dict[str, float]) -> list[s
     return out
 
 
-def _md_trials(records: list[dict[str, Any]]) -> list[str]:
+def _md_trials(records: list[TrialRecord]) -> list[str]:
     """The report's table of every trial, with a link to its final scene when there is one."""
     out = [
         "",
@@ -320,20 +319,20 @@ def _md_trials(records: list[dict[str, Any]]) -> list[str]:
         "|---|---:|---|---:|---|---|---:|---|---:|---:|---|",
     ]
     for r in records:
-        scene = Path(r.get("run_dir") or "") / "final_scene.png"
+        scene = Path(r.run_dir or "") / "final_scene.png"
         picture = (
             f"[png]({_link('trials/' + trial_picture_name(r))})"
-            if r.get("run_dir") and scene.is_file()
+            if r.run_dir and scene.is_file()
             else ""
         )
-        facing = r.get("facing_error_deg")
-        after = r.get("accessible_after_assistance")
+        facing = r.facing_error_deg
+        after = r.accessible_after_assistance
         out.append(
-            f"| {_md(r['chair'])} | {r['trial_index']} | {_md(r['experiment'])} | {r['seed']} | "
-            f"{_md(r['outcome'])} | {_md(r.get('failed_stage') or ('error' if r.get('error') else ''))} | "
-            f"{'' if r.get('rotations') is None else r['rotations']} | "
+            f"| {_md(r.chair)} | {r.trial_index} | {_md(r.experiment)} | {r.seed} | "
+            f"{_md(r.outcome)} | {_md(r.failed_stage or ('error' if r.error else ''))} | "
+            f"{'' if r.rotations is None else r.rotations} | "
             f"{'' if after is None else ('yes' if after else 'no')} | "
-            f"{'' if facing is None else f'{facing:.1f}'} | {r.get('wall_seconds') or 0:.1f} | "
+            f"{'' if facing is None else f'{facing:.1f}'} | {r.wall_seconds or 0:.1f} | "
             f"{picture} |"
         )
     return out

@@ -25,6 +25,8 @@ from bearchair.core.errors import RecordStoreError
 from bearchair.core.provenance import software_versions
 from bearchair.core.userfiles import parse_json, printable
 from bearchair.evaluation.protocol import TrialSpec
+from bearchair.evaluation.trial_record import TrialRecord
+from bearchair.executive.run_summary import RunSummary
 
 logger = logging.getLogger(__name__)
 
@@ -137,13 +139,11 @@ class TrialStore:
         rows = self._db.execute(f"SELECT {', '.join(KEY_COLUMNS)} FROM trials")
         return {tuple(row) for row in rows}  # type: ignore[misc]
 
-    def add(self, record: dict[str, Any]) -> None:
+    def add(self, record: TrialRecord) -> None:
         """Writes (or replaces) one trial's row and commits it."""
-        unknown = set(record) - set(COLUMNS)
-        if unknown:
-            raise ValueError(f"unknown record fields: {sorted(unknown)}")
+        row = record.to_row()
         names = list(COLUMNS)
-        values = [_to_sql(record.get(name)) for name in names]
+        values = [_to_sql(row[name]) for name in names]
         try:
             with self._db:  # one transaction, committed on exit
                 self._db.execute(
@@ -153,13 +153,13 @@ class TrialStore:
                 )
         except sqlite3.Error as error:
             raise RecordStoreError(
-                f"database {self.path}: cannot record {record.get('chair')} "
-                f"#{record.get('trial_index')} ({_sqlite_reason(error)}); its run folder "
-                f"{record.get('run_dir')} keeps the trial's summary.json"
+                f"database {self.path}: cannot record {record.chair} "
+                f"#{record.trial_index} ({_sqlite_reason(error)}); its run folder "
+                f"{record.run_dir} keeps the trial's summary.json"
             ) from error
 
-    def records(self, specs: list[TrialSpec] | None = None) -> list[dict[str, Any]]:
-        """Every row as a dict (JSON columns decoded), ordered by chair and trial index.
+    def records(self, specs: list[TrialSpec] | None = None) -> list[TrialRecord]:
+        """Every row as a record, ordered by chair and trial index.
 
         Args:
             specs: keep only the rows of these trials (the current campaign), if given.
@@ -168,7 +168,7 @@ class TrialStore:
         records = [_from_row(row, self.path) for row in rows]
         if specs is not None:
             wanted = {spec.key for spec in specs}
-            records = [r for r in records if tuple(r[k] for k in KEY_COLUMNS) in wanted]
+            records = [r for r in records if r.key in wanted]
         return records
 
 
@@ -237,7 +237,7 @@ def _to_sql(value: Any) -> Any:
     return value
 
 
-def _from_row(row: sqlite3.Row, db_path: Path) -> dict[str, Any]:
+def _from_row(row: sqlite3.Row, db_path: Path) -> TrialRecord:
     """A stored row as a record, its JSON columns decoded; a damaged one is left out with
     one warning naming the database and the row (the trial's other columns still count)."""
     record = dict(row)
@@ -256,72 +256,62 @@ def _from_row(row: sqlite3.Row, db_path: Path) -> dict[str, Any]:
                     printable(error, 120),
                 )
                 record[name] = None
-    return record
+    return TrialRecord.from_row(record)
 
 
 def record_from_summary(
     spec: TrialSpec,
-    summary: dict[str, Any],
+    summary: RunSummary,
     wall_seconds: float,
     run_dir: str | None,
     attempts: int = 1,
-) -> dict[str, Any]:
-    """A row from a finished mission's ``summary.json`` (see ``bearchair.executive.mission``)."""
-    judgement = summary.get("judgement") or {}
-    instructions = len(summary.get("instructions") or [])
-    accessible = bool(summary.get("accessible", False))
-    interrupted = bool(summary.get("interrupted", False))
-    return {
+) -> TrialRecord:
+    """A row from a finished mission's ``summary.json`` (``bearchair.executive.run_summary``)."""
+    judgement = summary.judgement
+    instructions = len(summary.instructions)
+    return TrialRecord(
         **_spec_columns(spec),
-        "outcome": "success" if summary.get("outcome") == "success" else "failure",
-        "failed_stage": summary.get("failed_stage"),
-        "reason": summary.get("reason") or "",
-        "rotations": int(summary.get("rotations") or 0),
-        "instructions": instructions,
-        "accessible_final": accessible,
-        "accessible_after_assistance": accessible if instructions > 0 else None,
-        "stage_seconds": {
-            stage["name"]: float(stage["seconds"])
-            for stage in summary.get("stages", [])
-            if stage.get("status") not in (None, "INVALID")
+        outcome="success" if summary.succeeded else "failure",
+        failed_stage=summary.failed_stage,
+        reason=summary.reason,
+        rotations=summary.rotations,
+        instructions=instructions,
+        accessible_final=summary.accessible,
+        accessible_after_assistance=summary.accessible if instructions > 0 else None,
+        stage_seconds={
+            stage.name: stage.seconds for stage in summary.stages if stage.status != "INVALID"
         },
-        "seated": _optional_bool(judgement.get("seated")),
-        "on_seat": _optional_bool(judgement.get("on_seat")),
-        "torso_tilt_deg": _optional_float(judgement.get("torso_tilt_deg")),
-        "facing_error_deg": _optional_float(judgement.get("facing_error_deg")),
-        "judgement_reason": judgement.get("reason"),
-        "sitting_pose": summary.get("sitting_pose"),
-        "mission_seconds": _optional_float(summary.get("wall_seconds")),
-        "wall_seconds": round(wall_seconds, 3),
-        "error": "the mission was interrupted inside the worker" if interrupted else None,
-        "attempts": attempts,
-        "run_dir": run_dir,
-        "finished_at": _now(),
-        "software": summary.get("software") or software_versions(),
-    }
+        seated=None if judgement is None else judgement.seated,
+        on_seat=None if judgement is None else judgement.on_seat,
+        torso_tilt_deg=None if judgement is None else judgement.torso_tilt_deg,
+        facing_error_deg=None if judgement is None else judgement.facing_error_deg,
+        judgement_reason=None if judgement is None else judgement.reason,
+        sitting_pose=summary.sitting_pose,
+        mission_seconds=summary.wall_seconds,
+        wall_seconds=round(wall_seconds, 3),
+        error="the mission was interrupted inside the worker" if summary.interrupted else None,
+        attempts=attempts,
+        run_dir=run_dir,
+        finished_at=_now(),
+        software=summary.software or software_versions(),
+    )
 
 
 def record_from_error(
     spec: TrialSpec, error: str, wall_seconds: float, run_dir: str | None, attempts: int = 1
-) -> dict[str, Any]:
+) -> TrialRecord:
     """A row for a trial that crashed, hung or could not start: a failure with its error."""
-    return {
+    return TrialRecord(
         **_spec_columns(spec),
-        "outcome": "failure",
-        "failed_stage": None,
-        "reason": error,
-        "rotations": None,
-        "instructions": None,
-        "accessible_final": None,
-        "accessible_after_assistance": None,
-        "stage_seconds": {},
-        "wall_seconds": round(wall_seconds, 3),
-        "error": error,
-        "attempts": attempts,
-        "run_dir": run_dir,
-        "finished_at": _now(),
-        "software": software_versions(),  # the harness's: the worker left no summary
-    }
+        outcome="failure",
+        reason=error,
+        wall_seconds=round(wall_seconds, 3),
+        error=error,
+        attempts=attempts,
+        run_dir=run_dir,
+        finished_at=_now(),
+        software=software_versions(),  # the harness's: the worker left no summary
+    )
 
 
 def _spec_columns(spec: TrialSpec) -> dict[str, Any]:
@@ -334,17 +324,6 @@ def _spec_columns(spec: TrialSpec) -> dict[str, Any]:
         "experiment": spec.experiment,
         "chair_path": str(spec.chair_path),
     }
-
-
-def _optional_bool(value: Any) -> bool | None:
-    return None if value is None else bool(value)
-
-
-def _optional_float(value: Any) -> float | None:
-    try:
-        return None if value is None else float(value)
-    except (TypeError, ValueError):
-        return None
 
 
 def _now() -> str:

@@ -11,6 +11,7 @@ for the harness. Exit status: 0 the mission ended (success or failure), 3 an exc
 
 from __future__ import annotations
 
+import dataclasses
 import faulthandler
 import json
 import os
@@ -21,10 +22,12 @@ import time
 import traceback
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from bearchair.evaluation.worker_process import RESULT_MARKER
-from bearchair.skills.imagination import DEFAULT_WORKERS
+
+if TYPE_CHECKING:
+    from bearchair.executive.config import RunConfig
 
 MISSION_TIMEOUT_MARGIN_S = 30.0
 """The mission stops itself this long before the harness would kill the worker, so a
@@ -87,31 +90,35 @@ def watch_for_orphaning(poll_s: float = 0.5) -> None:
     threading.Thread(target=watch, name="orphan-watch", daemon=True).start()
 
 
+def trial_run_config(payload: dict[str, Any]) -> RunConfig:
+    """The run of a trial payload: muted, its own timeout a margin inside the harness's
+    (the payload's ``timeout_s``), recorded only where Rerun is installed."""
+    from bearchair.executive.config import RunConfig
+
+    for key in ("out_dir", "placement", "helper", "seed", "timeout_s"):
+        if key not in payload:
+            raise KeyError(key)  # a trial names its run: no default stands in
+    config = RunConfig.from_payload(payload)
+    return dataclasses.replace(
+        config,
+        gui=False,
+        mute=True,
+        timeout_s=mission_timeout_s(config.timeout_s),
+        record=config.record and _rerun_installed(),
+    )
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) != 1:
         print("usage: python -m bearchair.evaluation.worker '<trial json>'", file=sys.stderr)
         return 2
     try:
-        payload = json.loads(argv[0])
-        from bearchair.executive.config import RunConfig
+        config = trial_run_config(json.loads(argv[0]))
         from bearchair.executive.mission import run_in_simulation
         from bearchair.executive.tree_source import load_tree_factory
 
-        out_dir = Path(payload["out_dir"])
-        config = RunConfig(
-            chair_path=Path(payload["chair_path"]) if payload.get("chair_path") else None,
-            placement=payload["placement"],
-            helper=payload["helper"],
-            seed=int(payload["seed"]),
-            gui=False,
-            out_dir=out_dir,
-            mute=True,
-            timeout_s=mission_timeout_s(float(payload["timeout_s"])),
-            record=bool(payload.get("record", False)) and _rerun_installed(),
-            imagination_workers=int(payload.get("imagination_workers", DEFAULT_WORKERS)),
-            tree_spec=str(payload.get("tree", "mission")),
-        )
+        out_dir = config.out_dir
         keeper = ChairKeeper()
         summary = run_in_simulation(
             config, on_tick=keeper, tree=load_tree_factory(config.tree_spec)
@@ -125,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
         message = {"error": f"{type(error).__name__}: {error}".splitlines()[0][:300]}
         print(RESULT_MARKER + json.dumps(message), flush=True)
         return 3
-    print(RESULT_MARKER + json.dumps({"summary": summary}, default=str), flush=True)
+    print(RESULT_MARKER + json.dumps({"summary": summary.to_json()}), flush=True)
     return 0
 
 

@@ -45,7 +45,8 @@ class WorkerOutcome(NamedTuple):
     """What came back from one trial subprocess.
 
     Attributes:
-        summary: the mission's summary (``bearchair.executive.mission``), None when it did not end.
+        summary: the JSON the worker printed: a run summary (``RunSummary.to_json``, read
+            with ``RunSummary.from_json``), or a bench's own result; None when it did not end.
         error: why there is no summary (crash, timeout, exception), None otherwise.
         wall_seconds: the subprocess's wall time, world building included.
         cancelled: the harness stopped it (Ctrl-C): not a result, never recorded.

@@ -306,9 +306,9 @@ def _run(args: argparse.Namespace) -> int:
             summary = run_in_simulation(config, on_tick=StageProgress(), tree=factory)
     print(format_summary(summary))
     print(f"run record: {out_dir}")
-    if summary.get("interrupted"):
+    if summary.interrupted:
         return exit_status()
-    return EXIT_SUCCESS if summary["outcome"] == "success" else EXIT_MISSION_FAILED
+    return EXIT_SUCCESS if summary.succeeded else EXIT_MISSION_FAILED
 
 
 @contextlib.contextmanager

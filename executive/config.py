@@ -6,7 +6,7 @@ import logging
 import math
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 from bearchair.core.arena import DEFAULT_ARENA, Arena
 from bearchair.core.errors import ChairSetError
@@ -93,6 +93,44 @@ class RunConfig:
 
     def chair_name(self) -> str:
         return self.chair_path.name if self.chair_path else "box-chair (built in)"
+
+    def to_payload(self) -> dict[str, Any]:
+        """The JSON a run started in another process gets (a trial worker, a bench's
+        fork): the fields a campaign or a bench chooses, by the names of
+        ``bearchair.evaluation.protocol.TrialSpec.to_payload`` (``tree`` is
+        :attr:`tree_spec`). The rest keep their defaults there (:meth:`from_payload`)."""
+        return {
+            "chair_path": None if self.chair_path is None else str(self.chair_path),
+            "placement": self.placement,
+            "helper": self.helper,
+            "seed": self.seed,
+            "out_dir": str(self.out_dir),
+            "timeout_s": self.timeout_s,
+            "record": self.record,
+            "imagination_workers": self.imagination_workers,
+            "tree": self.tree_spec,
+            "mute": self.mute,
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> RunConfig:
+        """The run a :meth:`to_payload` JSON (or a trial's) describes: a key left out
+        keeps the default, a key not of the run (``trial_index``, a bench's ``label``)
+        is ignored."""
+        base = cls()
+        chair = payload.get("chair_path")
+        return cls(
+            chair_path=Path(chair) if chair else None,
+            placement=cast(Placement, str(payload.get("placement", base.placement))),
+            helper=cast(HelperMode, str(payload.get("helper", base.helper))),
+            seed=int(payload.get("seed", base.seed)),
+            out_dir=Path(payload.get("out_dir", base.out_dir)),
+            timeout_s=float(payload.get("timeout_s", base.timeout_s)),
+            record=bool(payload.get("record", base.record)),
+            imagination_workers=int(payload.get("imagination_workers", base.imagination_workers)),
+            tree_spec=str(payload.get("tree", base.tree_spec)),
+            mute=bool(payload.get("mute", base.mute)),
+        )
 
 
 def _jsonable(value: Any) -> Any:

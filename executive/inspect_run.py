@@ -13,6 +13,7 @@ from bearchair.core.errors import RunRecordError
 from bearchair.core.userfiles import load_user_json, printable
 from bearchair.executive.record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, read_ticks
 from bearchair.executive.render import render_text
+from bearchair.executive.run_summary import RunSummary
 
 __all__ = ["RecordedRun", "RunRecordError"]
 
@@ -48,7 +49,7 @@ class RecordedRun:
             )
         self.summary = self._read_summary(run_dir / SUMMARY_FILE)
 
-    def _read_summary(self, path: Path) -> dict[str, Any] | None:
+    def _read_summary(self, path: Path) -> RunSummary | None:
         if not path.exists() and not path.is_symlink():
             return None
         try:
@@ -59,18 +60,21 @@ class RecordedRun:
         if not isinstance(summary, dict):
             self.notes.append(f"{SUMMARY_FILE} ignored: not a JSON object")
             return None
-        return summary
+        try:
+            return RunSummary.from_json(summary)
+        except RunRecordError as error:
+            self.notes.append(f"{SUMMARY_FILE} ignored: not a run summary ({printable(error)})")
+            return None
 
     def outcome_text(self) -> str:
         """``outcome: ...`` from the summary, or why there is none."""
         if self.summary is None:
             return "outcome: unknown (no readable summary.json: the run did not finish)"
-        outcome = self.summary.get("outcome", "unknown")
-        line = f"outcome: {outcome}"
-        if self.summary.get("failed_stage"):
-            line += f" at {self.summary['failed_stage']}: {self.summary.get('reason', '')}"
-        if self.summary.get("interrupted"):
-            line += f" (interrupted by {self.summary.get('signal', 'the operator')})"
+        line = f"outcome: {self.summary.outcome}"
+        if self.summary.failed_stage:
+            line += f" at {self.summary.failed_stage}: {self.summary.reason}"
+        if self.summary.interrupted:
+            line += f" (interrupted by {self.summary.signal or 'the operator'})"
         return printable(line, 2000)
 
     def compare_tree(self, spec: str) -> str:

@@ -11,8 +11,9 @@ import numpy as np
 def to_jsonable(value: Any, depth: int = 0) -> Any:
     """A compact JSON-friendly view of ``value``.
 
-    Results that know how to summarise themselves (``summary()``, ``to_json()``) do;
-    arrays and meshes are described by their shape, never dumped.
+    Results that know their JSON (``to_json()``) give it; arrays and meshes are
+    described by their shape, never dumped. ``summary()`` is the older name, still read
+    for the results not yet renamed (see docs/decisions.md, 2026-12-03).
     """
     if depth > 4:
         return repr(value)[:80]

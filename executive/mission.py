@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import logging
 import math
@@ -23,6 +24,7 @@ from bearchair.executive.interrupts import raise_if_received, signal_name
 from bearchair.executive.outputs import atomic_path, write_text_atomic
 from bearchair.executive.record import RecordWriteError, RunRecorder
 from bearchair.executive.recording import open_recording
+from bearchair.executive.run_summary import GroundTruth, RunInfo, RunSummary
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.executive.tree_source import build_tree
 from bearchair.skills.toolbox import MissionSkills
@@ -139,15 +141,15 @@ class ScenePictures:
         )
         return scene_picture.write(frame, scene_picture.SceneMarks.from_blackboard(), caption, path)
 
-    def final(self, path: Path, summary: dict[str, Any]) -> None:
+    def final(self, path: Path, summary: RunSummary) -> None:
         """The end of the run: its outcome, the failed stage and the reason (a success:
         what the last stage reported)."""
-        status = summary["outcome"].upper()
-        if summary.get("failed_stage"):
-            status += f" at {summary['failed_stage']}"
-        reason = summary.get("reason") or ""
-        if not reason and summary.get("stages"):
-            reason = summary["stages"][-1].get("message", "")
+        status = summary.outcome.upper()
+        if summary.failed_stage:
+            status += f" at {summary.failed_stage}"
+        reason = summary.reason
+        if not reason and summary.stages:
+            reason = summary.stages[-1].message
         self(path, "perspective", "final", status, reason)
 
 
@@ -171,7 +173,7 @@ def run_in_simulation(
     skills: MissionSkills | None = None,
     on_tick: Callable[[MissionRunner], None] | None = None,
     tree: TreeFactory | None = None,
-) -> dict[str, Any]:
+) -> RunSummary:
     """Builds the simulated world and the tree, runs the mission, writes the run record.
 
     Args:
@@ -193,15 +195,15 @@ def run_in_simulation(
     root = build_tree(tree or create_tree, config.tree_options, config.tree_spec)
     recorder = RunRecorder(config.out_dir, root)
     write_config(config)
-    run_info = {
-        "chair": config.chair_name(),
-        "placement": config.placement,
-        "helper": config.helper,
-        "seed": config.seed,
-        "backend": "sim",
-        "tree": config.tree_spec,
-        "started_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-    }
+    run_info = RunInfo(
+        chair=config.chair_name(),
+        placement=config.placement,
+        helper=config.helper,
+        seed=config.seed,
+        backend="sim",
+        tree=config.tree_spec,
+        started_at=time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    )
     try:
         world = _open_world(sim_config)
     except BaseException as error:
@@ -292,7 +294,7 @@ def run_on_robots(
     on_tick: Callable[[MissionRunner], None] | None = None,
     confirm: Callable[[str], bool] | None = None,
     tree: TreeFactory | None = None,
-) -> dict[str, Any]:
+) -> RunSummary:
     """Runs the mission on the real NAO and Panda described by ``cell_file`` (a cell
     file, or its fields: a configuration's ``[robots.cell]``).
 
@@ -345,7 +347,7 @@ def _record_on_robots(
     robot: Any,
     skills: MissionSkills | None,
     on_tick: Callable[[MissionRunner], None] | None,
-) -> dict[str, Any]:
+) -> RunSummary:
     """The run record of a mission on the activated real robots, watched by the monitor."""
     from bearchair.hardware.real import sdk_versions
     from bearchair.hardware.real.monitor import RobotMonitor
@@ -357,17 +359,17 @@ def _record_on_robots(
     recorder = RunRecorder(config.out_dir, root)
     write_config(config)
     write_text_atomic(config.out_dir / "cell.json", json.dumps(cell.to_json(), indent=2))
-    run_info = {
-        "chair": "real",
-        "placement": "real",
-        "helper": "person",
-        "seed": config.seed,
-        "backend": "real",
-        "tree": config.tree_spec,
-        "cell_file": "inline ([robots.cell])" if isinstance(cell_file, Mapping) else str(cell_file),
-        "sdk_versions": sdk_versions(),
-        "started_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-    }
+    run_info = RunInfo(
+        chair="real",
+        placement="real",
+        helper="person",
+        seed=config.seed,
+        backend="real",
+        tree=config.tree_spec,
+        started_at=time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        cell_file="inline ([robots.cell])" if isinstance(cell_file, Mapping) else str(cell_file),
+        sdk_versions=sdk_versions(),
+    )
     try:
         return _run_tree(root, recorder, robot, config, run_info, skills, on_tick, None)
     finally:
@@ -379,12 +381,12 @@ def _run_tree(
     recorder: RunRecorder,
     robot: Any,
     config: RunConfig,
-    run_info: dict[str, Any],
+    run_info: RunInfo,
     skills: MissionSkills | None,
     on_tick: Callable[[MissionRunner], None] | None,
-    render_png: Callable[[Path, dict[str, Any]], None] | None,
-    ground_truth: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
-) -> dict[str, Any]:
+    render_png: Callable[[Path, RunSummary], None] | None,
+    ground_truth: Callable[[RunSummary], GroundTruth] | None = None,
+) -> RunSummary:
     """Ticks the tree on ``robot`` and writes the summary; the record survives any error."""
     recording = None
     groot2 = None
@@ -414,27 +416,20 @@ def _run_tree(
             post_tick=tuple(hook for hook in (recording, groot2) if hook is not None),
             on_second_signal=lambda outcome: recorder.write_summary(summarise(outcome, run_info)),
         )
-        summary = summarise(runner.run(), run_info)
-        # The summary first: a SIGKILL while the picture renders must not lose it.
-        recorder.write_summary(summary)
-        if render_png is not None:
-            try:
-                with atomic_path(config.out_dir / "final_scene.png") as scratch:
-                    render_png(scratch, summary)
-                summary["picture"] = "final_scene.png"
-            except Exception as error:  # a missing picture must not lose the record
-                logger.warning("could not render the final scene: %s", error)
-        if ground_truth is not None:
-            try:
-                summary["ground_truth"] = ground_truth(summary)
-            except Exception as error:  # nor must a missing comparison
-                logger.warning("could not compare with the ground truth: %s", error)
+        outcome = summarise(runner.run(), run_info)
+        # The outcome first: a SIGKILL while the picture renders must not lose it.
+        recorder.write_summary(outcome)
+        summary = dataclasses.replace(
+            outcome,
+            picture=_final_picture(render_png, outcome, config.out_dir),
+            ground_truth=_compared(ground_truth, outcome),
+            recording=None if recording is None else recording.cost(),
+        )
         if recording is not None:
-            summary["recording"] = recording.cost()
             recording.log_summary(summary)
         recorder.write_summary(summary)
-        if summary.get("record_error"):
-            raise RecordWriteError(f"{summary['record_error']} (robots stopped)")
+        if summary.record_error:
+            raise RecordWriteError(f"{summary.record_error} (robots stopped)")
         return summary
     finally:
         recorder.close()
@@ -442,6 +437,38 @@ def _run_tree(
             recording.close()
         if groot2 is not None:
             groot2.close()
+
+
+FINAL_PICTURE = "final_scene.png"
+"""The final scene's picture in the run folder (simulation only)."""
+
+
+def _final_picture(
+    render_png: Callable[[Path, RunSummary], None] | None, summary: RunSummary, out_dir: Path
+) -> str | None:
+    """Renders the final scene beside the record; its file name, or None when not drawn."""
+    if render_png is None:
+        return None
+    try:
+        with atomic_path(out_dir / FINAL_PICTURE) as scratch:
+            render_png(scratch, summary)
+    except Exception as error:  # a missing picture must not lose the record
+        logger.warning("could not render the final scene: %s", error)
+        return None
+    return FINAL_PICTURE
+
+
+def _compared(
+    ground_truth: Callable[[RunSummary], GroundTruth] | None, summary: RunSummary
+) -> GroundTruth | None:
+    """The comparison with the simulated world's truth, or None (none, or it failed)."""
+    if ground_truth is None:
+        return None
+    try:
+        return ground_truth(summary)
+    except Exception as error:  # nor must a missing comparison
+        logger.warning("could not compare with the ground truth: %s", error)
+        return None
 
 
 def open_groot2(root: Any, config: RunConfig) -> Any:
@@ -475,8 +502,8 @@ def configured_skills(config: RunConfig) -> MissionSkills:
 
 
 def summary_before_start(
-    root: Any, run_info: dict[str, Any], error: BaseException, doing: str
-) -> dict[str, Any]:
+    root: Any, run_info: RunInfo, error: BaseException, doing: str
+) -> RunSummary:
     """The summary of a run that ended before its first tick (Ctrl-C, a failed world)."""
     from py_trees.common import Status
 
@@ -491,60 +518,59 @@ def summary_before_start(
         interrupted=interrupted,
         stop_signal=signal_name(getattr(error, "signum", signal.SIGINT)) if interrupted else None,
     )
-    summary = summarise(outcome, run_info)
-    summary["reason"] = (
+    reason = (
         f"interrupted while {doing}" if interrupted else f"failed while {doing}: {one_line(error)}"
     )
-    return summary
+    return dataclasses.replace(summarise(outcome, run_info), reason=reason)
 
 
-def _ground_truth(world: Any, summary: dict[str, Any]) -> dict[str, Any]:
+def _ground_truth(world: Any, summary: RunSummary) -> GroundTruth:
     """What only the simulated world knows, at the end of the run: the chair's true
     sitting direction, how far the mission's sitting pose was from it (degrees), and how
     deep the NAO went into the chair (centimetres; the simulated chair does not move)."""
     true_yaw = world.sitting_yaw_true()
     touch = world.chair_touch.deepest
-    truth: dict[str, Any] = {
-        "sitting_yaw_deg": None if true_yaw is None else round(math.degrees(true_yaw), 2),
-        "sitting_yaw_error_deg": None,
-        "nao_into_chair_cm": round(100.0 * touch.depth_m, 2),
-        "nao_into_chair_link": touch.nao_link,
-    }
-    pose = summary.get("sitting_pose")
-    if true_yaw is not None and pose:
-        error = wrap_angle(math.radians(pose["yaw_deg"]) - true_yaw)
-        truth["sitting_yaw_error_deg"] = round(abs(math.degrees(error)), 2)
-    return truth
+    error_deg = None
+    pose = summary.sitting_pose
+    if true_yaw is not None and pose is not None:
+        error = wrap_angle(math.radians(pose.yaw_deg) - true_yaw)
+        error_deg = round(abs(math.degrees(error)), 2)
+    return GroundTruth(
+        sitting_yaw_deg=None if true_yaw is None else round(math.degrees(true_yaw), 2),
+        sitting_yaw_error_deg=error_deg,
+        nao_into_chair_cm=round(100.0 * touch.depth_m, 2),
+        nao_into_chair_link=touch.nao_link,
+    )
 
 
-def format_summary(summary: dict[str, Any]) -> str:
+def format_summary(summary: RunSummary) -> str:
     """The per-stage table printed at the end of ``bearchair run``."""
+    info = summary.info
     lines = [
-        f"chair {summary['chair']} | placement {summary['placement']} | helper {summary['helper']} "
-        f"| seed {summary['seed']}",
+        f"chair {info.chair} | placement {info.placement} | helper {info.helper} "
+        f"| seed {info.seed}",
         f"{'stage':<20} {'status':<8} {'wall s':>7} {'robot s':>7}  outputs",
     ]
-    for stage in summary["stages"]:
-        robot_s = stage.get("robot_seconds")
-        robot_text = "" if robot_s is None else f"{robot_s:.2f}"
+    for stage in summary.stages:
+        robot_text = "" if stage.robot_seconds is None else f"{stage.robot_seconds:.2f}"
         lines.append(
-            f"{stage['name']:<20} {stage['status']:<8} {stage['seconds']:>7.2f} "
-            f"{robot_text:>7}  {stage['message']}"
+            f"{stage.name:<20} {stage.status:<8} {stage.seconds:>7.2f} "
+            f"{robot_text:>7}  {stage.message}"
         )
-    for sentence in summary["instructions"]:
+    for sentence in summary.instructions:
         lines.append(f'said: "{sentence}"')
-    truth = summary.get("ground_truth") or {}
-    if truth.get("nao_into_chair_cm"):
+    truth = summary.ground_truth
+    if truth is not None and truth.nao_into_chair_cm:
         lines.append(
-            f"ground truth: the NAO's {truth['nao_into_chair_link']} went "
-            f"{truth['nao_into_chair_cm']:.1f} cm into the chair (the simulated chair does not move)"
+            f"ground truth: the NAO's {truth.nao_into_chair_link} went "
+            f"{truth.nao_into_chair_cm:.1f} cm into the chair (the simulated chair does not move)"
         )
-    outcome = summary["outcome"].upper()
-    if summary["outcome"] == "success":
-        lines.append(f"outcome: {outcome} in {summary['wall_seconds']:.1f} s wall")
+    outcome = summary.outcome.upper()
+    if summary.succeeded:
+        lines.append(f"outcome: {outcome} in {summary.wall_seconds:.1f} s wall")
     else:
-        where = summary["failed_stage"] or "the start"
-        lines.append(f"outcome: {outcome} at {where}: {summary['reason']}")
+        where = summary.failed_stage or "the start"
+        lines.append(f"outcome: {outcome} at {where}: {summary.reason}")
     return "\n".join(printable(line, 1000) for line in lines)
 
 

@@ -9,12 +9,14 @@ A run directory holds:
   written only when it was written to, and holds until the next line that has one.
 * ``tree.json``: the tree's shape (each node's ``path``, ``name``, ``type``, ``depth``,
   and for composites with a memory, ``memory``).
-* ``summary.json``: the outcome (see :class:`RunSummary`).
+* ``summary.json``: the outcome (see
+  :class:`bearchair.executive.run_summary.RunSummary`).
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import uuid
 from pathlib import Path
@@ -27,6 +29,7 @@ from bearchair.core.provenance import software_versions
 from bearchair.core.userfiles import open_regular_file, parse_json, printable
 from bearchair.executive.jsonable import to_jsonable
 from bearchair.executive.outputs import describe_os_error, open_new_file, write_text_atomic
+from bearchair.executive.run_summary import RunSummary
 
 TICKS_FILE = "ticks.jsonl"
 TREE_FILE = "tree.json"
@@ -187,12 +190,14 @@ class RunRecorder:
                 f"cannot write {self.out_dir / TICKS_FILE}: {_why(error)}"
             ) from error
 
-    def write_summary(self, summary: dict[str, Any]) -> Path:
-        """Writes ``summary.json`` whole, with the software that made it (``software``)."""
+    def write_summary(self, summary: RunSummary) -> Path:
+        """Writes ``summary.json`` whole, with the software that made it (``software``,
+        unless the summary names it)."""
         path = self.out_dir / SUMMARY_FILE
-        summary = {**summary, "software": software_versions()}
+        if summary.software is None:
+            summary = dataclasses.replace(summary, software=software_versions())
         try:
-            return write_text_atomic(path, json.dumps(to_jsonable(summary), indent=2) + "\n")
+            return write_text_atomic(path, json.dumps(summary.to_json(), indent=2) + "\n")
         except OutputError as error:
             raise RecordWriteError(str(error)) from error
 

@@ -48,6 +48,7 @@ from bearchair.behaviours import keys
 from bearchair.core.errors import BackendUnavailable
 from bearchair.executive.jsonable import to_jsonable
 from bearchair.executive.record import tree_nodes
+from bearchair.executive.run_summary import RecordingCost, RunSummary
 from bearchair.executive.skill_calls import SkillCalls
 from bearchair.executive.tree_labels import node_label
 from bearchair.executive.viewer_links import (
@@ -280,21 +281,21 @@ class MissionRecording:
             self._stream.set_time("robot", duration=robot_s)
             self._robots.log_arm(self._stream, joints)
 
-    def cost(self) -> dict[str, Any]:
+    def cost(self) -> RecordingCost:
         """What the recording cost the run so far: the hook's wall seconds, in all and
         for the five most expensive things logged, and its CPU seconds
         (``summary.json``'s ``recording``)."""
         parts = sorted(self.seconds_by_part.items(), key=lambda kv: -kv[1])[:5]
-        return {
-            "file": None if self.path is None else self.path.name,
-            "seconds": round(self.seconds, 3),
-            "cpu_seconds": round(self.cpu_seconds, 3),
-            "seconds_by_part": {name: round(seconds, 3) for name, seconds in parts},
-        }
+        return RecordingCost(
+            file=None if self.path is None else self.path.name,
+            seconds=round(self.seconds, 3),
+            cpu_seconds=round(self.cpu_seconds, 3),
+            seconds_by_part={name: round(seconds, 3) for name, seconds in parts},
+        )
 
-    def log_summary(self, summary: dict[str, Any]) -> None:
+    def log_summary(self, summary: RunSummary) -> None:
         """The run's summary (``summary.json``) as a text document at the end."""
-        text = json.dumps(to_jsonable(summary), indent=2)
+        text = json.dumps(summary.to_json(), indent=2)
         self._guarded(
             "summary",
             lambda: self._stream.log(

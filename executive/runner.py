@@ -7,7 +7,7 @@ import signal
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import py_trees
 from py_trees.common import Status
@@ -15,6 +15,7 @@ from py_trees.common import Status
 from bearchair.behaviours import keys
 from bearchair.behaviours.mission_inputs import set_mission_inputs
 from bearchair.core.arena import Arena
+from bearchair.core.errors import RunRecordError
 from bearchair.executive.interrupts import (
     emergency_stop_on_second_signal,
     raise_if_received,
@@ -22,11 +23,22 @@ from bearchair.executive.interrupts import (
 )
 from bearchair.executive.jsonable import to_jsonable
 from bearchair.executive.record import RecordWriteError, RunRecorder
+from bearchair.executive.run_summary import (
+    JsonRecord,
+    JudgementRecord,
+    ReleaseRecord,
+    RunInfo,
+    RunSummary,
+    SittingPoseRecord,
+    StageRecord,
+)
 from bearchair.hardware.interfaces import Robot
 from bearchair.hardware.real import RobotFault
 from bearchair.skills.toolbox import MissionSkills
 
 logger = logging.getLogger(__name__)
+
+R = TypeVar("R", bound=JsonRecord)
 
 
 @dataclass
@@ -357,7 +369,7 @@ def _leaf_feedback(node: py_trees.behaviour.Behaviour) -> str:
     return message
 
 
-def summarise(outcome: MissionOutcome, run_info: dict[str, Any]) -> dict[str, Any]:
+def summarise(outcome: MissionOutcome, info: RunInfo) -> RunSummary:
     """The ``summary.json`` of a run: outcome, failed stage, reason, stages and key outputs."""
     board = outcome.blackboard
     success = outcome.status == Status.SUCCESS and not outcome.interrupted
@@ -368,35 +380,54 @@ def summarise(outcome: MissionOutcome, run_info: dict[str, Any]) -> dict[str, An
         reason = next((s.feedback for s in outcome.stages if s.name == failed_stage), "")
     else:
         reason = f"{outcome.failed_leaf.name}: {outcome.failed_leaf.feedback_message}"
-    judgement = board.get(keys.JUDGEMENT)
-    return {
-        **run_info,
-        "outcome": "success" if success else "failure",
-        "failed_stage": None if success else failed_stage,
-        "reason": reason,
-        "interrupted": outcome.interrupted,
-        **({"signal": outcome.stop_signal} if outcome.stop_signal else {}),
-        **({"record_error": outcome.record_error} if outcome.record_error else {}),
-        "wall_seconds": round(outcome.wall_s, 3),
-        "ticks": outcome.ticks,
-        "stages": [
-            {
-                "name": s.name,
-                "status": s.status,
-                "seconds": round(s.seconds, 3),
-                "robot_seconds": round(s.robot_seconds, 3),
-                "message": s.feedback,
-            }
-            for s in outcome.stages
-        ],
-        "sitting_pose": to_jsonable(board.get(keys.SITTING_POSE)),
-        "se2_goal": to_jsonable(board.get(keys.SE2_GOAL)),
-        "instructions": list(board.get(keys.INSTRUCTIONS, [])),
-        "rotations": int(board.get(keys.ROTATIONS, 0)),
-        "measured_rotations": to_jsonable(board.get(keys.MEASURED_ROTATIONS, [])),
-        "accessible": bool(getattr(board.get(keys.ACCESSIBILITY), "accessible", False)),
-        "walk": to_jsonable(board.get(keys.WALK)),
-        "judgement": to_jsonable(judgement),
-        "release_prediction": to_jsonable(getattr(board.get(keys.SEATING_PLAN), "release", None)),
-        "failures": list(outcome.failures),
-    }
+    return RunSummary(
+        outcome="success" if success else "failure",
+        info=info,
+        failed_stage=None if success else failed_stage,
+        reason=reason,
+        interrupted=outcome.interrupted,
+        signal=outcome.stop_signal or None,
+        record_error=outcome.record_error or None,
+        wall_seconds=round(outcome.wall_s, 3),
+        ticks=outcome.ticks,
+        stages=tuple(_stage_record(stage) for stage in outcome.stages),
+        sitting_pose=_view_record(SittingPoseRecord, board.get(keys.SITTING_POSE)),
+        se2_goal=to_jsonable(board.get(keys.SE2_GOAL)),
+        instructions=tuple(str(sentence) for sentence in board.get(keys.INSTRUCTIONS, [])),
+        rotations=int(board.get(keys.ROTATIONS, 0)),
+        measured_rotations=_as_tuple(to_jsonable(board.get(keys.MEASURED_ROTATIONS, []))),
+        accessible=bool(getattr(board.get(keys.ACCESSIBILITY), "accessible", False)),
+        walk=to_jsonable(board.get(keys.WALK)),
+        judgement=_view_record(JudgementRecord, board.get(keys.JUDGEMENT)),
+        release_prediction=_view_record(
+            ReleaseRecord, getattr(board.get(keys.SEATING_PLAN), "release", None)
+        ),
+        failures=tuple(outcome.failures),
+    )
+
+
+def _as_tuple(view: Any) -> tuple[Any, ...]:
+    """A JSON view as the record's tuple: a list's items, else the one value."""
+    return tuple(view) if isinstance(view, list) else (view,)
+
+
+def _stage_record(stage: StageTiming) -> StageRecord:
+    return StageRecord(
+        name=stage.name,
+        status=stage.status,
+        seconds=round(stage.seconds, 3),
+        robot_seconds=round(stage.robot_seconds, 3),
+        message=stage.feedback,
+    )
+
+
+def _view_record(record: type[R], value: Any) -> R | None:
+    """``value``'s JSON view (``to_jsonable``) read as ``record``; None when there is no
+    value, or when it is not such a record (a plug-in's own result: a warning says so)."""
+    if value is None:
+        return None
+    try:
+        return record.from_json(to_jsonable(value))
+    except RunRecordError as error:
+        logger.warning("the summary leaves out %s: %s", type(value).__name__, error)
+        return None

@@ -1,7 +1,7 @@
 """Typed results that cross from skills into the mission tree.
 
 Each stage's skill returns one of these; behaviours put them on the blackboard and the
-executive writes their ``summary()`` into the run record. Units: metres, radians,
+executive writes their ``to_json()`` into the run record. Units: metres, radians,
 seconds; frames are named in the attribute docs.
 """
 
@@ -38,7 +38,7 @@ class ChairScan(NamedTuple):
     frames: tuple[RGBDFrame, ...] = ()
     notes: tuple[str, ...] = ()
 
-    def summary(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         return {
             "views": self.views,
             "notes": list(self.notes),
@@ -153,7 +153,7 @@ class ImaginationResult(NamedTuple):
     vote: RotationVote | None = None
     backrest: Any = None
 
-    def summary(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         return {
             "found": self.found,
             "sitting_pose": self.sitting_pose.to_json() if self.sitting_pose else None,
@@ -194,7 +194,7 @@ class SeatReachability(NamedTuple):
     centred_m: float = 0.0
     seat_seen: bool = True
 
-    def summary(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         def number(value: float) -> float | None:
             return None if math.isnan(value) else round(value, 3)
 
@@ -239,12 +239,12 @@ class AccessibilityResult(NamedTuple):
     raise_at: SE2Pose | None = None
     step_in_from: SE2Pose | None = None
 
-    def summary(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         return {
             "accessible": self.accessible,
-            "se2_goal": _se2_json(self.se2_goal),
-            "raise_at": _se2_json(self.raise_at),
-            "step_in_from": _se2_json(self.step_in_from),
+            "se2_goal": None if self.se2_goal is None else self.se2_goal.to_json(),
+            "raise_at": None if self.raise_at is None else self.raise_at.to_json(),
+            "step_in_from": None if self.step_in_from is None else self.step_in_from.to_json(),
             "waypoints": len(self.path),
             "reason": self.reason,
             "seconds": round(self.seconds, 3),
@@ -303,7 +303,7 @@ class ChairRotation(NamedTuple):
     chair_points: np.ndarray
     visible_fitness: float = math.nan
 
-    def summary(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         return {
             "yaw_deg": round(math.degrees(self.yaw_rad), 2),
             "translation_m": [round(float(v), 4) for v in self.T_world_new_old[:3, 3]],
@@ -332,7 +332,7 @@ class WalkResult(NamedTuple):
     seconds: float
     reason: str = ""
 
-    def summary(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         return {
             "reached": self.reached,
             "position_error_m": round(self.position_error_m, 4),
@@ -365,7 +365,7 @@ class SeatingPlan(NamedTuple):
     seconds: dict[str, float]
     release: Any = None
 
-    def summary(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         out = {
             "knots": len(self.times_s),
             "duration_s": round(float(self.times_s[-1]), 2) if len(self.times_s) else 0.0,
@@ -374,13 +374,3 @@ class SeatingPlan(NamedTuple):
         if self.release is not None:
             out["release"] = self.release.summary()
         return out
-
-
-def _se2_json(pose: SE2Pose | None) -> dict[str, float] | None:
-    if pose is None:
-        return None
-    return {
-        "x_m": round(pose.x, 4),
-        "y_m": round(pose.y, 4),
-        "theta_deg": round(math.degrees(pose.theta), 2),
-    }

@@ -11,6 +11,7 @@ import pytest
 from bearchair.core.arena import DEFAULT_ARENA
 from bearchair.executive.cli import main
 from bearchair.executive.record import RunRecorder
+from bearchair.executive.run_summary import RunInfo
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.skills.scripted import ScriptedSkills
@@ -96,7 +97,7 @@ def test_inspect_replays_a_recorded_run(tmp_path, capsys):
         recorder=recorder,
         tick_period_s=0.002,
     )
-    recorder.write_summary(summarise(runner.run(), {"chair": "stub"}))
+    recorder.write_summary(summarise(runner.run(), RunInfo(chair="stub")))
     recorder.close()
 
     assert main(["inspect", str(tmp_path), "--timeline", "--blackboard"]) == 0

@@ -18,7 +18,9 @@ from bearchair.behaviours.tracking import tracked_humanoid_pose
 from bearchair.core.se2 import SE2Pose
 from bearchair.evaluation.cli import left_out_text
 from bearchair.evaluation.protocol import SkippedChair, discover_chairs
+from bearchair.evaluation.trial_record import TrialRecord
 from bearchair.executive.mission import StageProgress, format_summary, stage_seconds_text
+from bearchair.executive.run_summary import RunSummary
 from bearchair.executive.runner import StageClock, StageTiming
 
 
@@ -110,7 +112,7 @@ def test_stage_lines_and_the_table_name_their_clocks():
                     "robot_seconds": 8.9, "message": "at the goal"}],
         "instructions": [], "outcome": "success", "wall_seconds": 30.0,
     }  # fmt: skip
-    table = format_summary(summary)
+    table = format_summary(RunSummary.from_json(summary))
     assert "wall s robot s" in table and "3.20    8.90" in table
     assert table.endswith("outcome: SUCCESS in 30.0 s wall")
 
@@ -193,7 +195,9 @@ def test_trials_progress_is_a_tqdm_bar_on_a_terminal():
     terminal = _Terminal()
     progress = Progress(4, already_done=1, stream=terminal)
     progress.start()
-    progress.update({"chair": "a.obj", "trial_index": 1, "outcome": "success", "wall_seconds": 30})
+    progress.update(
+        TrialRecord("a.obj", "accessible", "obeys", 1, 0, "accessible", "success", wall_seconds=30)
+    )
     progress.finish()
     drawn = terminal.getvalue()
     assert "trials" in drawn and "2/4" in drawn and "a.obj #1 success" in drawn

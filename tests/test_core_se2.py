@@ -72,3 +72,20 @@ def test_transformed_follows_a_rigid_motion_of_the_world():
     T[:3, 3] = pivot - T[:3, :3] @ pivot
     moved = SE2Pose(1.5, -0.2, 0.0).transformed(T)
     assert same(moved, SE2Pose(0.5, 0.8, math.pi / 2))
+
+
+def test_a_pose_in_a_record_has_its_units_in_the_keys():
+    pose = SE2Pose(1.23456, -0.5, math.pi / 2)
+    assert pose.to_json() == {"x_m": 1.2346, "y_m": -0.5, "theta_deg": 90.0}
+
+
+def test_the_blackboard_and_the_accessibility_result_record_a_goal_alike():
+    # Both are in the same ticks.jsonl line: the goal on its own and inside the result.
+    from bearchair.core.geometry import SittingPose
+    from bearchair.executive.jsonable import to_jsonable
+    from bearchair.skills.results import AccessibilityResult
+
+    goal = SE2Pose(0.7, 0.1, -2.0)
+    result = AccessibilityResult(True, goal, SittingPose(np.zeros(3), 0.0), (goal,))
+    assert to_jsonable(goal) == to_jsonable(result)["se2_goal"] == goal.to_json()
+    assert set(goal.to_json()) == {"x_m", "y_m", "theta_deg"}

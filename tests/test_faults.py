@@ -29,6 +29,7 @@ from bearchair.evaluation.store import TrialStore, campaign_lock
 from bearchair.executive import cli, mission
 from bearchair.executive.inspect_run import RecordedRun
 from bearchair.executive.record import RunRecorder
+from bearchair.executive.run_summary import RunInfo
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.skills.scripted import ScriptedSkills
 from bearchair.trees.mission import create_tree
@@ -56,7 +57,7 @@ class FakeMission:
     def __call__(self, config, skills=None, on_tick=None, tree=None):
         root = (tree or create_tree)(config.tree_options)
         recorder = RunRecorder(config.out_dir, root)
-        run_info = {"chair": "stub", "placement": "accessible", "helper": "obeys", "seed": 0}
+        run_info = RunInfo(chair="stub", placement="accessible", helper="obeys", seed=0)
         return mission._run_tree(
             root, recorder, self.robot, config, run_info, self.skills, self.on_tick, None
         )
@@ -326,7 +327,7 @@ def recorded_run(tmp_path_factory) -> Path:
         recorder=recorder,
         tick_period_s=0.002,
     )
-    recorder.write_summary(summarise(runner.run(), {"chair": "stub"}))
+    recorder.write_summary(summarise(runner.run(), RunInfo(chair="stub")))
     recorder.close()
     return out
 
@@ -495,7 +496,7 @@ def test_a_database_that_fails_mid_campaign_keeps_the_finished_trials(
     command = fake_worker_command(tmp_path, monkeypatch)
     folder = write_chairs(tmp_path / "chairs", ["a.obj"])
     real_add = TrialStore.add
-    added: list[dict] = []
+    added: list = []
 
     def add(self, record):
         if len(added) == 2:  # the disk fills up at the third trial
@@ -534,13 +535,13 @@ def test_a_killed_worker_is_retried_once_and_marked(tmp_path, monkeypatch):
     specs = expand_protocol(chairs, "paper", 0)
     with TrialStore(tmp_path / "t.sqlite") as store:
         run_campaign(specs, store, LocalBackend(2, 30, command), tmp_path / "runs", 30)
-        records = {(r["chair"], r["trial_index"]): r for r in store.records()}
+        records = {(r.chair, r.trial_index): r for r in store.records()}
     flaky = [r for (chair, _), r in records.items() if chair == "flaky.obj"]
-    assert all(r["attempts"] == 2 and r["error"] is None for r in flaky)  # retried, then fine
+    assert all(r.attempts == 2 and r.error is None for r in flaky)  # retried, then fine
     crashed = records[("crash.obj", 1)]
-    assert crashed["attempts"] == 2 and "retried once" in crashed["error"]
-    assert "SIGSEGV" in crashed["error"]
-    assert records[("crash.obj", 0)]["attempts"] == 1
+    assert crashed.attempts == 2 and "retried once" in crashed.error
+    assert "SIGSEGV" in crashed.error
+    assert records[("crash.obj", 0)].attempts == 1
 
 
 def test_a_sigkilled_campaign_resumes_to_the_same_table_with_no_orphan(tmp_path, monkeypatch):
@@ -586,7 +587,7 @@ def test_a_sigkilled_campaign_resumes_to_the_same_table_with_no_orphan(tmp_path,
     with TrialStore(db) as store, TrialStore(tmp_path / "straight" / "trials.sqlite") as other:
         assert len(store.records()) == 6
         assert table_without_timing(store.records()) == table_without_timing(other.records())
-        run_dirs = {Path(r["run_dir"]) for r in store.records()}
+        run_dirs = {Path(r.run_dir) for r in store.records()}
     # Every run folder on disk belongs to a recorded trial: the killed ones were redone.
     on_disk = {p for p in (out / "runs").glob("*/*") if p.is_dir()}
     assert on_disk == run_dirs

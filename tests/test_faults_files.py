@@ -23,6 +23,7 @@ from bearchair.core.errors import OutputError
 from bearchair.evaluation.store import TrialStore, campaign_lock
 from bearchair.executive import cli, operator, outputs
 from bearchair.executive.record import RecordWriteError, RunRecorder
+from bearchair.executive.run_summary import RunSummary
 from bearchair.trees.mission import create_tree
 from tests.test_bad_inputs import refused
 from tests.test_faults_inspect import recorded_run
@@ -109,10 +110,10 @@ def test_a_worker_summary_of_the_wrong_shape_fails_that_trial_only(campaign, tmp
     )
     assert cli.main(argv) == 0
     with TrialStore(out / "trials.sqlite") as store:
-        records = {r["trial_index"]: r for r in store.records()}
+        records = {r.trial_index: r for r in store.records()}
     assert len(records) == 6
-    assert "the worker's summary is malformed" in records[3]["error"]
-    assert all(records[i]["error"] is None for i in (0, 1, 2, 4, 5))
+    assert "the worker's summary is malformed" in records[3].error
+    assert all(records[i].error is None for i in (0, 1, 2, 4, 5))
 
 
 def test_chair_names_in_the_report_are_escaped(campaign, tmp_path, capsys):
@@ -449,6 +450,6 @@ def test_the_run_summary_prints_a_hostile_chair_name_escaped():
         "failed_stage": "ScanChair",
         "reason": "\x1b[2J",
     }
-    text = format_summary(summary)
+    text = format_summary(RunSummary.from_json(summary))
     assert "\x1b" not in text and "\x07" not in text
     assert not any(line.startswith("[  ok] forged") for line in text.splitlines())

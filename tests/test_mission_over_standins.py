@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from bearchair.core.arena import DEFAULT_ARENA
+from bearchair.executive.run_summary import RunInfo
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.hardware.real.panda import wall_limits
 from bearchair.hardware.sim.world import SimConfig, SimWorld
@@ -50,11 +51,11 @@ def test_the_mission_runs_over_the_sdk_standins():
         runner = MissionRunner(
             create_tree(), DefaultSkills(), robot, seed=1, arena=DEFAULT_ARENA, timeout_s=900
         )
-        summary = summarise(runner.run(), {})
+        summary = summarise(runner.run(), RunInfo())
         panda_calls = list(robot.arm._robot._impl.calls)  # the fake behind the SDK double
         session.close()
-    assert summary["outcome"] == "success", f"{summary['failed_stage']}: {summary['reason']}"
-    assert summary["judgement"]["seated"]
+    assert summary.outcome == "success", f"{summary.failed_stage}: {summary.reason}"
+    assert summary.judgement is not None and summary.judgement.seated
 
     calls = [(name, args) for _, name, args in standin.calls]
     names = {name for name, _ in calls}
@@ -71,7 +72,7 @@ def test_the_mission_runs_over_the_sdk_standins():
             assert all(len(a) == len(t) for a, t in zip(angles, times, strict=True))
         elif name in ("openHand", "closeHand"):
             assert args in (("LHand",), ("RHand",))
-    assert [args[0] for name, args in calls if name == "say"] == summary["instructions"]
+    assert [args[0] for name, args in calls if name == "say"] == list(summary.instructions)
     # The run ended with the emergency stop: the walk stopped, no leg task killed mid-walk.
     assert "stopMove" in names and standin.fell == ""
 

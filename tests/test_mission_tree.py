@@ -15,6 +15,7 @@ from bearchair.core.errors import RunRecordError
 from bearchair.executive.inspect_run import RecordedRun
 from bearchair.executive.record import RunRecorder
 from bearchair.executive.render import render_text
+from bearchair.executive.run_summary import RunInfo, RunSummary
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.skills.perception.errors import RegistrationError
@@ -28,7 +29,7 @@ ACCESSIBLE = DEFAULTS["check_accessibility"]
 BLOCKED = AccessibilityResult(False, None, ACCESSIBLE.sitting_pose, (), "s_goal outside the arena")
 
 
-def run(skills: ScriptedSkills, out_dir=None, robot=None) -> tuple[dict, MissionRunner]:
+def run(skills: ScriptedSkills, out_dir=None, robot=None) -> tuple[RunSummary, MissionRunner]:
     root = create_tree()
     recorder = RunRecorder(out_dir, root) if out_dir else None
     runner = MissionRunner(
@@ -42,7 +43,7 @@ def run(skills: ScriptedSkills, out_dir=None, robot=None) -> tuple[dict, Mission
         timeout_s=60,
     )
     outcome = runner.run()
-    summary = summarise(outcome, {"chair": "stub"})
+    summary = summarise(outcome, RunInfo(chair="stub"))
     if recorder:
         recorder.write_summary(summary)
         recorder.close()
@@ -64,12 +65,12 @@ def test_every_leaf_is_a_named_behaviour_with_no_hardware_before_setup():
 
 def test_accessible_mission_succeeds_without_instructions():
     summary, _ = run(ScriptedSkills())
-    assert summary["outcome"] == "success", summary["reason"]
-    assert summary["failed_stage"] is None
-    assert [s["status"] for s in summary["stages"]] == ["SUCCESS"] * len(STAGES)
-    assert summary["rotations"] == 0 and summary["instructions"] == []
-    assert summary["judgement"]["seated"] is True
-    assert summary["sitting_pose"]["yaw_deg"] == 0.0
+    assert summary.outcome == "success", summary.reason
+    assert summary.failed_stage is None
+    assert [s.status for s in summary.stages] == ["SUCCESS"] * len(STAGES)
+    assert summary.rotations == 0 and summary.instructions == ()
+    assert summary.judgement is not None and summary.judgement.seated is True
+    assert summary.sitting_pose is not None and summary.sitting_pose.yaw_deg == 0.0
 
 
 @pytest.mark.parametrize("rotations_needed", [1, 2, 3])
@@ -77,9 +78,9 @@ def test_assistance_loop_asks_until_accessible(rotations_needed):
     checks = [BLOCKED] * rotations_needed + [ACCESSIBLE]
     skills = ScriptedSkills({"check_accessibility": checks})
     summary, _ = run(skills)
-    assert summary["outcome"] == "success", summary["reason"]
-    assert summary["rotations"] == rotations_needed
-    assert len(summary["instructions"]) == rotations_needed
+    assert summary.outcome == "success", summary.reason
+    assert summary.rotations == rotations_needed
+    assert len(summary.instructions) == rotations_needed
     assert len(skills.calls["measure_chair_rotation"]) == rotations_needed
     assert len(skills.calls["check_accessibility"]) == rotations_needed + 1
     assert len(skills.calls["walk_path"]) == 1
@@ -91,12 +92,12 @@ def test_a_turned_chair_no_fit_accepts_is_scanned_and_imagined_anew():
         {"check_accessibility": [BLOCKED, ACCESSIBLE], "measure_chair_rotation": rejected}
     )
     summary, runner = run(skills)
-    assert summary["outcome"] == "success", summary["reason"]
-    assert summary["rotations"] == 1
+    assert summary.outcome == "success", summary.reason
+    assert summary.rotations == 1
     assert len(skills.calls["scan_chair"]) == 2 and len(skills.calls["imagine_sitting"]) == 2
     # The second accessibility check asks about the chair as scanned anew.
     assert len(skills.calls["check_accessibility"]) == 2
-    assert any("registration rejected" in failure for failure in summary["failures"])
+    assert any("registration rejected" in failure for failure in summary.failures)
     statuses = {node.name: node.status for node in runner.root.iterate()}
     assert statuses["ScanTurnedChair"] == statuses["ImagineTurnedChair"] == Status.SUCCESS
 
@@ -104,22 +105,22 @@ def test_a_turned_chair_no_fit_accepts_is_scanned_and_imagined_anew():
 def test_assistance_loop_gives_up_after_the_third_rotation():
     skills = ScriptedSkills({"check_accessibility": BLOCKED})
     summary, _ = run(skills)
-    assert summary["outcome"] == "failure"
-    assert summary["failed_stage"] == "MakeChairAccessible"
-    assert summary["rotations"] == 3
+    assert summary.outcome == "failure"
+    assert summary.failed_stage == "MakeChairAccessible"
+    assert summary.rotations == 3
     assert len(skills.calls["compose_instruction"]) == 3
-    assert summary["reason"] == (
+    assert summary.reason == (
         "GiveUp: chair not accessible after 3 rotation(s) (at most 3); last failure: "
         "CheckAccessibilityAgain: not accessible: s_goal outside the arena"
     )
     # Every leaf failure, in order: the first check, each check after a turn, GiveUp.
-    assert summary["failures"] == [
+    assert list(summary.failures) == [
         "CheckAccessibility: not accessible: s_goal outside the arena",
         *["CheckAccessibilityAgain: not accessible: s_goal outside the arena"] * 3,
-        summary["reason"],
+        summary.reason,
     ]
     assert not skills.calls["walk_path"]
-    statuses = {s["name"]: s["status"] for s in summary["stages"]}
+    statuses = {s.name: s.status for s in summary.stages}
     assert statuses["WalkToChair"] == "INVALID"
 
 
@@ -131,10 +132,10 @@ def test_a_seat_out_of_reach_is_refused_before_anyone_is_asked_to_turn_it():
     )
     skills = ScriptedSkills({"check_seat_reachable": refusal})
     summary, _ = run(skills)
-    assert summary["outcome"] == "failure"
-    assert summary["failed_stage"] == "CheckSeatReachable"
-    assert summary["reason"].startswith("CheckSeatReachable: refused: seat too high for the NAO")
-    assert summary["rotations"] == 0 and summary["instructions"] == []
+    assert summary.outcome == "failure"
+    assert summary.failed_stage == "CheckSeatReachable"
+    assert summary.reason.startswith("CheckSeatReachable: refused: seat too high for the NAO")
+    assert summary.rotations == 0 and summary.instructions == ()
     assert not skills.calls["compose_instruction"] and not skills.calls["check_accessibility"]
     assert not skills.calls["walk_path"]
 
@@ -144,17 +145,17 @@ def test_missing_skill_fails_at_its_stage_and_names_it():
         "skill 'imagine_sitting' is not implemented: no module skills.imagination"
     )
     summary, _ = run(ScriptedSkills({"imagine_sitting": error}))
-    assert summary["outcome"] == "failure"
-    assert summary["failed_stage"] == "ImagineSitting"
-    assert "imagine_sitting" in summary["reason"]
-    assert summary["reason"].startswith("ImagineSitting:")
+    assert summary.outcome == "failure"
+    assert summary.failed_stage == "ImagineSitting"
+    assert "imagine_sitting" in summary.reason
+    assert summary.reason.startswith("ImagineSitting:")
 
 
 def test_a_skill_exception_never_crashes_the_executive():
     summary, _ = run(ScriptedSkills({"walk_path": ZeroDivisionError("division by zero")}))
-    assert summary["outcome"] == "failure"
-    assert summary["failed_stage"] == "WalkToChair"
-    assert "ZeroDivisionError" in summary["reason"]
+    assert summary.outcome == "failure"
+    assert summary.failed_stage == "WalkToChair"
+    assert "ZeroDivisionError" in summary.reason
 
 
 def test_timeout_stops_the_tree_and_cancels_the_running_skill():
@@ -164,13 +165,13 @@ def test_timeout_stops_the_tree_and_cancels_the_running_skill():
         root, skills, fake_robot(), seed=0, arena=DEFAULT_ARENA, tick_period_s=0.01, timeout_s=0.3
     )
     outcome = runner.run()
-    summary = summarise(outcome, {})
-    assert summary["outcome"] == "failure"
-    assert summary["failed_stage"] == "ImagineSitting"
-    assert summary["reason"] == "mission timed out after 0 s"
+    summary = summarise(outcome, RunInfo())
+    assert summary.outcome == "failure"
+    assert summary.failed_stage == "ImagineSitting"
+    assert summary.reason == "mission timed out after 0 s"
     assert outcome.status == Status.FAILURE
-    assert outcome.failed_leaf is None and summary["failures"] == []
-    statuses = {s["name"]: (s["status"], s["message"]) for s in summary["stages"]}
+    assert outcome.failed_leaf is None and summary.failures == ()
+    statuses = {s.name: (s.status, s.message) for s in summary.stages}
     assert statuses["ScanChair"][0] == "SUCCESS"
     assert statuses["ImagineSitting"] == ("FAILURE", "mission timed out after 0 s")
     # The Timeout stopped the tree: the running leaf's terminate() cancelled its worker.
@@ -249,16 +250,16 @@ def test_ctrl_c_stops_the_tree_cancels_the_skill_and_stops_the_robot(tmp_path):
         on_tick=press_ctrl_c,
     )
     outcome = runner.run()
-    summary = summarise(outcome, {})
+    summary = summarise(outcome, RunInfo())
     recorder.write_summary(summary)
     recorder.close()
     assert outcome.interrupted
-    assert summary["outcome"] == "failure"
-    assert summary["failed_stage"] == "ImagineSitting"
-    assert "Ctrl-C" in summary["reason"]
+    assert summary.outcome == "failure"
+    assert summary.failed_stage == "ImagineSitting"
+    assert "Ctrl-C" in summary.reason
     assert robot.humanoid.stopped >= 1
     deadline = time.monotonic() + 2.0
     while "imagine_sitting" not in skills.cancelled and time.monotonic() < deadline:
         time.sleep(0.01)
     assert "imagine_sitting" in skills.cancelled
-    assert RecordedRun(tmp_path).summary["interrupted"] is True
+    assert RecordedRun(tmp_path).summary.interrupted is True

@@ -175,6 +175,7 @@ def test_imagine_image_and_the_report_draw_with_the_same_renderer(tmp_path, monk
 
     from bearchair.core.meshes import box_chair_mesh
     from bearchair.evaluation.pictures import render_chair_pictures
+    from bearchair.evaluation.trial_record import TrialRecord
     from bearchair.executive import cmd_imagine
     from bearchair.skills.imagination import render
 
@@ -193,10 +194,11 @@ def test_imagine_image_and_the_report_draw_with_the_same_renderer(tmp_path, monk
     run = tmp_path / "run"
     run.mkdir()
     mesh.export(run / "chair_reconstructed.ply")
-    record = {
-        "chair": "box.obj", "trial_index": 0, "experiment": "accessible", "outcome": "success",
-        "run_dir": str(run), "sitting_pose": {"position_m": [0.0, 0.0, 0.3], "yaw_deg": 30.0},
-    }  # fmt: skip
+    record = TrialRecord.from_row({
+        "chair": "box.obj", "placement": "accessible", "helper": "obeys", "trial_index": 0,
+        "seed": 0, "experiment": "accessible", "outcome": "success", "run_dir": str(run),
+        "sitting_pose": {"position_m": [0.0, 0.0, 0.3], "yaw_deg": 30.0},
+    })  # fmt: skip
     assert set(render_chair_pictures([record], tmp_path / "chairs")) == {"box.obj"}
     assert [name for _, _, name in calls] == ["imagine.png", "box.png"]
     assert calls[0][0] == calls[1][0] == len(mesh.faces)

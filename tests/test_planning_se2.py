@@ -383,7 +383,7 @@ def test_a_raised_approach_ends_the_path_where_the_bear_is_raised() -> None:
     assert result.accessible, result.reason
     assert result.raise_at == stepped_back(result.se2_goal, 0.06)
     assert result.path[-1] == result.raise_at
-    assert result.summary()["raise_at"]["x_m"] == pytest.approx(result.raise_at.x, abs=1e-3)
+    assert result.to_json()["raise_at"]["x_m"] == pytest.approx(result.raise_at.x, abs=1e-3)
 
 
 def _seat_with_hole(hole_half_m: float, open_to_front: bool) -> trimesh.Trimesh:

@@ -318,13 +318,14 @@ def test_the_trial_worker_runs_the_payload_tree(tmp_path, monkeypatch, capsys):
 
     from bearchair.evaluation import worker
     from bearchair.executive import mission
+    from bearchair.executive.run_summary import RunSummary
     from bearchair_example.trees import create_tree_without_assistance
 
     ran = {}
 
     def fake_run(config, on_tick=None, tree=None):
         ran.update(spec=config.tree_spec, tree=tree)
-        return {"outcome": "success"}
+        return RunSummary(outcome="success")
 
     monkeypatch.setattr(mission, "run_in_simulation", fake_run)
     payload = {"out_dir": str(tmp_path), "placement": "accessible", "helper": "obeys"}

@@ -15,6 +15,7 @@ from bearchair.core import provenance
 from bearchair.evaluation.protocol import ChairEntry, expand_protocol
 from bearchair.evaluation.store import TrialStore, record_from_error, record_from_summary
 from bearchair.executive.record import RunRecorder
+from bearchair.executive.run_summary import RunSummary
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -48,7 +49,7 @@ def test_software_versions_name_the_key_dependencies_as_installed():
 def test_every_summary_carries_the_software(tmp_path):
     recorder = RunRecorder(tmp_path, py_trees.behaviours.Success(name="leaf"))
     try:
-        path = recorder.write_summary({"outcome": "success"})
+        path = recorder.write_summary(RunSummary(outcome="success"))
     finally:
         recorder.close()
     summary = json.loads(path.read_text())
@@ -63,11 +64,16 @@ def test_every_trial_row_carries_the_software(tmp_path):
     store = TrialStore(tmp_path / "trials.sqlite")
     try:
         store.add(
-            record_from_summary(first, {"outcome": "success", "software": made_by}, 1.0, None)
+            record_from_summary(
+                first,
+                RunSummary.from_json({"outcome": "success", "software": made_by}),
+                1.0,
+                None,
+            )
         )
         store.add(record_from_error(second, "worker crashed", 1.0, None))
-        rows = {row["trial_index"]: row for row in store.records()}
+        rows = {row.trial_index: row for row in store.records()}
     finally:
         store.close()
-    assert rows[first.trial_index]["software"] == made_by  # the worker's own summary
-    assert rows[second.trial_index]["software"]["bearchair"] == provenance.bearchair_version()
+    assert rows[first.trial_index].software == made_by  # the worker's own summary
+    assert (rows[second.trial_index].software or {})["bearchair"] == provenance.bearchair_version()

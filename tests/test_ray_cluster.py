@@ -145,7 +145,7 @@ def test_ray_trials_run_in_a_node_folder_and_come_back_under_out(tmp_path, monke
     with TrialStore(out / "trials.sqlite") as store:
         records = store.records()
     for record in records:
-        run_dir = Path(record["run_dir"])
+        run_dir = Path(record.run_dir)
         assert run_dir.is_relative_to(out.resolve())
         assert json.loads((run_dir / "summary.json").read_text())["outcome"] in (
             "success",
@@ -298,7 +298,7 @@ def test_trials_on_a_two_node_cluster_write_every_record_under_the_heads_out(tmp
     assert len(records) == 6
     nodes, package_dirs, cwds = set(), set(), set()
     for record in records:
-        run_dir = Path(record["run_dir"])
+        run_dir = Path(record.run_dir)
         assert run_dir.is_relative_to(out.resolve())
         for name in ("summary.json", "ticks.jsonl", "tree.json", "worker.log", NODE_FILE):
             assert (run_dir / name).is_file(), f"{run_dir.name} lacks {name}"
@@ -314,11 +314,11 @@ def test_trials_on_a_two_node_cluster_write_every_record_under_the_heads_out(tmp
     assert not any(Path(d).resolve().is_relative_to(REPO) for d in package_dirs)
     scenes = sorted(p.name for p in (out / "trials").glob("*.png"))
     assert len(scenes) == len(
-        [r for r in records if (Path(r["run_dir"]) / "final_scene.png").is_file()]
+        [r for r in records if (Path(r.run_dir) / "final_scene.png").is_file()]
     )
     assert len(scenes) >= 1
     # The imagined pose is drawn on the head, from the records it unpacked.
-    drawable = [r for r in records if r.get("sitting_pose")]
+    drawable = [r for r in records if r.sitting_pose is not None]
     assert (out / "chairs" / "gen-01.png").is_file() == bool(drawable)
     if drawable:
         assert "chairs/gen-01.png" in (out / "report.md").read_text()

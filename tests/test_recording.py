@@ -23,6 +23,7 @@ from bearchair.core.meshes import box_chair_mesh
 from bearchair.core.se2 import SE2Pose
 from bearchair.executive import cli
 from bearchair.executive.record import RunRecorder, load_ticks
+from bearchair.executive.run_summary import RunInfo, RunSummary
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.hardware.interfaces import SeatingJudgement
@@ -98,7 +99,7 @@ def recorded(box_chair_results, tmp_path_factory):
         timeout_s=60,
         post_tick=(recording,),
     )
-    summary = summarise(runner.run(), {"chair": "box"})
+    summary = summarise(runner.run(), RunInfo(chair="box"))
     recording.log_summary(summary)
     recorder.write_summary(summary)
     recorder.close()
@@ -109,8 +110,8 @@ def recorded(box_chair_results, tmp_path_factory):
 
 def test_the_recorded_mission_succeeded_with_one_rotation(recorded):
     out_dir, summary, _, recording, _ = recorded
-    assert summary["outcome"] == "success", summary["reason"]
-    assert summary["rotations"] == 1
+    assert summary.outcome == "success", summary.reason
+    assert summary.rotations == 1
     assert (out_dir / RECORDING_FILE).stat().st_size > 100_000  # depth views, mesh, drops
     assert recording.seconds > 0.0
 
@@ -375,7 +376,7 @@ def test_trials_pass_record_to_each_worker(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(
         bearchair.executive.mission,
         "run_in_simulation",
-        lambda config, **_: configs.append(config) or {},
+        lambda config, **_: configs.append(config) or RunSummary(outcome="success"),
     )
     for record in (True, False):
         payload = {**backend.payloads[0], "record": record, "out_dir": str(tmp_path / "w")}

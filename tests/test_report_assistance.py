@@ -9,6 +9,7 @@ from pathlib import Path
 from bearchair.evaluation.protocol import TrialSpec
 from bearchair.evaluation.report import compute_table, format_table
 from bearchair.evaluation.store import record_from_summary
+from bearchair.executive.run_summary import RunSummary
 
 
 def _summary(outcome: str, instructions: int, accessible: bool) -> dict:
@@ -31,7 +32,8 @@ def _record(experiment: str, index: int, outcome: str, instructions: int, access
     helper = "disobeys" if experiment.endswith("disobeys") else "obeys"
     placement = "accessible" if experiment == "accessible" else "inaccessible"
     spec = TrialSpec("c.obj", Path("c.obj"), index, experiment, placement, helper, index)
-    return record_from_summary(spec, _summary(outcome, instructions, accessible), 60.0, None)
+    summary = RunSummary.from_json(_summary(outcome, instructions, accessible))
+    return record_from_summary(spec, summary, 60.0, None)
 
 
 def test_accessible_after_assistance_is_counted_from_the_records_not_from_seating():

@@ -218,6 +218,7 @@ import sys, threading, time
 from pathlib import Path
 from bearchair.executive import cli, mission
 from bearchair.executive.record import RunRecorder
+from bearchair.executive.run_summary import RunInfo
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.skills.scripted import ScriptedSkills
 from bearchair.trees.mission import create_tree
@@ -239,7 +240,7 @@ robot.emergency_stop = slow_stop
 def fake_run(config, skills_=None, on_tick=None, tree=None):
     root = create_tree()
     recorder = RunRecorder(config.out_dir, root)
-    info = {"chair": "stub", "placement": "accessible", "helper": "obeys", "seed": 0}
+    info = RunInfo(chair="stub", placement="accessible", helper="obeys", seed=0)
     return mission._run_tree(root, recorder, robot, config, info, skills, None, None)
 
 mission.run_in_simulation = fake_run

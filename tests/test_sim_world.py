@@ -434,11 +434,12 @@ def test_simulated_run_records_the_ground_truth(tmp_path):
         RunConfig(seed=0, out_dir=tmp_path, mute=True, timeout_s=120.0), skills=ScriptedSkills()
     )
     truth = json.loads((tmp_path / "summary.json").read_text())["ground_truth"]
-    assert truth == summary["ground_truth"]
+    assert summary.ground_truth is not None and truth == summary.ground_truth.to_json()
     with SimWorld(SimConfig(seed=0, camera_noise=False)) as world:
         true_yaw = world.sitting_yaw_true()
     assert truth["sitting_yaw_deg"] == pytest.approx(math.degrees(true_yaw), abs=0.01)
-    imagined = math.radians(summary["sitting_pose"]["yaw_deg"])
+    assert summary.sitting_pose is not None
+    imagined = math.radians(summary.sitting_pose.yaw_deg)
     expected = abs(math.degrees(wrap_angle(imagined - true_yaw)))
     assert truth["sitting_yaw_error_deg"] == pytest.approx(expected, abs=0.02)
 

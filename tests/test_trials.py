@@ -30,7 +30,9 @@ from bearchair.evaluation.protocol import (
 )
 from bearchair.evaluation.report import compute_table, failure_kind, format_table, markdown_report
 from bearchair.evaluation.store import TrialStore, record_from_error, record_from_summary
+from bearchair.evaluation.trial_record import TrialRecord
 from bearchair.executive import cli
+from bearchair.executive.run_summary import RunSummary
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -122,7 +124,7 @@ def entries(names: list[str], folder: Path = Path("/chairs")) -> list[ChairEntry
     return [ChairEntry(folder / name, "chair", 90.0) for name in names]
 
 
-def table_without_timing(records: list[dict]) -> tuple:
+def table_without_timing(records: list[TrialRecord]) -> tuple:
     table = compute_table(records)
     return table.seating, table.assistance, table.failure_causes, table.stage_median_s
 
@@ -302,11 +304,11 @@ def test_records_are_committed_and_a_rerun_skips_finished_trials(tmp_path, fake_
     assert second == (0, 12, False)
     assert len(worker_starts(tmp_path)) == 12  # nothing ran again
     record = records[3]
-    assert record["experiment"] == "inaccessible_obeys" and record["rotations"] == 2
-    assert set(record["stage_seconds"]) == {"ScanChair", "ImagineSitting", "WalkToChair"}
-    assert record["sitting_pose"]["yaw_deg"] == 10.0
-    assert record["torso_tilt_deg"] == 3.0 and record["mission_seconds"] == 12.5
-    assert records[0]["accessible_after_assistance"] is None  # no instruction given
+    assert record.experiment == "inaccessible_obeys" and record.rotations == 2
+    assert set(record.stage_seconds) == {"ScanChair", "ImagineSitting", "WalkToChair"}
+    assert record.sitting_pose is not None and record.sitting_pose.yaw_deg == 10.0
+    assert record.torso_tilt_deg == 3.0 and record.mission_seconds == 12.5
+    assert records[0].accessible_after_assistance is None  # no instruction given
     # A different campaign seed is a different campaign: its trials are not skipped.
     other = expand_protocol(entries(["a.obj"], tmp_path), "paper", 2)
     with TrialStore(tmp_path / "t.sqlite") as store:
@@ -319,17 +321,17 @@ def test_a_crashing_and_a_hanging_trial_are_failures_and_the_harness_goes_on(tmp
     start = time.monotonic()
     with TrialStore(tmp_path / "t.sqlite") as store:
         result = run_campaign(specs, store, backend, tmp_path / "runs", 3.0)
-        records = {(r["chair"], r["trial_index"]): r for r in store.records()}
+        records = {(r.chair, r.trial_index): r for r in store.records()}
     assert result.ran == 12 and len(records) == 12
     assert time.monotonic() - start < 25
     crashed = records[("crash.obj", 1)]
-    assert crashed["outcome"] == "failure" and "SIGSEGV" in crashed["error"]
-    assert "Fatal Python error" in crashed["error"] or "crashed" in crashed["error"]
+    assert crashed.outcome == "failure" and "SIGSEGV" in crashed.error
+    assert "Fatal Python error" in crashed.error or "crashed" in crashed.error
     hung = records[("hang.obj", 2)]
-    assert hung["outcome"] == "failure" and "timed out after 3 s" in hung["error"]
-    assert hung["wall_seconds"] >= 3.0
+    assert hung.outcome == "failure" and "timed out after 3 s" in hung.error
+    assert hung.wall_seconds >= 3.0
     others = [r for key, r in records.items() if key not in {("crash.obj", 1), ("hang.obj", 2)}]
-    assert all(r["error"] is None for r in others)
+    assert all(r.error is None for r in others)
     causes = dict(compute_table(list(records.values())).failure_causes)
     assert any(cause.startswith("harness: worker crashed") for cause in causes)
     assert any(cause.startswith("harness: timed out") for cause in causes)
@@ -425,7 +427,7 @@ def make_record(experiment, outcome, instructions=0, accessible=True, **extra):
         "error": None,
     }
     record.update(extra)
-    return record
+    return TrialRecord(**record)
 
 
 def test_table_1_numbers_from_known_records():
@@ -512,13 +514,13 @@ def test_records_from_a_summary_and_from_an_error():
         "judgement": None,
         "wall_seconds": 55.1,
     }
-    record = record_from_summary(spec, summary, 61.0, "/runs/x")
-    assert record["stage_seconds"] == {"ScanChair": 7.1, "WalkToChair": 20.0}
-    assert record["accessible_after_assistance"] is True and record["instructions"] == 2
-    assert record["seated"] is None and record["error"] is None
-    assert record["helper"] == "disobeys" and record["wall_seconds"] == 61.0
+    record = record_from_summary(spec, RunSummary.from_json(summary), 61.0, "/runs/x")
+    assert record.stage_seconds == {"ScanChair": 7.1, "WalkToChair": 20.0}
+    assert record.accessible_after_assistance is True and record.instructions == 2
+    assert record.seated is None and record.error is None
+    assert record.helper == "disobeys" and record.wall_seconds == 61.0
     failed = record_from_error(spec, "worker crashed: killed by SIGSEGV", 3.0, None)
-    assert failed["outcome"] == "failure" and failed["error"].endswith("SIGSEGV")
+    assert failed.outcome == "failure" and failed.error.endswith("SIGSEGV")
 
 
 def test_report_folder_has_a_picture_per_chair_and_per_trial(tmp_path, fake_worker, monkeypatch):
@@ -643,12 +645,8 @@ def test_ray_backend_runs_the_same_trials_with_the_same_records(tmp_path, fake_w
     with TrialStore(out / "trials.sqlite") as store:
         ray_records = store.records()
     assert len(ray_records) == 12
-    assert (
-        "SIGSEGV"
-        in next(r for r in ray_records if r["chair"] == "crash.obj" and r["trial_index"] == 1)[
-            "error"
-        ]
-    )
+    crashed = next(r for r in ray_records if r.chair == "crash.obj" and r.trial_index == 1)
+    assert "SIGSEGV" in (crashed.error or "")
     status = cli.main(
         ["trials", "--chairs", str(folder), "--out", str(tmp_path / "local"),
          "--worker-cmd", " ".join(fake_worker)]
