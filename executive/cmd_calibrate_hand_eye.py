@@ -373,7 +373,7 @@ def _write_views(path: Path, views: list[View], board: Any, result: Any) -> None
     record = {
         "board": board._asdict(),
         "T_flange_camera": result.cell_entry()["T_flange_camera"],
-        "residuals": result.residuals.summary(),
+        "residuals": result.residuals.to_json(),
         "rotation_diversity_deg": round(result.rotation_diversity_deg, 3),
         "views": [
             {

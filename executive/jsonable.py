@@ -12,8 +12,7 @@ def to_jsonable(value: Any, depth: int = 0) -> Any:
     """A compact JSON-friendly view of ``value``.
 
     Results that know their JSON (``to_json()``) give it; arrays and meshes are
-    described by their shape, never dumped. ``summary()`` is the older name, still read
-    for the results not yet renamed (see docs/decisions.md, 2026-12-03).
+    described by their shape, never dumped.
     """
     if depth > 4:
         return repr(value)[:80]
@@ -24,9 +23,8 @@ def to_jsonable(value: Any, depth: int = 0) -> Any:
         return round(number, 6) if math.isfinite(number) else str(number)
     if isinstance(value, np.integer):
         return int(value)
-    for method in ("to_json", "summary"):
-        if callable(getattr(value, method, None)):
-            return to_jsonable(getattr(value, method)(), depth + 1)
+    if callable(getattr(value, "to_json", None)):
+        return to_jsonable(value.to_json(), depth + 1)
     if isinstance(value, np.ndarray):
         if value.size <= 16:
             return [to_jsonable(v, depth + 1) for v in value.tolist()]

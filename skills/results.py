@@ -372,5 +372,5 @@ class SeatingPlan(NamedTuple):
             "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
         }
         if self.release is not None:
-            out["release"] = self.release.summary()
+            out["release"] = self.release.to_json()
         return out

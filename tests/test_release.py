@@ -40,7 +40,7 @@ def test_a_bear_let_go_over_the_seat_stays_and_one_past_its_front_falls(chair):
     assert abs(settled[2, 3] - SEAT_HEIGHT_M) < 0.005  # resting on the seat's top
     past_front = imagine_release(chair, _bear_at(0.19, SEAT_HEIGHT_M + 0.01), 0.0, NAO_POSE)
     assert not past_front.stays and "floor" in past_front.reason
-    assert past_front.summary()["stays"] is False
+    assert past_front.to_json()["stays"] is False
 
 
 def test_the_prediction_judges_the_facing_as_the_judge_does(chair):
@@ -92,7 +92,7 @@ def test_no_placement_where_the_bear_stays_fails_before_the_release(chair, monke
     assert len(tried) > 1  # other placements along the ray were tried
     monkeypatch.setenv(release_choice.RELEASE_CHECK_ENV, "predict")
     plan = release_choice.plan_seating_released(chair, SITTING_POSE, NAO_POSE)
-    assert plan.release is falls and plan.summary()["release"]["stays"] is False
+    assert plan.release is falls and plan.to_json()["release"]["stays"] is False
     monkeypatch.setenv(release_choice.RELEASE_CHECK_ENV, "sometimes")
     with pytest.raises(ValueError, match="BEARCHAIR_RELEASE_CHECK"):
         release_choice.plan_seating_released(chair, SITTING_POSE, NAO_POSE)

@@ -110,7 +110,7 @@ class ReleasePrediction(NamedTuple):
         reasons = [r.judgement.reason for r in self.releases if not r.judgement.seated]
         return max(set(reasons), key=reasons.count) if reasons else ""
 
-    def summary(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         """For ``summary.json``: the prediction and the planned release's settle pose."""
         settled = self.releases[0].judgement
         T = np.asarray(settled.T_world_bear)

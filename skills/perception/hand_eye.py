@@ -163,7 +163,7 @@ class HandEyeResiduals(NamedTuple):
         """Within :data:`MAX_SPREAD_MM` and :data:`MAX_SPREAD_DEG`."""
         return self.max_mm <= MAX_SPREAD_MM and self.max_deg <= MAX_SPREAD_DEG
 
-    def summary(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         """JSON-ready numbers (mm, degrees)."""
         return {
             "max_mm": round(self.max_mm, 3),
