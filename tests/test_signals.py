@@ -10,6 +10,7 @@ robots do on a signal is checked in-process in tests/test_faults.py.
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -142,9 +143,12 @@ def test_a_second_ctrl_c_during_a_run_still_writes_the_summary(tmp_path):
 
 
 class _SlowWorld:
-    """A simulated world whose construction takes 3 s: long enough for a Ctrl-C."""
+    """A simulated world whose construction is interrupted by a Ctrl-C: it sends the
+    signal itself, so it always arrives while the world is built (a timer started before
+    the run may fire before the run folder exists on a loaded machine)."""
 
     def __init__(self, config) -> None:
+        os.kill(os.getpid(), signal.SIGINT)
         time.sleep(3.0)
 
     def close(self) -> None:
@@ -154,19 +158,11 @@ class _SlowWorld:
 def test_ctrl_c_while_the_world_is_built_leaves_a_record_inspect_replays(
     tmp_path, monkeypatch, capsys
 ):
-    import os
-    import threading
-
     import bearchair.hardware.sim.world
 
     monkeypatch.setattr(bearchair.hardware.sim.world, "SimWorld", _SlowWorld)
     out = tmp_path / "run"
-    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
-    timer.start()
-    try:
-        assert cli.main(["run", "--mute", "--out", str(out)]) == 130
-    finally:
-        timer.cancel()
+    assert cli.main(["run", "--mute", "--out", str(out)]) == 130
     capsys.readouterr()
     assert cli.main(["inspect", str(out)]) == 0
     shown = capsys.readouterr().out
