@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import dataclasses
 import importlib.metadata
 import json
 import logging
@@ -36,22 +35,21 @@ from bearchair.executive import (
     cmd_check_hardware,
     cmd_config,
     cmd_imagine,
+    cmd_inspect,
+    cmd_run,
     cmd_scan,
+    cmd_tree,
     cmd_view,
 )
-from bearchair.executive.cli_types import positive_seconds, seed_value
-from bearchair.executive.cmd_config import (
-    add_config_arguments,
-    check_run_inputs,
-    mission_from_args,
-)
+from bearchair.executive.cmd_run import LOG_FILE
 from bearchair.executive.console import TolerantStream, lost_output_status
+from bearchair.executive.exit_codes import EXIT_BAD_INPUT, EXIT_INTERNAL_ERROR
 from bearchair.executive.interrupts import exit_status, handling_signals, received, signal_name
-from bearchair.executive.operator import ask_operator
-from bearchair.executive.step_bars import showing_step_bars
-from bearchair.executive.viewer_links import add_bind_argument
 
 OWN_COMMANDS = (
+    cmd_run,
+    cmd_tree,
+    cmd_inspect,
     cmd_imagine,
     cmd_scan,
     cmd_check_hardware,
@@ -63,13 +61,6 @@ OWN_COMMANDS = (
 COMMANDS_GROUP = "bearchair.commands"
 """The entry-point group of commands from packages above executive (pyproject.toml):
 each names a ``register(subparsers)``, loaded from the installed metadata."""
-
-EXIT_SUCCESS = 0
-EXIT_MISSION_FAILED = 1
-EXIT_BAD_INPUT = 2
-EXIT_INTERNAL_ERROR = 3
-LOG_FILE = "bearchair.log"
-"""The run folder's log: warnings of the run, and the traceback of an internal error."""
 
 
 class CommandUnavailableError(BackendUnavailable):
@@ -132,108 +123,6 @@ def build_parser() -> argparse.ArgumentParser:
         "--version", action="version", version=version_line(), help="print the version and exit"
     )
     subparsers = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-
-    run = subparsers.add_parser("run", help="run the mission in the simulated world")
-    run.add_argument(
-        "--chair", type=Path, help="chair mesh (OBJ/PLY/STL/OFF/GLB); default: a box chair"
-    )
-    # Flags left off keep the configuration's values (--config; default: accessible, obeys, 0).
-    run.add_argument(
-        "--placement",
-        choices=("accessible", "inaccessible"),
-        help="how the simulated chair is placed: its seat reachable by the NAO, or turned so "
-        "that the NAO must ask the helper to rotate it (default: accessible, or --config's)",
-    )
-    run.add_argument(
-        "--helper",
-        choices=("obeys", "disobeys", "ignores"),
-        help="how the simulated helper answers a request to rotate the chair "
-        "(default: obeys, or --config's)",
-    )
-    run.add_argument(
-        "--seed",
-        type=seed_value,
-        help="seeds the world and the skills: the same seed gives the same run "
-        "(default: 0, or --config's)",
-    )
-    run.add_argument("--gui", action="store_true", help="watch in the pybullet GUI")
-    run.add_argument("--out", type=Path, help="run record directory (default: runs/<time>-seed<N>)")
-    run.add_argument(
-        "--mute",
-        action="store_true",
-        help="print instructions instead of speaking (with --robots: the NAO stays silent)",
-    )
-    run.add_argument(
-        "--timeout",
-        type=positive_seconds,
-        help="stop the mission as failed after this many wall seconds "
-        "(default: 900, or --config's)",
-    )
-    run.add_argument(
-        "--overwrite", action="store_true", help="replace the run record already in --out"
-    )
-    run.add_argument(
-        "--snapshots",
-        action="store_true",
-        help="in simulation, also save a picture whenever a stage ends (OUT/snapshots)",
-    )
-    add_recording_arguments(run, record_default=None)
-    run.add_argument(
-        "--robots",
-        type=Path,
-        metavar="CELL_JSON",
-        help="run on the real NAO and Panda described by this file instead of the simulation",
-    )
-    run.add_argument("--yes", action="store_true", help="with --robots: start without asking")
-    add_config_arguments(run)
-    run.add_argument(
-        "--groot2",
-        nargs="?",
-        const=1667,
-        type=int,
-        metavar="PORT",
-        help="publish the running tree to Groot2 on PORT and PORT+1 (default 1667; "
-        "docs/btcpp-groot2.md)",
-    )
-    run.add_argument(
-        "--groot2-bind",
-        metavar="ADDRESS",
-        help="the address Groot2's ports listen on (default 127.0.0.1; '*': every interface, "
-        "through BehaviorTree.CPP's own publisher)",
-    )
-    run.set_defaults(func=_run)
-
-    tree = subparsers.add_parser("tree", help="render the mission tree")
-    tree.add_argument(
-        "--format",
-        choices=("ascii", "unicode", "dot", "svg", "png", "btcpp"),
-        default="unicode",
-        help="text on the console (ascii, unicode) or a file (dot, svg, png; btcpp: "
-        "BehaviorTree.CPP v4 XML for Groot2, docs/btcpp-groot2.md)",
-    )
-    tree.add_argument("--blackboard", action="store_true", help="show blackboard keys and users")
-    tree.add_argument(
-        "--out",
-        type=Path,
-        help="output file for dot/svg/png (default: mission.<format>) or btcpp (default: stdout)",
-    )
-    add_config_arguments(tree)
-    tree.set_defaults(func=_tree)
-
-    inspect = subparsers.add_parser("inspect", help="replay a recorded run")
-    # Not named run_dir: that is where an internal error's traceback would go, and
-    # inspect reads a record, it never writes one.
-    inspect.add_argument(
-        "record_dir", metavar="run_dir", type=Path, help="a run folder written by 'bearchair run'"
-    )
-    inspect.add_argument("--tick", type=int, help="show the tree at this tick (default: the last)")
-    inspect.add_argument("--blackboard", action="store_true", help="also show the blackboard")
-    inspect.add_argument("--timeline", action="store_true", help="show every status change")
-    inspect.add_argument(
-        "--tree", metavar="SPEC", help="also say whether the record's tree is the one SPEC builds"
-    )
-    inspect.set_defaults(func=_inspect)
-
     for module in OWN_COMMANDS:
         module.register(subparsers)
     for register in registered_commands():
@@ -260,194 +149,6 @@ def registered_commands() -> list[Callable[[Any], None]]:
                 f"loaded: {one_line(error)}; reinstall bearchair (pip install -e .)"
             ) from error
     return found
-
-
-def _run(args: argparse.Namespace) -> int:
-    from bearchair.executive.mission import (
-        StageProgress,
-        format_summary,
-        run_in_simulation,
-        run_on_robots,
-    )
-    from bearchair.executive.outputs import default_run_dir, prepare_run_dir
-
-    if args.robots is not None:
-        for option in ("placement", "helper"):
-            if getattr(args, option) is not None:
-                raise InputError(
-                    f"bearchair run: --{option} is for the simulated world; not with --robots"
-                )
-    check_groot2_arguments("bearchair run", args)
-    # Every input and the output place are checked before anything runs.
-    mission = mission_from_args(args)
-    factory = check_run_inputs(mission)
-    outputs = mission.outputs
-    check_recording_arguments("bearchair run", argparse.Namespace(**outputs.model_dump()))
-    if outputs.out_dir is not None:
-        out_dir = prepare_run_dir(outputs.out_dir, overwrite=outputs.overwrite)
-    else:
-        out_dir = default_run_dir(mission.run.seed)
-    args.run_dir = out_dir  # where an internal error's traceback goes
-    config = dataclasses.replace(
-        mission.run_config(out_dir),
-        groot2_port=args.groot2,
-        groot2_bind=args.groot2_bind or "127.0.0.1",
-    )
-    with _log_to(out_dir / LOG_FILE), showing_step_bars():
-        if mission.robots.used:
-            summary = run_on_robots(
-                config,
-                mission.robots.cell_file or mission.robots.cell,
-                on_tick=StageProgress(),
-                confirm=None if args.yes else ask_operator,
-                tree=factory,
-            )
-        else:
-            summary = run_in_simulation(config, on_tick=StageProgress(), tree=factory)
-    print(format_summary(summary))
-    print(f"run record: {out_dir}")
-    if summary.interrupted:
-        return exit_status()
-    return EXIT_SUCCESS if summary.succeeded else EXIT_MISSION_FAILED
-
-
-@contextlib.contextmanager
-def _log_to(path: Path):
-    """Also sends this process's warnings (and an internal error) to ``path``."""
-    try:
-        handler: logging.Handler | None = logging.FileHandler(path, encoding="utf-8")
-    except OSError:
-        handler = None  # the record itself will say what is wrong with the folder
-    if handler is not None:
-        handler.setLevel(logging.INFO)
-        handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
-        logging.getLogger().addHandler(handler)
-    try:
-        yield
-    finally:
-        if handler is not None:
-            logging.getLogger().removeHandler(handler)
-            handler.close()
-
-
-def add_recording_arguments(
-    parser: argparse.ArgumentParser, *, record_default: bool | None
-) -> None:
-    """``--record/--no-record`` and ``--live`` (Rerun recordings, ``bearchair.executive.recording``);
-    ``record_default`` None: left off, the flag is None (the configuration decides, off)."""
-    default = {True: "on", False: "off", None: "the configuration's, off"}[record_default]
-    parser.add_argument(
-        "--record",
-        action=argparse.BooleanOptionalAction,
-        default=record_default,
-        help="write a Rerun recording of the run, OUT/mission.rrd (open it with "
-        f"'bearchair view OUT'; default: {default})",
-    )
-    parser.add_argument(
-        "--live",
-        nargs="?",
-        const="spawn",
-        metavar="WHERE",
-        help="stream the run to a Rerun viewer as it happens: no value starts the native "
-        "viewer, 'web' serves the web viewer, or a viewer's URL (rerun+http://HOST:9876/proxy)",
-    )
-    add_bind_argument(parser, configured=True)
-
-
-def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
-    """One line before any work when a recording was asked for and cannot be made."""
-    from bearchair.executive.recording import INSTALL_HINT, has_display, rerun_available
-
-    live = getattr(args, "live", None)
-    if (args.record or live) and not rerun_available():
-        flag = "--record" if args.record else "--live"
-        raise InputError(f"{command}: {flag} needs rerun-sdk: {INSTALL_HINT}")
-    if live == "spawn" and not has_display():
-        raise InputError(
-            f"{command}: --live: no display for the native viewer; use --live web "
-            "(a web viewer on a port) or --live rerun+http://HOST:9876/proxy"
-        )
-    if live not in (None, "spawn", "web") and not live.startswith(("rerun://", "rerun+http")):
-        raise InputError(
-            f"{command}: --live takes no value, 'web', or a viewer URL "
-            f"(rerun+http://HOST:9876/proxy), not {live!r}"
-        )
-
-
-def check_groot2_arguments(command: str, args: argparse.Namespace) -> None:
-    """One line before any work when ``--groot2`` cannot be served."""
-    from bearchair.executive.groot2 import (
-        INSTALL_HINT,
-        check_groot2_address,
-        check_groot2_port,
-        missing_modules,
-    )
-
-    if args.groot2 is None:
-        if args.groot2_bind is not None:
-            raise InputError(f"{command}: --groot2-bind is for --groot2 [PORT]")
-        return
-    check_groot2_port(args.groot2)
-    missing = missing_modules()
-    if missing:
-        raise InputError(f"{command}: --groot2 needs {', '.join(missing)}: {INSTALL_HINT}")
-    check_groot2_address(args.groot2, args.groot2_bind or "127.0.0.1")
-
-
-def _tree(args: argparse.Namespace) -> int:
-    from bearchair.executive.outputs import check_output_file
-    from bearchair.executive.render import TEXT_FORMATS, render_graph, render_text
-    from bearchair.executive.tree_source import build_tree, load_tree_factory
-
-    mission = mission_from_args(args)
-    factory = load_tree_factory(mission.tree.factory)
-    if args.format == "btcpp":
-        from bearchair.executive.render import write_btcpp
-
-        return write_btcpp(
-            build_tree(factory, mission.tree.options(), mission.tree.factory), args.out
-        )
-    if args.format in TEXT_FORMATS:
-        if args.out is not None:
-            raise InputError(
-                f"bearchair tree: --out is for dot/svg/png, not --format {args.format}"
-            )
-    else:
-        args.out = check_output_file(
-            args.out or Path(f"mission.{args.format}"), "--out", (f".{args.format}",)
-        )
-    root = build_tree(factory, mission.tree.options(), mission.tree.factory)
-    if args.out is None:
-        print(render_text(root, args.format, args.blackboard))
-    else:
-        print(render_graph(root, args.format, args.out, args.blackboard))
-    return 0
-
-
-def _inspect(args: argparse.Namespace) -> int:
-    from bearchair.executive.inspect_run import RecordedRun
-
-    run = RecordedRun(args.record_dir)
-    state = run.at(args.tick)
-    print(
-        f"{printable(args.record_dir)}: tick {state['tick']} of {run.last_tick}, t = {state['t']:.2f} s"
-    )
-    for note in run.notes:
-        print(f"note: {printable(note, 1000)}")
-    if args.tree is not None:
-        print(f"tree: {run.compare_tree(args.tree)}")
-    print(run.tree_text(args.tick))
-    if args.blackboard:
-        print("\nblackboard:")
-        print(run.blackboard_text(args.tick))
-    if args.timeline:
-        print("\ntimeline:")
-        print(run.timeline_text())
-    if args.tick is None:
-        outcome = run.outcome_text()
-        if outcome:
-            print(f"\n{outcome}")
-    return 0
 
 
 def _error_line(error: BaseException) -> str:
