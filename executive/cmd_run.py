@@ -101,13 +101,9 @@ def register(subparsers: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from bearchair.executive.mission import (
-        StageProgress,
-        format_summary,
-        run_in_simulation,
-        run_on_robots,
-    )
+    from bearchair.executive.mission import format_summary, run_in_simulation, run_on_robots
     from bearchair.executive.outputs import default_run_dir, prepare_run_dir
+    from bearchair.executive.tick_watchers import StageProgress
 
     if args.robots is not None:
         for option in ("placement", "helper"):

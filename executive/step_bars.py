@@ -3,7 +3,7 @@
 ``bearchair run`` shows a bar for each long step a skill reports through
 :mod:`bearchair.core.progress` (the scan's views, the imagination's drops) while the
 stage runs; the bar goes away when the step ends, leaving the stage's own lines
-(:class:`bearchair.executive.mission.StageProgress`). Where stderr is not a terminal (a
+(:class:`bearchair.executive.tick_watchers.StageProgress`). Where stderr is not a terminal (a
 log file, CI, a test capturing output) nothing is drawn.
 """
 

@@ -119,7 +119,7 @@ def test_stage_snapshots_picture_each_stage_end_once(tmp_path) -> None:
     from collections import namedtuple
     from types import SimpleNamespace
 
-    from bearchair.executive.mission import StageSnapshots
+    from bearchair.executive.tick_watchers import StageSnapshots
 
     Stage = namedtuple("Stage", "name status")
     calls: list[tuple[str, str]] = []

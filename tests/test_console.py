@@ -19,9 +19,10 @@ from bearchair.core.se2 import SE2Pose
 from bearchair.evaluation.cli import left_out_text
 from bearchair.evaluation.protocol import SkippedChair, discover_chairs
 from bearchair.evaluation.trial_record import TrialRecord
-from bearchair.executive.mission import StageProgress, format_summary, stage_seconds_text
+from bearchair.executive.mission import format_summary
 from bearchair.executive.run_summary import RunSummary
 from bearchair.executive.runner import StageClock, StageTiming
+from bearchair.executive.tick_watchers import StageProgress, stage_seconds_text
 
 
 def _run_python(code: str) -> subprocess.CompletedProcess[str]:

@@ -152,7 +152,7 @@ def test_a_scene_picture_has_no_blank_band_and_carries_its_caption_and_marks(wor
 def test_stage_snapshots_of_an_unchanged_scene_differ_by_their_captions(world, tmp_path):
     from types import SimpleNamespace
 
-    from bearchair.executive.mission import ScenePictures, StageSnapshots
+    from bearchair.executive.tick_watchers import ScenePictures, StageSnapshots
 
     Stage = SimpleNamespace
     snapshots = StageSnapshots(ScenePictures(world, "box-chair", 0), tmp_path)
