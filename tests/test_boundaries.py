@@ -164,3 +164,35 @@ def test_a_blocked_step_in_makes_the_chair_inaccessible_with_no_path(monkeypatch
     blocked = check(DEFAULT_ARENA._replace(obstacles=(*DEFAULT_ARENA.obstacles, post)))
     assert not blocked.accessible and blocked.path == ()
     assert blocked.reason == "the step in to s_goal touches the obstacle"
+
+
+def test_a_step_in_from_where_the_bear_is_raised_counts_the_chair(monkeypatch) -> None:
+    """Without an approach, s_goal is clear of the walking NAO's clearance of the chair,
+    so the step in from where the bear is raised (``raise_at``) must not touch the chair
+    either: a raise point whose straight step to s_goal crosses the chair is refused,
+    naming the chair, before a path is planned there."""
+    from bearchair.skills.planning.preplan import reach_validator
+
+    # Mid-arena, so that the far side of the chair is clear of the walls and the arm.
+    chair_mesh = box_chair_mesh().apply_translation((1.2, 0.0, 0.0))
+    sitting_pose = SittingPose(np.array([1.2, 0.0, 0.29]), 0.0)
+    choose = se2.choose_stance
+
+    def raised_beyond_the_chair(*args, **kwargs):
+        choice = choose(*args, **kwargs)
+        goal = choice.se2_goal
+        beyond = SE2Pose(goal.x - 0.7, goal.y, goal.theta)  # the chair lies between
+        assert _checker(chair_mesh=chair_mesh).is_free(beyond.x, beyond.y, beyond.theta)
+        return choice._replace(approach=None, check=choice.check._replace(raise_at=beyond))
+
+    monkeypatch.setattr(se2, "choose_stance", raised_beyond_the_chair)
+    result = se2.check_accessibility(
+        chair_mesh,
+        sitting_pose,
+        DEFAULT_ARENA.humanoid_start,
+        DEFAULT_ARENA,
+        seed=0,
+        seating_validator=reach_validator,
+    )
+    assert not result.accessible and result.path == ()
+    assert result.reason == "the step in to s_goal touches the chair"
