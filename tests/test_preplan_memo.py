@@ -56,3 +56,14 @@ def test_the_memo_forgets_the_least_recently_used_answer_beyond_its_size() -> No
     memo.put(("c",), SeatingCheck("c"))
     assert memo.get(("b",)) is None
     assert memo.get(("a",)) == SeatingCheck("a") and memo.get(("c",)) == SeatingCheck("c")
+
+
+def test_the_runtime_reset_forgets_the_process_wide_answers() -> None:
+    """What keeps the tests above independent of order (the suite's fixture resets the
+    runtime before each test): the process-wide memo is registered and cleared by it."""
+    from bearchair.core.runtime import RUNTIME
+
+    PREPLANS.put(("a question",), SeatingCheck("an answer"))
+    assert PREPLANS.get(("a question",)) is not None
+    RUNTIME.reset()
+    assert PREPLANS.get(("a question",)) is None and len(PREPLANS) == 0
