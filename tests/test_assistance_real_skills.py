@@ -109,6 +109,22 @@ def test_a_fit_that_fails_the_thresholds_is_rejected_also_from_the_extra_views(w
         measure_chair_rotation(world.robot.arm, first_scan.chair_points, registration=impossible)
 
 
+def test_the_new_views_judge_the_fit_not_its_fitness_alone(world, first_scan):
+    """The measurement hands its frames to ``register_chair``: a visible-overlap bound no
+    fit meets rejects the fit although a fitness bound of 0 would accept any (a wrong fit
+    can have a high fitness, see the registration's module doc)."""
+    only_what_the_views_saw = RegistrationConfig(
+        min_fitness=0.0, min_visible_fitness=1.01, min_peak_visible_fitness=1.01
+    )
+    with pytest.raises(RegistrationError, match="visible overlap"):
+        measure_chair_rotation(
+            world.robot.arm,
+            first_scan.chair_points,
+            more_views=(),
+            registration=only_what_the_views_saw,
+        )
+
+
 class _RejectingSkills:
     """The real skills, but a registration that accepts no fit: the tree must fall back
     to scanning the turned chair anew and imagining its sitting pose again."""

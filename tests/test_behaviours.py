@@ -186,6 +186,34 @@ def test_measure_rotation_carries_the_sitting_pose_with_the_chair():
     np.testing.assert_allclose(mesh_after.bounds.mean(axis=0)[:2], [0.0, -0.6], atol=1e-9)
 
 
+def test_a_second_turn_is_measured_against_the_chair_as_the_first_left_it():
+    """The leaf writes the measured chair (``chair_points``) back as the next reference,
+    so a second turn is registered onto the chair where it now stands, not where it was
+    scanned (which would measure the sum of the turns)."""
+    references: list[np.ndarray] = []
+    step_m = np.array([0.1, 0.0, 0.0])  # each scripted measurement moves the chair 10 cm
+
+    def measure(arm, reference_points):
+        references.append(np.asarray(reference_points))
+        return DEFAULTS["measure_chair_rotation"]._replace(
+            chair_points=np.asarray(reference_points) + step_m
+        )
+
+    skills = ScriptedSkills({"measure_chair_rotation": measure})
+    first = make(MeasureChairRotation, skills)
+    assert tick_until_done(first)[-1] == Status.SUCCESS
+    second = MeasureChairRotation(name="MeasureAgain")
+    second.setup(skills=skills, robot=fake_robot())
+    assert tick_until_done(second)[-1] == Status.SUCCESS
+    scanned = DEFAULTS["scan_chair"].chair_points
+    np.testing.assert_allclose(references[0], scanned)
+    np.testing.assert_allclose(references[1], scanned + step_m)
+    np.testing.assert_allclose(
+        py_trees.blackboard.Blackboard.get(keys.CHAIR_POINTS), scanned + 2 * step_m
+    )
+    assert len(py_trees.blackboard.Blackboard.get(keys.MEASURED_ROTATIONS)) == 2
+
+
 def test_instruct_helper_speaks_and_counts():
     skills = ScriptedSkills()
     fill_blackboard()

@@ -3,10 +3,13 @@
 Each boundary test names its threshold and which side of it the boundary itself falls on:
 
 - ``bearchair.skills.imagination.backrest.AGREEMENT_RAD`` (30 deg): an imagined direction
-  within it of the backrest's stands (``<=``); beyond it, the mirror planes decide.
+  within it of the backrest's stands (``<=``, the boundary itself included); beyond it,
+  the mirror planes decide.
 - ``bearchair.skills.perception.registration.RegistrationConfig.min_fitness`` and
   ``max_rmse_m``: a fit exactly at the minimum fitness, or exactly at the maximum RMSE,
-  is accepted (``>=`` and ``<=``); the least step past either rejects it.
+  is accepted (``>=`` and ``<=``); the least step past either rejects it. With the new
+  views' frames, ``min_visible_fitness``, ``min_peak_visible_fitness`` (for a fit that is a
+  peak of the visible overlap) and ``max_rmse_m`` likewise (``>=``, ``>=``, ``<=``).
 - ``bearchair.core.arena.ACCESSIBLE_TOLERANCE_RAD`` (30 deg): an accessible placement's
   sitting direction is at most this from the direction toward the humanoid, both
   extremes included.
@@ -52,6 +55,26 @@ def test_the_backrest_agreement_holds_at_30_degrees_and_not_past_it(side: float)
     past = wrap_angle(cue[0] + side * (AGREEMENT_RAD + HAIR_RAD))
     _, check = check_direction(chair_mesh, SittingPose(p, past))
     assert check is not None and not math.isnan(check.mirror_back)  # judged by the mirrors
+
+
+@pytest.mark.parametrize("side", [-1.0, 1.0], ids=["left", "right"])
+def test_a_direction_exactly_at_the_backrest_agreement_stands(monkeypatch, side: float) -> None:
+    """The boundary itself is on the agreeing side (``<=``). No yaw lies exactly 30 deg
+    from the backrest's in floating point (``wrap_angle``'s grid), so the bound is set to
+    this direction's own disagreement with the backrest, bit for bit."""
+    from bearchair.skills.imagination import backrest
+
+    chair_mesh = box_chair_mesh()
+    p = np.array([0.0, 0.0, 0.29])
+    cue = backrest_yaw(chair_mesh, SittingPose(p, 0.0))
+    assert cue is not None
+    at = wrap_angle(cue[0] + side * AGREEMENT_RAD)
+    disagreement = abs(wrap_angle(at - cue[0]))
+    assert disagreement == pytest.approx(AGREEMENT_RAD, abs=1e-12)
+    monkeypatch.setattr(backrest, "AGREEMENT_RAD", disagreement)
+    kept, check = check_direction(chair_mesh, SittingPose(p, at))
+    assert check is not None and not check.used and kept.yaw == at
+    assert math.isnan(check.mirror_back)  # stood by the agreement, no mirror consulted
 
 
 def _chair_cloud(n: int = 3000) -> np.ndarray:
@@ -164,3 +187,120 @@ def test_a_blocked_step_in_makes_the_chair_inaccessible_with_no_path(monkeypatch
     blocked = check(DEFAULT_ARENA._replace(obstacles=(*DEFAULT_ARENA.obstacles, post)))
     assert not blocked.accessible and blocked.path == ()
     assert blocked.reason == "the step in to s_goal touches the obstacle"
+
+
+def test_a_step_in_from_where_the_bear_is_raised_counts_the_chair(monkeypatch) -> None:
+    """Without an approach, s_goal is clear of the walking NAO's clearance of the chair,
+    so the step in from where the bear is raised (``raise_at``) must not touch the chair
+    either: a raise point whose straight step to s_goal crosses the chair is refused,
+    naming the chair, before a path is planned there."""
+    from bearchair.skills.planning.preplan import reach_validator
+
+    # Mid-arena, so that the far side of the chair is clear of the walls and the arm.
+    chair_mesh = box_chair_mesh().apply_translation((1.2, 0.0, 0.0))
+    sitting_pose = SittingPose(np.array([1.2, 0.0, 0.29]), 0.0)
+    choose = se2.choose_stance
+
+    def raised_beyond_the_chair(*args, **kwargs):
+        choice = choose(*args, **kwargs)
+        goal = choice.se2_goal
+        assert goal is not None
+        beyond = SE2Pose(goal.x - 0.7, goal.y, goal.theta)  # the chair lies between
+        assert _checker(chair_mesh=chair_mesh).is_free(beyond.x, beyond.y, beyond.theta)
+        return choice._replace(approach=None, check=choice.check._replace(raise_at=beyond))
+
+    monkeypatch.setattr(se2, "choose_stance", raised_beyond_the_chair)
+    result = se2.check_accessibility(
+        chair_mesh,
+        sitting_pose,
+        DEFAULT_ARENA.humanoid_start,
+        DEFAULT_ARENA,
+        seed=0,
+        seating_validator=reach_validator,
+    )
+    assert not result.accessible and result.path == ()
+    assert result.reason == "the step in to s_goal touches the chair"
+
+
+# --- registration judged by the new views: the visible overlap and RMSE bounds ----------
+
+
+@pytest.fixture(scope="module")
+def seen_chair():
+    """The box chair scanned from every scan view (the reference) and seen again, unmoved,
+    from the tracking views (the new points and their frames): rendered, not simulated."""
+    from bearchair.core.geometry import yaw_transform
+    from bearchair.skills.perception import ReconstructionConfig, reconstruct_chair
+    from bearchair.skills.perception.synthetic import SyntheticArm, SyntheticScene
+    from bearchair.skills.perception.views import SCAN_CONFIGURATIONS, TRACKING_VIEWS
+
+    scene = SyntheticScene(seed=3)
+    scene.add_mesh(box_chair_mesh(), yaw_transform(0.6, np.array([0.58, 0.08, 0.0])))
+    arm = SyntheticArm(scene)
+    try:
+        frames = []
+        for joints in SCAN_CONFIGURATIONS:
+            arm.move_to(joints)
+            frames.append(arm.capture())
+    finally:
+        arm.close()
+        scene.close()
+    config = ReconstructionConfig(with_mesh=False)
+    tracking = [frames[i] for i in TRACKING_VIEWS]
+    reference = reconstruct_chair(frames, config).chair_points
+    return reference, reconstruct_chair(tracking, config).chair_points, tracking
+
+
+def _judged(monkeypatch, reference, new, frames, config) -> tuple[float, float]:
+    """Registers with frames and returns the first fit's visible overlap and RMSE, the two
+    numbers ``register_chair`` compares with its bounds (recorded on their way, unchanged)."""
+    from bearchair.skills.perception import registration
+
+    seen, refined = [], []
+    original_seen, original_refine = registration._seen, registration._refine
+
+    def recording_seen(*args):
+        seen.append(original_seen(*args))
+        return seen[-1]
+
+    def recording_refine(*args):
+        refined.append(original_refine(*args))
+        return refined[-1]
+
+    monkeypatch.setattr(registration, "_seen", recording_seen)
+    monkeypatch.setattr(registration, "_refine", recording_refine)
+    register_chair(new, reference, config, frames)
+    monkeypatch.undo()
+    return seen[0], refined[0][2]
+
+
+def test_with_frames_a_fit_exactly_at_the_visible_overlap_and_rmse_bounds_is_accepted(
+    monkeypatch, seen_chair
+) -> None:
+    """With frames, ``min_visible_fitness``, ``min_peak_visible_fitness`` (for a peak)
+    and ``max_rmse_m`` hold at the boundary (``>=``, ``>=``, ``<=``); the least step past
+    them rejects the fit (with the peak's floor just above the overlap, only the fixed
+    bound can accept it)."""
+    reference, new, frames = seen_chair
+    visible, rmse = _judged(monkeypatch, reference, new, frames, RegistrationConfig())
+    above = float(np.nextafter(visible, 2.0))
+    at_the_boundary = RegistrationConfig(
+        min_visible_fitness=visible, min_peak_visible_fitness=above, max_rmse_m=rmse
+    )
+    assert _judged(monkeypatch, reference, new, frames, at_the_boundary) == (visible, rmse)
+    register_chair(new, reference, at_the_boundary, frames)  # accepted
+    # The peak's floor at the boundary: the fixed bound just above, the unmoved chair's
+    # fit a peak of the visible overlap, accepted.
+    at_the_peak_floor = replace(
+        at_the_boundary, min_visible_fitness=above, min_peak_visible_fitness=visible
+    )
+    register_chair(new, reference, at_the_peak_floor, frames)
+    with pytest.raises(RegistrationError, match="visible overlap"):
+        register_chair(new, reference, replace(at_the_boundary, min_visible_fitness=above), frames)
+    with pytest.raises(RegistrationError, match="RMSE"):
+        register_chair(
+            new,
+            reference,
+            replace(at_the_boundary, max_rmse_m=float(np.nextafter(rmse, -1.0))),
+            frames,
+        )

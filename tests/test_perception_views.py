@@ -23,6 +23,7 @@ from bearchair.skills.perception.clearance import (
     chair_extent,
     plan_views,
 )
+from bearchair.skills.perception.errors import RegistrationError
 from bearchair.skills.perception.registration import (
     RegistrationConfig,
     is_visible_peak,
@@ -253,3 +254,29 @@ def test_a_turn_showing_sides_the_reference_never_saw_is_accepted_by_what_the_vi
     assert fit.fitness < 0.6
     assert fit.visible_fitness >= RegistrationConfig().min_visible_fitness
     assert abs(math.degrees(wrap_angle(yaw_of(fit.T_world_new_old) - yaw_of(motion)))) < 3.0
+
+
+def test_when_the_best_fitting_yaw_is_wrong_the_views_pick_another():
+    """The search past the best-fitting hypothesis (the best other yaws and the global
+    registration, judged by the visible overlap): an armchair turned -120 degrees whose
+    best-fitting yaw is a quarter turn off. Judged by the fitness alone (no frames) the
+    fit is wrong or rejected; with the frames it is the helper's turn."""
+    mesh = generate_chair(2, "armchair").mesh
+    config = ReconstructionConfig(with_mesh=False)
+    reference = reconstruct_chair(frames_of(mesh, T_WORLD_CHAIR, SCAN_CONFIGURATIONS), config)
+    centre = T_WORLD_CHAIR[:3, 3]
+    turn_rad = math.radians(-120.0)
+    motion = yaw_transform(0.0, centre) @ yaw_transform(turn_rad) @ yaw_transform(0.0, -centre)
+    frames = frames_of(
+        mesh, motion @ T_WORLD_CHAIR, [SCAN_CONFIGURATIONS[i] for i in TRACKING_VIEWS]
+    )
+    new = reconstruct_chair(frames, config).chair_points
+    try:
+        by_fitness = register_chair(new, reference.chair_points)
+        off_deg = abs(math.degrees(wrap_angle(yaw_of(by_fitness.T_world_new_old) - turn_rad)))
+        assert off_deg > 30.0  # the test's premise: the best-fitting yaw is wrong
+    except RegistrationError:
+        pass
+    fit = register_chair(new, reference.chair_points, None, frames)
+    assert abs(math.degrees(wrap_angle(yaw_of(fit.T_world_new_old) - turn_rad))) < 3.0
+    assert fit.visible_fitness >= RegistrationConfig().min_visible_fitness

@@ -31,7 +31,7 @@ def test_a_question_asked_twice_is_planned_once_and_answered_alike() -> None:
     assert second == first
 
 
-def test_a_turned_chair_or_another_stance_is_a_new_question() -> None:
+def test_a_turned_chair_another_sitting_pose_or_another_stance_is_a_new_question() -> None:
     chair_mesh = box_chair_mesh()
     turned = chair_mesh.copy().apply_transform(
         make_transform(rot_z(math.radians(30.0)), np.zeros(3))
@@ -39,6 +39,12 @@ def test_a_turned_chair_or_another_stance_is_a_new_question() -> None:
     key = PreplanMemo.key(chair_mesh, SITTING_POSE, SE2Pose(0.3, 0.0, math.pi))
     assert PreplanMemo.key(turned, SITTING_POSE, SE2Pose(0.3, 0.0, math.pi)) != key
     assert PreplanMemo.key(chair_mesh, SITTING_POSE, SE2Pose(0.31, 0.0, math.pi)) != key
+    # The same seat point, another sitting direction; another seat point.
+    for other in (
+        SittingPose(SITTING_POSE.position.copy(), math.radians(10.0)),
+        SittingPose(SITTING_POSE.position + np.array([0.01, 0.0, 0.0]), SITTING_POSE.yaw),
+    ):
+        assert PreplanMemo.key(chair_mesh, other, SE2Pose(0.3, 0.0, math.pi)) != key
     assert PreplanMemo.key(chair_mesh.copy(), SITTING_POSE, SE2Pose(0.3, 0.0, math.pi)) == key
 
 
@@ -50,3 +56,14 @@ def test_the_memo_forgets_the_least_recently_used_answer_beyond_its_size() -> No
     memo.put(("c",), SeatingCheck("c"))
     assert memo.get(("b",)) is None
     assert memo.get(("a",)) == SeatingCheck("a") and memo.get(("c",)) == SeatingCheck("c")
+
+
+def test_the_runtime_reset_forgets_the_process_wide_answers() -> None:
+    """What keeps the tests above independent of order (the suite's fixture resets the
+    runtime before each test): the process-wide memo is registered and cleared by it."""
+    from bearchair.core.runtime import RUNTIME
+
+    PREPLANS.put(("a question",), SeatingCheck("an answer"))
+    assert PREPLANS.get(("a question",)) is not None
+    RUNTIME.reset()
+    assert PREPLANS.get(("a question",)) is None and len(PREPLANS) == 0

@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from bearchair.evaluation.protocol import TrialSpec
-from bearchair.evaluation.report import compute_table, format_table
+from bearchair.evaluation.report import compute_table, format_table, markdown_report
 from bearchair.evaluation.store import record_from_summary
 from bearchair.executive.run_summary import RunSummary
 
@@ -74,3 +74,24 @@ def test_an_accessible_placement_that_was_assisted_is_named_apart():
     table = compute_table(records)
     assert table.assisted_accessible_trials == 1
     assert [r.n for r in table.assistance] == [0, 0, 0]
+
+
+def test_each_trial_row_says_accessible_after_assistance_only_where_it_was_assisted():
+    """The report's row per trial: "yes"/"no" from the record's own column where an
+    instruction was given, blank where none was (not the final accessibility, nor seating)."""
+    records = [
+        _record("inaccessible_obeys", 0, "failure", 1, True),  # made accessible, bear fell
+        _record("inaccessible_obeys", 1, "failure", 3, False),
+        _record("inaccessible_obeys", 2, "failure", 0, False),  # never assisted
+        _record("accessible", 3, "success", 0, True),  # accessible at once
+    ]
+    markdown = markdown_report(compute_table(records), records)
+    header = next(line for line in markdown.splitlines() if line.startswith("| Chair |"))
+    column = [cell.strip() for cell in header.split("|")].index("Accessible after")
+    rows = [line for line in markdown.splitlines() if line.startswith("| c.obj |")]
+    assert [[cell.strip() for cell in row.split("|")][column] for row in rows] == [
+        "yes",
+        "no",
+        "",
+        "",
+    ]
