@@ -289,7 +289,9 @@ def test_a_bug_exits_3_with_one_line_and_the_traceback_in_the_run_folder(
 
 def test_a_bug_outside_a_run_logs_to_the_cache(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("BEARCHAIR_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setattr(cli, "_tree", lambda args: 1 / 0)
+    from bearchair.executive import cmd_tree
+
+    monkeypatch.setattr(cmd_tree, "_tree", lambda args: 1 / 0)
     assert cli.main(["tree"]) == 3
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "ZeroDivisionError" in err

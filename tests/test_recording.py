@@ -22,6 +22,7 @@ from bearchair.core.geometry import SittingPose, yaw_transform
 from bearchair.core.meshes import box_chair_mesh
 from bearchair.core.se2 import SE2Pose
 from bearchair.executive import cli
+from bearchair.executive.cmd_config import mission_from_args
 from bearchair.executive.record import RunRecorder, load_ticks
 from bearchair.executive.run_summary import RunInfo, RunSummary
 from bearchair.executive.runner import MissionRunner, summarise
@@ -340,7 +341,7 @@ def test_run_record_and_live_flags(tmp_path, monkeypatch, capsys):
     assert args.record is True and args.live == "web"
     plain = cli.build_parser().parse_args(["run"])
     assert plain.record is None  # left to the configuration, whose default is off
-    assert cli.mission_from_args(plain).outputs.record is False
+    assert mission_from_args(plain).outputs.record is False
     assert cli.build_parser().parse_args(["run", "--live"]).live == "spawn"
     trials = cli.build_parser().parse_args(["trials", "--chairs", "x", "--no-record"])
     assert trials.record is False
