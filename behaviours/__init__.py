@@ -2,5 +2,5 @@
 worker thread (``update()`` polls, ``terminate()`` cancels); ``keys`` names the blackboard.
 
 May import ``core``, ``hardware`` and ``skills`` (their protocols and result types: the
-skills themselves arrive as a ``bearchair.skills.toolbox.MissionSkills`` object at setup).
+skills themselves arrive as a ``bearchair.skills.mission_skills.MissionSkills`` object at setup).
 """

@@ -20,7 +20,7 @@ import py_trees
 from py_trees.common import Access, Status
 
 from bearchair.hardware.interfaces import Robot
-from bearchair.skills.toolbox import MissionSkills
+from bearchair.skills.mission_skills import MissionSkills
 
 
 class SkillBehaviour(py_trees.behaviour.Behaviour):

@@ -7,7 +7,7 @@ import logging
 from bearchair.core.geometry import wrap_angle
 from bearchair.core.se2 import SE2Pose
 from bearchair.hardware.interfaces import Robot
-from bearchair.skills.toolbox import MissionSkills
+from bearchair.skills.mission_skills import MissionSkills
 
 logger = logging.getLogger(__name__)
 

@@ -1,6 +1,6 @@
 """Benchmark: does the mission's planning generalise to chairs it has never seen?
 
-Generates chairs (``bearchair.skills.chairgen``: every family, seeded) and, for each, runs the
+Generates chairs (``bearchair.testing.chairgen``: every family, seeded) and, for each, runs the
 stages that decide whether the bear can be seated, without a whole mission:
 
 1. imagination (``--imagine``): the sitting pose from drops of the virtual child; its
@@ -45,9 +45,9 @@ import numpy as np
 
 from bearchair.core.arena import DEFAULT_ARENA, accessible_sitting_yaws
 from bearchair.core.geometry import SittingPose, wrap_angle, yaw_transform
-from bearchair.skills.chairgen import FAMILIES, GeneratedChair, generate_chair
-from bearchair.skills.planning.se2 import check_accessibility
+from bearchair.skills.planning.accessibility import check_accessibility
 from bearchair.skills.planning.stance import check_seat_reachable
+from bearchair.testing.chairgen import FAMILIES, GeneratedChair, generate_chair
 
 PELVIS_ABOVE_SEAT_M = 0.05
 DIRECTION_TOLERANCE_DEG = 30.0

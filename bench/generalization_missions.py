@@ -1,6 +1,6 @@
 """Whole simulated missions over generated chairs: ``bench/generalization.py --missions N``.
 
-Chair i of ``bearchair.skills.chairgen.generate_chairs(N, seed)`` (the families in
+Chair i of ``bearchair.testing.chairgen.generate_chairs(N, seed)`` (the families in
 turn) is written as an OBJ beside a manifest (front +x, as generated) and gets the
 paper's condition i mod 6 (3 accessible, 2 inaccessible with a helper who obeys, 1 who
 disobeys): every stage, the release and the judge, one trial subprocess each, through
@@ -25,7 +25,7 @@ from bearchair.evaluation.protocol import (
     trial_seed,
 )
 from bearchair.evaluation.trial_record import TrialRecord
-from bearchair.skills.chairgen import GeneratedChair, generate_chairs
+from bearchair.testing.chairgen import GeneratedChair, generate_chairs
 
 
 def mission_specs(chairs: list[GeneratedChair], folder: Path, seed: int) -> list[TrialSpec]:

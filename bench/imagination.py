@@ -16,7 +16,7 @@ given, the benchmark uses a fresh cache folder so every mesh is prepared from sc
 as a newly scanned chair is in a mission. The summary gives the median and the maximum
 of the time per mesh (preparation plus drops), tables included.
 
-``--generated N`` runs N chairs per family of ``bearchair.skills.chairgen`` instead (families with a
+``--generated N`` runs N chairs per family of ``bearchair.testing.chairgen`` instead (families with a
 front only; seeds 0..N-1 shifted by ``--seed``), each turned by a seeded random yaw as the
 calibration meshes are, and prints the direction error per family.
 
@@ -163,7 +163,7 @@ def _generated_chairs(count: int, seed: int, families: list[str]):
     import numpy as np
     import trimesh
 
-    from bearchair.skills.chairgen import generate_chair
+    from bearchair.testing.chairgen import generate_chair
 
     for family in families:
         for index in range(count):
@@ -178,10 +178,10 @@ def _generated_chairs(count: int, seed: int, families: list[str]):
 
 
 def _generated(args: argparse.Namespace) -> int:
-    from bearchair.skills.chairgen import FAMILIES
     from bearchair.skills.imagination import imagine_sitting_details, warm_up
     from bearchair.skills.imagination.sam import score_drop
     from bearchair.skills.imagination.vote import choose_sitting_pose
+    from bearchair.testing.chairgen import FAMILIES
 
     families = [f for f in (args.families.split(",") if args.families else FAMILIES) if f]
     saved: dict[str, tuple] = {}

@@ -148,7 +148,7 @@ def run_one(payload: dict[str, Any], started: float = PROCESS_STARTED) -> dict[s
     if profiler is not None:
         profiler.start()
     from bearchair.executive.config import RunConfig
-    from bearchair.executive.mission import run_in_simulation
+    from bearchair.executive.run import run_in_simulation
 
     meter = StageMeter(started)
     config = dataclasses.replace(RunConfig.from_payload({"timeout_s": 600.0, **payload}), mute=True)

@@ -3,7 +3,7 @@
 Run: ``.venv/bin/python bench/perception_generated.py [--per-family 2] [--families bench,armchair]
 [--place 0.35,-0.25,45]``.
 
-For each family of ``bearchair.skills.chairgen``, the largest of ``--pool`` seeded chairs (by
+For each family of ``bearchair.testing.chairgen``, the largest of ``--pool`` seeded chairs (by
 footprint diagonal times height) are placed in the simulated world as the mission places
 them (seeded), scanned, then turned by the helper's rotations (±90 and 180 degrees about
 their centre, a few millimetres of slip) and tracked with ``measure_chair_rotation``.
@@ -30,8 +30,8 @@ from scipy.spatial import cKDTree
 
 from bearchair.core.geometry import wrap_angle, yaw_of, yaw_transform
 from bearchair.hardware.sim.world import SimConfig, SimWorld
-from bearchair.skills.chairgen import FAMILIES, generate_chair
 from bearchair.skills.perception import PerceptionError, measure_chair_rotation, scan_chair
+from bearchair.testing.chairgen import FAMILIES, generate_chair
 
 ROTATIONS_DEG = (90, -90, 180)
 

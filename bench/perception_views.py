@@ -18,7 +18,7 @@ import numpy as np
 import pybullet
 from scipy.optimize import least_squares
 
-from bearchair.skills.perception.synthetic import PandaKinematics
+from bearchair.skills.perception.panda_kinematics import PandaKinematics
 from bearchair.skills.perception.views import CHAIR_VOLUME, look_at
 
 # The scan looks at the chair area's centre, 0.2 m up, from 9 directions spread as far

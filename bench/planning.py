@@ -41,8 +41,8 @@ from bearchair.core.geometry import SittingPose, yaw_transform
 from bearchair.core.meshes import box_chair_mesh, load_mesh
 from bearchair.evaluation.protocol import SEAT_KINDS
 from bearchair.skills.assistance import compose_instruction
+from bearchair.skills.planning.accessibility import check_accessibility
 from bearchair.skills.planning.preplan import reach_validator
-from bearchair.skills.planning.se2 import check_accessibility
 from bearchair.skills.planning.seat import seat_support_heights
 from bearchair.skills.results import AccessibilityResult
 

@@ -4,7 +4,7 @@
     python bench/recording.py --runs 3     # three of each, alternating; medians
     python bench/recording.py --chair MESH
 
-Runs the whole mission in the simulated world (``bearchair.executive.mission.run_in_simulation``)
+Runs the whole mission in the simulated world (``bearchair.executive.run.run_in_simulation``)
 alternately without and with ``--record``, same seed, and prints each run's wall time,
 this process's CPU time (every thread: the mission, the simulated world, Rerun's
 encoder and writer; the imagination's worker processes are left out, they do the same
@@ -28,8 +28,8 @@ import time
 from pathlib import Path
 
 from bearchair.executive.config import RunConfig
-from bearchair.executive.mission import run_in_simulation
 from bearchair.executive.recording import RECORDING_FILE, rerun_available
+from bearchair.executive.run import run_in_simulation
 
 TARGET_RATIO = 0.10
 

@@ -17,7 +17,7 @@ import sys
 import time
 
 PRELOADED_MODULES = (
-    "bearchair.executive.mission",
+    "bearchair.executive.run",
     "bearchair.evaluation.worker",
     "bearchair.trees.mission",
     "bearchair.skills.default_skills",  # every skill

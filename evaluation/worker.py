@@ -3,7 +3,7 @@
 The JSON is ``bearchair.evaluation.protocol.TrialSpec.to_payload``: chair_path, placement,
 helper, seed, trial_index, out_dir, timeout_s, record (and ``tree``, a ``--tree`` SPEC,
 when the campaign runs another tree than the mission's). The worker runs the whole mission in the
-simulated world (``bearchair.executive.mission.run_in_simulation``), which writes the run record
+simulated world (``bearchair.executive.run.run_in_simulation``), which writes the run record
 into out_dir, keeps the robot's reconstructed chair (``chair_reconstructed.ply``) for the
 imagined-pose picture, and prints one line ``BEARCHAIR-TRIAL-RESULT {...}`` on stdout
 for the harness. Exit status: 0 the mission ended (success or failure), 3 an exception.
@@ -115,7 +115,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         config = trial_run_config(json.loads(argv[0]))
-        from bearchair.executive.mission import run_in_simulation
+        from bearchair.executive.run import run_in_simulation
         from bearchair.executive.tree_source import load_tree_factory
 
         out_dir = config.out_dir

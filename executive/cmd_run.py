@@ -101,8 +101,8 @@ def register(subparsers: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from bearchair.executive.mission import format_summary, run_in_simulation, run_on_robots
     from bearchair.executive.outputs import default_run_dir, prepare_run_dir
+    from bearchair.executive.run import format_summary, run_in_simulation, run_on_robots
     from bearchair.executive.tick_watchers import StageProgress
 
     if args.robots is not None:

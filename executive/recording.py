@@ -68,8 +68,8 @@ if TYPE_CHECKING:
     from bearchair.core.se2 import SE2Pose
     from bearchair.executive.recording_robots import JointSampler
     from bearchair.executive.runner import MissionRunner
+    from bearchair.skills.mission_skills import MissionSkills
     from bearchair.skills.results import SeatingPlan
-    from bearchair.skills.toolbox import MissionSkills
 logger = logging.getLogger(__name__)
 
 RECORDING_FILE = "mission.rrd"

@@ -34,7 +34,7 @@ from bearchair.executive.run_summary import (
 )
 from bearchair.hardware.interfaces import Robot
 from bearchair.hardware.real import RobotFault
-from bearchair.skills.toolbox import MissionSkills
+from bearchair.skills.mission_skills import MissionSkills
 
 logger = logging.getLogger(__name__)
 

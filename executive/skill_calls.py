@@ -17,7 +17,7 @@ class SkillCalls:
     recording logs them at the next tick, from the tick's thread.
 
     Args:
-        skills: the :class:`bearchair.skills.toolbox.MissionSkills` the tree uses.
+        skills: the :class:`bearchair.skills.mission_skills.MissionSkills` the tree uses.
         clock: the robot's clock (stamps each call).
     """
 

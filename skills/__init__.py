@@ -2,5 +2,5 @@
 perception, imagination, planning, control, assistance (no py_trees in here).
 
 May import ``core`` and ``hardware`` (its interfaces, to drive a robot through them).
-The behaviours call these through ``bearchair.skills.toolbox.MissionSkills``.
+The behaviours call these through ``bearchair.skills.mission_skills.MissionSkills``.
 """

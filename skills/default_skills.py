@@ -1,7 +1,7 @@
 """The real skills, bound for the mission tree: :class:`DefaultSkills`.
 
 Importing this module imports every skill (open3d, casadi, pybullet, OMPL: about 2 s),
-which is why the tree's leaves see only the :class:`bearchair.skills.toolbox.MissionSkills`
+which is why the tree's leaves see only the :class:`bearchair.skills.mission_skills.MissionSkills`
 protocol and the executive imports this module when a mission runs.
 """
 
@@ -14,7 +14,7 @@ from bearchair.skills import assistance, control, imagination, perception
 from bearchair.skills.imagination.drop_records import SimulationSettings
 from bearchair.skills.parameters import SkillParameters
 from bearchair.skills.perception.reconstruction import ReconstructionConfig
-from bearchair.skills.planning import se2, stance, wholebody
+from bearchair.skills.planning import accessibility, stance, wholebody
 from bearchair.skills.planning.wholebody.optimisation import start_building_problems
 from bearchair.skills.planning.wholebody.release_choice import plan_seating_released
 
@@ -32,7 +32,7 @@ class DefaultSkills:
     wait_until_chair_still = staticmethod(perception.wait_until_chair_still)
     measure_chair_rotation = staticmethod(perception.measure_chair_rotation)
     check_seat_reachable = staticmethod(stance.check_seat_reachable)
-    check_accessibility = staticmethod(se2.check_accessibility)
+    check_accessibility = staticmethod(accessibility.check_accessibility)
     choose_rotation = staticmethod(assistance.choose_rotation)
     compose_instruction = staticmethod(assistance.compose_instruction)
     walk_path = staticmethod(control.walk_path)

@@ -3,7 +3,7 @@
 An entry point of :data:`SKILLS_GROUP` names either
 
 - a class (or any callable of no argument) whose instances implement
-  :class:`bearchair.skills.toolbox.MissionSkills`: a whole skill set, used instead of the
+  :class:`bearchair.skills.mission_skills.MissionSkills`: a whole skill set, used instead of the
   defaults; or
 - a mapping ``{skill name: function}``: overrides of single skills over the set below it
   (usually the defaults), e.g. ``{"compose_instruction": polite_instruction}``.
@@ -21,7 +21,7 @@ from typing import Any, cast
 from bearchair.core.errors import PluginError, one_line
 from bearchair.core.plugins import load_entry_point
 from bearchair.core.protocols import binding_error, protocol_gaps, protocol_members
-from bearchair.skills.toolbox import MissionSkills
+from bearchair.skills.mission_skills import MissionSkills
 
 SKILLS_GROUP = "bearchair.skills"
 """The entry point group of skill plug-ins."""

@@ -14,6 +14,12 @@ fake_robot         a :class:`bearchair.hardware.interfaces.Robot` of in-memory f
 scripted_skills    a :class:`ScriptedSkills` with every default answer
 ================== =====================================================================
 
+Its modules besides the fixtures: :mod:`bearchair.testing.scripted` (skills answering
+from a script, each stub checked against the real skill's signature),
+:mod:`bearchair.testing.chairgen` (generated chairs of known geometry, with
+``chairgen_families``) and :mod:`bearchair.testing.synthetic_scenes` (rendered RGB-D
+frames of meshes, tags and calibration boards, without a simulated world).
+
 Layering: this room may import everything below the executive (core, hardware, skills,
 behaviours, trees): a kit for testing leaves and trees must not pull in the executive's
 run loop, CLI and recordings, and nothing in bearchair imports the kit (only tests do).
@@ -30,7 +36,7 @@ from bearchair.hardware.fakes import (
     FakeTagTracker,
     fake_robot,
 )
-from bearchair.skills.scripted import ScriptedSkills, default_results
+from bearchair.testing.scripted import ScriptedSkills, default_results
 from bearchair.testing.ticking import (
     fresh_blackboard,
     set_up,

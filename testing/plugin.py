@@ -14,7 +14,7 @@ import pytest
 
 if TYPE_CHECKING:
     from bearchair.hardware.interfaces import Robot
-    from bearchair.skills.scripted import ScriptedSkills
+    from bearchair.testing.scripted import ScriptedSkills
 
 
 @pytest.fixture
@@ -55,6 +55,6 @@ def fake_robot() -> Robot:
 @pytest.fixture
 def scripted_skills() -> ScriptedSkills:
     """Skills answering their defaults (script more with ``ScriptedSkills({...})``)."""
-    from bearchair.skills.scripted import ScriptedSkills
+    from bearchair.testing.scripted import ScriptedSkills
 
     return ScriptedSkills()

@@ -11,7 +11,7 @@ import py_trees
 from py_trees.common import Access, Status
 
 from bearchair.hardware.interfaces import Robot
-from bearchair.skills.toolbox import MissionSkills
+from bearchair.skills.mission_skills import MissionSkills
 
 
 def tick_until_done(

@@ -11,13 +11,13 @@ import trimesh
 
 from bearchair.core.geometry import SittingPose, make_transform, rot_z, wrap_angle
 from bearchair.core.meshes import box_chair_mesh
-from bearchair.skills.chairgen import FAMILIES, generate_chair
 from bearchair.skills.imagination.backrest import (
     AGREEMENT_RAD,
     MIRROR_MARGIN,
     backrest_yaw,
     check_direction,
 )
+from bearchair.testing.chairgen import FAMILIES, generate_chair
 
 BACKLESS = ("stool", "bench")
 

@@ -26,6 +26,7 @@ from bearchair.core.arena import DEFAULT_ARENA
 from bearchair.core.se2 import SE2Pose
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.hardware.interfaces import SeatingJudgement
+from bearchair.skills.mission_skills import SkillNotReady
 from bearchair.skills.results import (
     AccessibilityResult,
     ImaginationResult,
@@ -33,9 +34,8 @@ from bearchair.skills.results import (
     SeatReachability,
     WalkResult,
 )
-from bearchair.skills.scripted import ScriptedSkills, default_results
-from bearchair.skills.toolbox import SkillNotReady
 from bearchair.testing import tick_until_done, write_blackboard
+from bearchair.testing.scripted import ScriptedSkills, default_results
 
 DEFAULTS = default_results()
 

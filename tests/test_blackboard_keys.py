@@ -16,7 +16,7 @@ from bearchair.executive.runner import MissionRunner
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.skills.perception.errors import RegistrationError
 from bearchair.skills.results import AccessibilityResult
-from bearchair.skills.scripted import ScriptedSkills, default_results
+from bearchair.testing.scripted import ScriptedSkills, default_results
 from bearchair.trees.mission import create_tree
 
 ACCESSIBLE = default_results()["check_accessibility"]

@@ -35,7 +35,7 @@ from bearchair.core.se2 import SE2Pose
 from bearchair.skills.imagination.backrest import AGREEMENT_RAD, backrest_yaw, check_direction
 from bearchair.skills.perception.errors import RegistrationError
 from bearchair.skills.perception.registration import RegistrationConfig, register_chair
-from bearchair.skills.planning import se2
+from bearchair.skills.planning import accessibility
 from bearchair.skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 
 HAIR_RAD = math.radians(0.1)
@@ -125,7 +125,7 @@ def _checker(obstacles=(), chair_mesh=None) -> NaoCollisionChecker:
 
 
 def test_a_clear_step_in_is_not_blocked() -> None:
-    assert se2._step_in_blocked_by(_checker(), STEP_START, STEP_GOAL, chair=True) == ""
+    assert accessibility._step_in_blocked_by(_checker(), STEP_START, STEP_GOAL, chair=True) == ""
 
 
 def test_a_step_in_across_an_obstacle_names_it() -> None:
@@ -133,12 +133,14 @@ def test_a_step_in_across_an_obstacle_names_it() -> None:
     post = Box2D(1.29, 1.31, -0.01, 0.01)
     checker = _checker((post,))
     assert checker.is_free(STEP_START.x, STEP_START.y, STEP_START.theta)
-    assert se2._step_in_blocked_by(checker, STEP_START, STEP_GOAL, chair=False) == "obstacle"
+    assert (
+        accessibility._step_in_blocked_by(checker, STEP_START, STEP_GOAL, chair=False) == "obstacle"
+    )
 
 
 def test_a_step_in_through_a_wall_names_the_wall() -> None:
     out = SE2Pose(DEFAULT_ARENA.x_max + 0.2, 0.0, math.pi)
-    assert se2._step_in_blocked_by(_checker(), out, STEP_GOAL, chair=False) == "wall"
+    assert accessibility._step_in_blocked_by(_checker(), out, STEP_GOAL, chair=False) == "wall"
 
 
 def test_a_step_in_into_the_chair_counts_only_when_asked() -> None:
@@ -146,8 +148,8 @@ def test_a_step_in_into_the_chair_counts_only_when_asked() -> None:
     pre-plan approved it: the chair counts only for a goal reached without an approach."""
     chair_mesh = box_chair_mesh().apply_translation((0.9, 0.0, 0.0))
     checker = _checker(chair_mesh=chair_mesh)
-    assert se2._step_in_blocked_by(checker, STEP_START, STEP_GOAL, chair=True) == "chair"
-    assert se2._step_in_blocked_by(checker, STEP_START, STEP_GOAL, chair=False) == ""
+    assert accessibility._step_in_blocked_by(checker, STEP_START, STEP_GOAL, chair=True) == "chair"
+    assert accessibility._step_in_blocked_by(checker, STEP_START, STEP_GOAL, chair=False) == ""
 
 
 def test_a_blocked_step_in_makes_the_chair_inaccessible_with_no_path(monkeypatch) -> None:
@@ -159,17 +161,17 @@ def test_a_blocked_step_in_makes_the_chair_inaccessible_with_no_path(monkeypatch
 
     chair_mesh = box_chair_mesh().apply_translation((0.6, 0.0, 0.0))
     sitting_pose = SittingPose(np.array([0.6, 0.0, 0.29]), 0.0)
-    choose = se2.choose_stance
+    choose = accessibility.choose_stance
 
     def with_an_approach(*args, **kwargs):
         choice = choose(*args, **kwargs)
         goal = choice.se2_goal
         return choice._replace(approach=SE2Pose(goal.x + 0.3, goal.y, goal.theta))
 
-    monkeypatch.setattr(se2, "choose_stance", with_an_approach)
+    monkeypatch.setattr(accessibility, "choose_stance", with_an_approach)
 
     def check(arena):
-        return se2.check_accessibility(
+        return accessibility.check_accessibility(
             chair_mesh,
             sitting_pose,
             DEFAULT_ARENA.humanoid_start,
@@ -199,7 +201,7 @@ def test_a_step_in_from_where_the_bear_is_raised_counts_the_chair(monkeypatch) -
     # Mid-arena, so that the far side of the chair is clear of the walls and the arm.
     chair_mesh = box_chair_mesh().apply_translation((1.2, 0.0, 0.0))
     sitting_pose = SittingPose(np.array([1.2, 0.0, 0.29]), 0.0)
-    choose = se2.choose_stance
+    choose = accessibility.choose_stance
 
     def raised_beyond_the_chair(*args, **kwargs):
         choice = choose(*args, **kwargs)
@@ -209,8 +211,8 @@ def test_a_step_in_from_where_the_bear_is_raised_counts_the_chair(monkeypatch) -
         assert _checker(chair_mesh=chair_mesh).is_free(beyond.x, beyond.y, beyond.theta)
         return choice._replace(approach=None, check=choice.check._replace(raise_at=beyond))
 
-    monkeypatch.setattr(se2, "choose_stance", raised_beyond_the_chair)
-    result = se2.check_accessibility(
+    monkeypatch.setattr(accessibility, "choose_stance", raised_beyond_the_chair)
+    result = accessibility.check_accessibility(
         chair_mesh,
         sitting_pose,
         DEFAULT_ARENA.humanoid_start,
@@ -231,8 +233,8 @@ def seen_chair():
     from the tracking views (the new points and their frames): rendered, not simulated."""
     from bearchair.core.geometry import yaw_transform
     from bearchair.skills.perception import ReconstructionConfig, reconstruct_chair
-    from bearchair.skills.perception.synthetic import SyntheticArm, SyntheticScene
     from bearchair.skills.perception.views import SCAN_CONFIGURATIONS, TRACKING_VIEWS
+    from bearchair.testing.synthetic_scenes import SyntheticArm, SyntheticScene
 
     scene = SyntheticScene(seed=3)
     scene.add_mesh(box_chair_mesh(), yaw_transform(0.6, np.array([0.58, 0.08, 0.0])))

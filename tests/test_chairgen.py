@@ -5,8 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bearchair.skills.chairgen import FAMILIES, SEAT_HEIGHT_RANGE_M, generate_chair, generate_chairs
 from bearchair.skills.planning.seat import seat_support_heights
+from bearchair.testing.chairgen import (
+    FAMILIES,
+    SEAT_HEIGHT_RANGE_M,
+    generate_chair,
+    generate_chairs,
+)
 
 
 @pytest.mark.parametrize("family", FAMILIES)

@@ -14,7 +14,7 @@ from bearchair.executive.record import RunRecorder
 from bearchair.executive.run_summary import RunInfo
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.hardware.fakes import FakeJudge, fake_robot
-from bearchair.skills.scripted import ScriptedSkills
+from bearchair.testing.scripted import ScriptedSkills
 from bearchair.trees.mission import STAGES, create_tree
 
 

@@ -19,7 +19,7 @@ from bearchair.core.se2 import SE2Pose
 from bearchair.evaluation.cli import left_out_text
 from bearchair.evaluation.protocol import SkippedChair, discover_chairs
 from bearchair.evaluation.trial_record import TrialRecord
-from bearchair.executive.mission import format_summary
+from bearchair.executive.run import format_summary
 from bearchair.executive.run_summary import RunSummary
 from bearchair.executive.runner import StageClock, StageTiming
 from bearchair.executive.tick_watchers import StageProgress, stage_seconds_text
@@ -168,7 +168,7 @@ def test_the_scan_and_the_imagination_report_their_steps():
     from bearchair.core.progress import showing
     from bearchair.skills.imagination import imagine_sitting
     from bearchair.skills.perception import scan_chair
-    from bearchair.skills.perception.synthetic import SyntheticArm, SyntheticScene
+    from bearchair.testing.synthetic_scenes import SyntheticArm, SyntheticScene
 
     scene = SyntheticScene(seed=3)
     scene.add_mesh(box_chair_mesh(), yaw_transform(0.6, np.array([0.58, 0.08, 0.0])))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import inspect
 
 from bearchair.skills.default_skills import DefaultSkills
-from bearchair.skills.toolbox import MissionSkills
+from bearchair.skills.mission_skills import MissionSkills
 
 
 def protocol_methods() -> set[str]:

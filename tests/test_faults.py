@@ -26,12 +26,13 @@ import trimesh
 
 from bearchair.core.runtime import RUNTIME
 from bearchair.evaluation.store import TrialStore, campaign_lock
-from bearchair.executive import cli, mission
+from bearchair.executive import cli
+from bearchair.executive import run as executive_run
 from bearchair.executive.inspect_run import RecordedRun
 from bearchair.executive.record import RunRecorder
 from bearchair.executive.run_summary import RunInfo
 from bearchair.hardware.fakes import FakeJudge, fake_robot
-from bearchair.skills.scripted import ScriptedSkills
+from bearchair.testing.scripted import ScriptedSkills
 from bearchair.trees.mission import create_tree
 from tests.test_trials import (
     FAKE_WORKER,
@@ -46,7 +47,7 @@ from tests.test_trials import (
 
 
 class FakeMission:
-    """Stands in for ``bearchair.executive.mission.run_in_simulation``: the real tree, runner and
+    """Stands in for ``bearchair.executive.run.run_in_simulation``: the real tree, runner and
     record on a fake robot, with scripted skills (no physics)."""
 
     def __init__(self, delays_s: dict[str, float] | None = None, on_tick=None) -> None:
@@ -58,7 +59,7 @@ class FakeMission:
         root = (tree or create_tree)(config.tree_options)
         recorder = RunRecorder(config.out_dir, root)
         run_info = RunInfo(chair="stub", placement="accessible", helper="obeys", seed=0)
-        return mission._run_tree(
+        return executive_run._run_tree(
             root, recorder, self.robot, config, run_info, self.skills, self.on_tick, None
         )
 
@@ -102,7 +103,7 @@ def test_a_signal_while_ticking_stops_tree_and_robots_and_keeps_the_summary(
     tmp_path, monkeypatch, capsys, signum, status, name
 ):
     fake = FakeMission(delays_s={"scan_chair": 30.0})
-    monkeypatch.setattr(mission, "run_in_simulation", fake)
+    monkeypatch.setattr(executive_run, "run_in_simulation", fake)
     out = tmp_path / "run"
     sent_at = signal_once_called(signum, fake.skills.calls, "scan_chair")
     assert cli.main(["run", "--mute", "--out", str(out)]) == status
@@ -231,7 +232,7 @@ def test_a_full_disk_while_ticking_is_one_line_and_the_robots_stop(tmp_path, mon
     monkeypatch.setattr(RunRecorder, "__init__", init)
     # The scan's end changes the record: that second line finds the disk full.
     fake = FakeMission(delays_s={"scan_chair": 0.2, "imagine_sitting": 30.0})
-    monkeypatch.setattr(mission, "run_in_simulation", fake)
+    monkeypatch.setattr(executive_run, "run_in_simulation", fake)
     out = tmp_path / "run"
     assert cli.main(["run", "--mute", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
@@ -259,7 +260,7 @@ def test_a_failed_summary_write_leaves_no_half_file(tmp_path, monkeypatch, capsy
             raise OSError(errno.ENOSPC, "No space left on device")
         real_replace(source, target)
 
-    monkeypatch.setattr(mission, "run_in_simulation", FakeMission())
+    monkeypatch.setattr(executive_run, "run_in_simulation", FakeMission())
     monkeypatch.setattr(bearchair.executive.outputs.os, "replace", full)
     out = tmp_path / "run"
     assert cli.main(["run", "--mute", "--out", str(out)]) == 2
@@ -275,8 +276,8 @@ def test_a_bug_exits_3_with_one_line_and_the_traceback_in_the_run_folder(
     def broken(summary):
         raise TypeError("unsupported format string passed to NoneType.__format__")
 
-    monkeypatch.setattr(mission, "run_in_simulation", FakeMission())
-    monkeypatch.setattr(mission, "format_summary", broken)
+    monkeypatch.setattr(executive_run, "run_in_simulation", FakeMission())
+    monkeypatch.setattr(executive_run, "format_summary", broken)
     out = tmp_path / "run"
     assert cli.main(["run", "--mute", "--out", str(out)]) == 3
     err = capsys.readouterr().err.strip()
@@ -371,7 +372,7 @@ def test_a_damaged_summary_is_ignored_with_a_note(recorded_run, tmp_path, capsys
 def test_a_new_run_never_sits_beside_an_old_record(recorded_run, tmp_path, monkeypatch, capsys):
     run = copy_run(recorded_run, tmp_path / "run")
     (run / "final_scene.png").write_bytes(b"old picture")
-    monkeypatch.setattr(mission, "run_in_simulation", FakeMission())
+    monkeypatch.setattr(executive_run, "run_in_simulation", FakeMission())
     assert cli.main(["run", "--mute", "--out", str(run)]) == 2
     assert "--overwrite" in capsys.readouterr().err
     assert cli.main(["run", "--mute", "--out", str(run), "--overwrite"]) == 0

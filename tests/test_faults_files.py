@@ -155,10 +155,10 @@ def test_overwrite_of_a_folder_another_run_writes_is_refused(tmp_path, capsys):
 
 
 def test_a_finished_run_releases_its_folder_for_the_next_overwrite(tmp_path, monkeypatch, capsys):
-    from bearchair.executive import mission
+    from bearchair.executive import run as executive_run
     from tests.test_faults import FakeMission
 
-    monkeypatch.setattr(mission, "run_in_simulation", FakeMission())
+    monkeypatch.setattr(executive_run, "run_in_simulation", FakeMission())
     out = tmp_path / "run"
     assert cli.main(["run", "--mute", "--out", str(out)]) == 0
     assert outputs._held_locks == {}
@@ -430,7 +430,7 @@ def test_an_out_that_is_a_dangling_link_is_refused(tmp_path, capsys):
 
 
 def test_the_run_summary_prints_a_hostile_chair_name_escaped():
-    from bearchair.executive.mission import format_summary
+    from bearchair.executive.run import format_summary
 
     summary = {
         "chair": "\x1b]0;owned\x07chair.obj",

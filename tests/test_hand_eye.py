@@ -31,7 +31,7 @@ from bearchair.skills.perception.hand_eye import (
     rotation_diversity_deg,
     solve_hand_eye,
 )
-from bearchair.skills.perception.synthetic import board_view
+from bearchair.testing.synthetic_scenes import board_view
 
 # The simulated camera mount (hardware.sim: T_HAND_CAMERA on panda_hand, -45 deg about the
 # flange's z), moved by a few millimetres and degrees: the answer must come from the data.
@@ -297,7 +297,7 @@ def test_rendered_in_pybullet_the_stored_views_recover_the_simulated_mount():
     view; measured 3.8 mm and 0.12 deg from the truth (TinyRenderer's nearest-texel
     sampling costs accuracy against the warped pictures above)."""
     from bearchair.hardware.sim.camera import carmine_intrinsics
-    from bearchair.skills.perception.synthetic import PandaKinematics, SyntheticScene
+    from bearchair.testing.synthetic_scenes import PandaKinematics, SyntheticScene
 
     scene = SyntheticScene(noise=False)
     kinematics = PandaKinematics()

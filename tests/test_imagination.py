@@ -317,7 +317,7 @@ def test_a_one_metre_cube_is_not_a_chair() -> None:
 
 @pytest.mark.parametrize("family", ["stool", "bench"])
 def test_a_seat_without_a_backrest_is_sat_on_by_upright_sitters(family: str) -> None:
-    from bearchair.skills.chairgen import generate_chair
+    from bearchair.testing.chairgen import generate_chair
 
     chair = generate_chair(3, family)  # a 0.20 m seat, within the sitting heights
     result = imagine_sitting(chair.mesh, seed=0)
@@ -341,10 +341,10 @@ def test_a_table_top_gets_no_upright_sitters() -> None:
 
 
 def test_the_righting_torque_balances_on_a_stool_but_not_on_a_post() -> None:
-    from bearchair.skills.chairgen import generate_chair
     from bearchair.skills.imagination.drop_records import DropSpec, SimulationSettings, TaskSpec
     from bearchair.skills.imagination.sam import score_drop
     from bearchair.skills.imagination.simulation import run_task
+    from bearchair.testing.chairgen import generate_chair
 
     # A 6 cm post with its top at sitting height: the agent's weight falls outside it
     # by more than the righting torque's lean.

@@ -11,12 +11,12 @@ import pytest
 from bearchair.core.arena import DEFAULT_ARENA
 from bearchair.executive import cli
 from bearchair.executive.cmd_config import mission_from_args, parse_assignment
-from bearchair.executive.mission import CONFIG_FILE, write_config
 from bearchair.executive.mission_config import (
     MissionConfig,
     load_mission_config,
     parse_mission_config,
 )
+from bearchair.executive.run import CONFIG_FILE, write_config
 from bearchair.trees.options import TreeOptions
 
 jsonschema = pytest.importorskip("jsonschema")

@@ -18,10 +18,10 @@ from bearchair.executive.render import render_text
 from bearchair.executive.run_summary import RunInfo, RunSummary
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.hardware.fakes import FakeJudge, fake_robot
+from bearchair.skills.mission_skills import SkillNotReady
 from bearchair.skills.perception.errors import RegistrationError
 from bearchair.skills.results import AccessibilityResult, SeatReachability
-from bearchair.skills.scripted import ScriptedSkills, default_results
-from bearchair.skills.toolbox import SkillNotReady
+from bearchair.testing.scripted import ScriptedSkills, default_results
 from bearchair.trees.mission import STAGES, create_tree
 
 DEFAULTS = default_results()

@@ -13,7 +13,6 @@ import pytest
 
 from bearchair.core.geometry import transform_points, wrap_angle, yaw_of, yaw_transform
 from bearchair.core.meshes import box_chair_mesh
-from bearchair.skills.chairgen import generate_chair
 from bearchair.skills.perception import PerceptionError, ReconstructionConfig, reconstruct_chair
 from bearchair.skills.perception.clearance import (
     MIN_SCAN_VIEWS,
@@ -31,7 +30,6 @@ from bearchair.skills.perception.registration import (
     visible_fitness,
 )
 from bearchair.skills.perception.scan import scan_chair
-from bearchair.skills.perception.synthetic import SyntheticArm, SyntheticScene
 from bearchair.skills.perception.views import (
     CHAIR_VOLUME,
     HOME_CONFIGURATION,
@@ -40,6 +38,8 @@ from bearchair.skills.perception.views import (
     TRACKING_VIEWS,
     VIEW_CLEARANCE_M,
 )
+from bearchair.testing.chairgen import generate_chair
+from bearchair.testing.synthetic_scenes import SyntheticArm, SyntheticScene
 
 T_WORLD_CHAIR = yaw_transform(0.6, np.array([0.58, 0.08, 0.0]))
 

@@ -13,9 +13,13 @@ from bearchair.core.geometry import SittingPose, yaw_transform
 from bearchair.core.meshes import box_chair_mesh
 from bearchair.core.se2 import SE2Pose
 from bearchair.skills.planning import collision, preplan
+from bearchair.skills.planning.accessibility import (
+    AccessibilityError,
+    check_accessibility,
+    stepped_back,
+)
 from bearchair.skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from bearchair.skills.planning.preplan import SeatingCheck, reach_validator
-from bearchair.skills.planning.se2 import AccessibilityError, check_accessibility, stepped_back
 from bearchair.skills.planning.seat import (
     BEAR_EDGE_MARGIN_M,
     SEAT_DROP_TOLERANCE_M,

@@ -17,9 +17,9 @@ from bearchair.executive.cell_config import CellConfigError, parse_cell_config
 from bearchair.executive.tree_source import build_tree, load_tree_factory
 from bearchair.hardware.backends import build_device
 from bearchair.hardware.interfaces import Speaker
+from bearchair.skills.mission_skills import MissionSkills
 from bearchair.skills.plugins import apply_skill_plugins, check_skill_plugins
-from bearchair.skills.scripted import ScriptedSkills
-from bearchair.skills.toolbox import MissionSkills
+from bearchair.testing.scripted import ScriptedSkills
 from bearchair.trees.mission import create_tree
 from bearchair.trees.options import TreeOptions
 from tests.test_cell_config import GOOD as VALID_CELL
@@ -317,7 +317,7 @@ def test_the_trial_worker_runs_the_payload_tree(tmp_path, monkeypatch, capsys):
     import json
 
     from bearchair.evaluation import worker
-    from bearchair.executive import mission
+    from bearchair.executive import run as executive_run
     from bearchair.executive.run_summary import RunSummary
     from bearchair_example.trees import create_tree_without_assistance
 
@@ -327,7 +327,7 @@ def test_the_trial_worker_runs_the_payload_tree(tmp_path, monkeypatch, capsys):
         ran.update(spec=config.tree_spec, tree=tree)
         return RunSummary(outcome="success")
 
-    monkeypatch.setattr(mission, "run_in_simulation", fake_run)
+    monkeypatch.setattr(executive_run, "run_in_simulation", fake_run)
     payload = {"out_dir": str(tmp_path), "placement": "accessible", "helper": "obeys"}
     payload |= {"seed": 1, "timeout_s": 60, "tree": "example-no-assistance"}
     assert worker.main([json.dumps(payload)]) == 0, capsys.readouterr().out

@@ -15,7 +15,7 @@ import trimesh
 from bearchair.core.meshes import MeshLoadError, box_chair_mesh, check_chair_mesh, load_mesh
 from bearchair.core.posture import MAX_REST_TILT_DEG, posture_warning, rest_faces
 from bearchair.executive import cli
-from bearchair.skills.chairgen import FAMILIES, generate_chair
+from bearchair.testing.chairgen import FAMILIES, generate_chair
 
 ROTATE = trimesh.transformations.rotation_matrix
 WITH_BACKREST = ("four_legs", "armchair", "round", "sled", "footrest")

@@ -258,7 +258,7 @@ def ray_cluster() -> Iterator[tuple[str, dict[str, str]]]:
 
 
 def _generated_chair(folder: Path) -> Path:
-    from bearchair.skills.chairgen import generate_chair
+    from bearchair.testing.chairgen import generate_chair
 
     folder.mkdir(parents=True)
     chair = generate_chair(seed=1, family="four_legs")

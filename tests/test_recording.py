@@ -29,7 +29,7 @@ from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.hardware.interfaces import SeatingJudgement
 from bearchair.skills.results import AccessibilityResult
-from bearchair.skills.scripted import ScriptedSkills, default_results
+from bearchair.testing.scripted import ScriptedSkills, default_results
 from bearchair.trees.mission import create_tree
 
 pytest.importorskip("rerun", reason="rerun-sdk (the [viewer] extra) is not installed")
@@ -47,7 +47,7 @@ def box_chair_results():
     """The real scan (9 synthetic views) and imagination (24 drops) of the box chair."""
     from bearchair.skills.imagination import imagine_sitting
     from bearchair.skills.perception import scan_chair
-    from bearchair.skills.perception.synthetic import SyntheticArm, SyntheticScene
+    from bearchair.testing.synthetic_scenes import SyntheticArm, SyntheticScene
 
     scene = SyntheticScene(seed=3)
     scene.add_mesh(box_chair_mesh(), T_WORLD_CHAIR)
@@ -356,7 +356,7 @@ def test_run_record_and_live_flags(tmp_path, monkeypatch, capsys):
 
 
 def test_trials_pass_record_to_each_worker(tmp_path, monkeypatch, capsys):
-    import bearchair.executive.mission
+    import bearchair.executive.run
     from bearchair.evaluation import worker
     from bearchair.evaluation.campaign import run_campaign
     from bearchair.evaluation.protocol import ChairEntry, expand_protocol
@@ -375,7 +375,7 @@ def test_trials_pass_record_to_each_worker(tmp_path, monkeypatch, capsys):
     # The worker turns it into the run's configuration.
     configs = []
     monkeypatch.setattr(
-        bearchair.executive.mission,
+        bearchair.executive.run,
         "run_in_simulation",
         lambda config, **_: configs.append(config) or RunSummary(outcome="success"),
     )

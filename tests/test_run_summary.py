@@ -28,7 +28,7 @@ from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.hardware.interfaces import SeatingJudgement
 from bearchair.skills.imagination.release import ImaginedRelease, ReleasePrediction
-from bearchair.skills.scripted import ScriptedSkills
+from bearchair.testing.scripted import ScriptedSkills
 from bearchair.trees.mission import create_tree
 
 VERSION_1 = {

@@ -212,11 +212,12 @@ def test_a_second_signal_kills_and_reaps_the_pool_before_it_exits(tmp_path):
 SECOND_SIGNAL_ON_A_RUN = """
 import sys, threading, time
 from pathlib import Path
-from bearchair.executive import cli, mission
+from bearchair.executive import cli
+from bearchair.executive import run as executive_run
 from bearchair.executive.record import RunRecorder
 from bearchair.executive.run_summary import RunInfo
 from bearchair.hardware.fakes import FakeJudge, fake_robot
-from bearchair.skills.scripted import ScriptedSkills
+from bearchair.testing.scripted import ScriptedSkills
 from bearchair.trees.mission import create_tree
 
 robot = fake_robot(judge=FakeJudge())
@@ -237,9 +238,9 @@ def fake_run(config, skills_=None, on_tick=None, tree=None):
     root = create_tree()
     recorder = RunRecorder(config.out_dir, root)
     info = RunInfo(chair="stub", placement="accessible", helper="obeys", seed=0)
-    return mission._run_tree(root, recorder, robot, config, info, skills, None, None)
+    return executive_run._run_tree(root, recorder, robot, config, info, skills, None, None)
 
-mission.run_in_simulation = fake_run
+executive_run.run_in_simulation = fake_run
 
 def ready():
     while not skills.calls.get("scan_chair"):

@@ -20,8 +20,9 @@ from bearchair.hardware.interfaces import (
     SeatingJudge,
     Speaker,
 )
-from bearchair.hardware.sim.camera import CARMINE_INTRINSICS, T_HAND_CAMERA
+from bearchair.hardware.sim.camera import CARMINE_INTRINSICS
 from bearchair.hardware.sim.world import SimConfig, SimWorld
+from bearchair.hardware.wrist_mount import T_HAND_CAMERA
 
 SHARED_CHAIRS = Path(__file__).resolve().parents[2] / "shared" / "chairs"
 
@@ -427,8 +428,8 @@ def test_simulated_run_records_the_ground_truth(tmp_path):
     import json
 
     from bearchair.executive.config import RunConfig
-    from bearchair.executive.mission import run_in_simulation
-    from bearchair.skills.scripted import ScriptedSkills
+    from bearchair.executive.run import run_in_simulation
+    from bearchair.testing.scripted import ScriptedSkills
 
     summary = run_in_simulation(
         RunConfig(seed=0, out_dir=tmp_path, mute=True, timeout_s=120.0), skills=ScriptedSkills()

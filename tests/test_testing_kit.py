@@ -15,8 +15,8 @@ from bearchair.behaviours.mission_inputs import set_mission_inputs
 from bearchair.core.arena import DEFAULT_ARENA
 from bearchair.hardware.fakes import FakeSpeaker
 from bearchair.hardware.sim.helper import SimSpeaker
-from bearchair.skills.scripted import SKILLS
 from bearchair.testing import ScriptedSkills, fake_robot, set_up, tick_until_done
+from bearchair.testing.scripted import SKILLS
 from bearchair.trees.mission import create_tree
 from bearchair.trees.options import TreeOptions
 

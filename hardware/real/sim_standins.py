@@ -132,7 +132,7 @@ class SimulatedPanda(FakePanda):
 
 
 def _t_hand_camera() -> np.ndarray:
-    from bearchair.hardware.sim.camera import T_HAND_CAMERA
+    from bearchair.hardware.wrist_mount import T_HAND_CAMERA
 
     return T_HAND_CAMERA
 

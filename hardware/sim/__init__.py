@@ -5,9 +5,10 @@
 pictures of the scene.
 """
 
-from bearchair.hardware.sim.camera import CARMINE_INTRINSICS, T_HAND_CAMERA, CarmineNoise
+from bearchair.hardware.sim.camera import CARMINE_INTRINSICS, CarmineNoise
 from bearchair.hardware.sim.panda import PANDA_READY_RAD, look_at
 from bearchair.hardware.sim.world import SimConfig, SimWorld
+from bearchair.hardware.wrist_mount import T_HAND_CAMERA
 
 __all__ = [
     "CARMINE_INTRINSICS",

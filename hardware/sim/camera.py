@@ -1,8 +1,8 @@
 """The wrist depth camera: a PrimeSense Carmine 1.09 rendered by pybullet's TinyRenderer.
 
-The one description of the simulated Carmine (field of view, intrinsics, mount, range,
+The one description of the simulated Carmine (field of view, intrinsics, range,
 noise model), used by the simulated Panda (:mod:`bearchair.hardware.sim.panda`) and by the
-synthetic scenes the perception tests render (:mod:`bearchair.skills.perception.synthetic`).
+synthetic scenes the perception tests render (:mod:`bearchair.testing.synthetic_scenes`).
 Rendering works in DIRECT mode (no GUI, no OpenGL context). The OpenGL z-buffer is
 turned into metric depth along the optical axis, then a Carmine-like noise model is
 applied (see :class:`CarmineNoise`), or only the sensor's range limits
@@ -19,7 +19,6 @@ import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
-from bearchair.core.geometry import make_transform
 from bearchair.hardware.interfaces import CameraIntrinsics
 from bearchair.hardware.sim.bullet import LockedBullet
 
@@ -40,18 +39,6 @@ def carmine_intrinsics(width: int = 640, height: int = 480) -> CameraIntrinsics:
 
 
 CARMINE_INTRINSICS = carmine_intrinsics()
-
-T_HAND_CAMERA = make_transform(
-    np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]),
-    np.array([0.065, 0.0, 0.02]),
-)
-"""Hand-eye extrinsic: the camera (OpenCV optical frame) in the Panda's ``panda_hand`` frame.
-
-The camera is mounted 6.5 cm off the hand's axis along the hand's +x, 2 cm along the
-approach axis, looking along the hand's approach axis (+z). Its image x axis is the
-hand's -y and its image y axis (down) the hand's +x, so the closed fingers lie above the
-top edge of the image, outside the 45 deg vertical field of view.
-"""
 
 NEAR_M = 0.05
 FAR_M = 8.0

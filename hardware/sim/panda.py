@@ -21,13 +21,13 @@ from bearchair.hardware.sim.bullet import (
 )
 from bearchair.hardware.sim.camera import (
     CARMINE_INTRINSICS,
-    T_HAND_CAMERA,
     CarmineNoise,
     RenderedView,
     carmine_images,
     render_view,
 )
 from bearchair.hardware.sim.clock import SimClock
+from bearchair.hardware.wrist_mount import T_HAND_CAMERA
 
 PANDA_URDF = Path(pybullet_data.getDataPath()) / "franka_panda" / "panda.urdf"
 _PANDA_MESHES = PANDA_URDF.parent / "meshes"

@@ -71,10 +71,10 @@ def choose_rotation(
         humanoid_pose: where the NAO stands.
         arena: the workspace.
         seed: the accessibility check's seed.
-        check: the accessibility check (default ``bearchair.skills.planning.se2.check_accessibility``).
+        check: the accessibility check (default ``bearchair.skills.planning.accessibility.check_accessibility``).
     """
     if check is None:
-        from bearchair.skills.planning.se2 import check_accessibility
+        from bearchair.skills.planning.accessibility import check_accessibility
 
         check = check_accessibility
     toward = rotation_toward(sitting_pose, (humanoid_pose.x, humanoid_pose.y))

@@ -1,7 +1,7 @@
 """Sitting imagination: find how to sit on an unseen chair by physical simulation.
 
 Public entry point: :func:`imagine_sitting` (the ``imagine_sitting`` skill of
-``bearchair.skills.toolbox``). See ``imagine.py`` for the procedure, ``vote.py`` for the choice of the rotation,
+``bearchair.skills.mission_skills``). See ``imagine.py`` for the procedure, ``vote.py`` for the choice of the rotation,
 ``workers.py`` for the worker processes, ``drop_parameters.py`` for the drops' numbers, ``agent.py`` for the
 generated child-sized agent, ``chair.py`` for g_obb and the chair's preparation,
 ``simulation.py`` for the drops and ``sam.py`` for the sitting affordance model.

@@ -113,7 +113,7 @@ class ArmClearance:
     """
 
     def __init__(self) -> None:
-        from bearchair.skills.perception.synthetic import PandaKinematics
+        from bearchair.skills.perception.panda_kinematics import PandaKinematics
 
         self._kinematics = PandaKinematics()
         self._box: int | None = None

@@ -1,7 +1,7 @@
 """The seating pre-plan: can the NAO seat the bear at g from a prospective s_goal?
 
 The stance search (:mod:`bearchair.skills.planning.stance`) and the accessibility check
-(:mod:`bearchair.skills.planning.se2`) ask a seating validator about candidate stances. Two are
+(:mod:`bearchair.skills.planning.accessibility`) ask a seating validator about candidate stances. Two are
 here: the whole-body pre-plan (:func:`wholebody_validator`, the default, its answers
 memoised in :data:`PREPLANS`) and the faster reach model alone (:func:`reach_validator`).
 """

@@ -1,4 +1,4 @@
-"""The generator's families of real chairs' harder shapes (see :mod:`bearchair.skills.chairgen`).
+"""The generator's families of real chairs' harder shapes (see :mod:`bearchair.testing.chairgen`).
 
 Each builds its parts around a seat centred on the origin, +x its front, its top at
 ``seat.top`` just behind the front edge (the first surface a sitter's thighs meet):
@@ -26,7 +26,7 @@ import trimesh
 
 
 class _Seat(Protocol):
-    """The seat drawn for a chair (``bearchair.skills.chairgen``'s, metres)."""
+    """The seat drawn for a chair (``bearchair.testing.chairgen``'s, metres)."""
 
     @property
     def top(self) -> float: ...

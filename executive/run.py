@@ -27,7 +27,7 @@ from bearchair.executive.run_summary import GroundTruth, RunInfo, RunSummary
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.executive.tick_watchers import ScenePictures, StageSnapshots, both
 from bearchair.executive.tree_source import build_tree
-from bearchair.skills.toolbox import MissionSkills
+from bearchair.skills.mission_skills import MissionSkills
 from bearchair.trees.mission import create_tree
 from bearchair.trees.options import TreeFactory
 

@@ -20,7 +20,6 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 import pybullet
-import pybullet_data
 import trimesh
 from pybullet_utils.bullet_client import BulletClient
 
@@ -28,11 +27,12 @@ from bearchair.core.arena import TagSpec
 from bearchair.hardware.interfaces import CameraIntrinsics, RGBDFrame
 from bearchair.hardware.sim.camera import (
     CARMINE_INTRINSICS,
-    T_HAND_CAMERA,
     CarmineNoise,
     carmine_images,
     render_view,
 )
+from bearchair.hardware.wrist_mount import T_HAND_CAMERA
+from bearchair.skills.perception.panda_kinematics import PandaKinematics
 
 if TYPE_CHECKING:
     from bearchair.skills.perception.charuco import BoardSpec
@@ -180,54 +180,6 @@ class SyntheticScene:
         return RGBDFrame(
             rgb, depth, intrinsics, np.asarray(T_world_camera, dtype=np.float64).copy(), stamp_s
         )
-
-
-class PandaKinematics:
-    """Forward kinematics and collision queries of the Franka Panda (pybullet_data's URDF)."""
-
-    HAND_LINK = 8
-
-    def __init__(self) -> None:
-        self.client = pybullet.connect(pybullet.DIRECT)
-        pybullet.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=self.client)
-        self.robot = pybullet.loadURDF(
-            "franka_panda/panda.urdf",
-            useFixedBase=True,
-            flags=pybullet.URDF_USE_SELF_COLLISION,
-            physicsClientId=self.client,
-        )
-
-    def close(self) -> None:
-        """Disconnects the client."""
-        if self.client >= 0:
-            pybullet.disconnect(self.client)
-            self.client = -1
-
-    def set_joints(self, joints_rad: Sequence[float] | np.ndarray) -> None:
-        """Sets the 7 arm joints (fingers stay open)."""
-        for index, angle in enumerate(joints_rad):
-            pybullet.resetJointState(self.robot, index, float(angle), physicsClientId=self.client)
-        for finger in (9, 10):
-            pybullet.resetJointState(self.robot, finger, 0.04, physicsClientId=self.client)
-
-    def link_pose(self, link: int) -> np.ndarray:
-        """T_world_link of a link at the current joints."""
-        state = pybullet.getLinkState(
-            self.robot, link, computeForwardKinematics=True, physicsClientId=self.client
-        )
-        transform = np.eye(4)
-        transform[:3, :3] = np.asarray(
-            pybullet.getMatrixFromQuaternion(state[5], physicsClientId=self.client)
-        ).reshape(3, 3)
-        transform[:3, 3] = state[4]
-        return transform
-
-    def camera_pose(
-        self, joints_rad: Sequence[float] | np.ndarray, T_hand_camera: np.ndarray = T_HAND_CAMERA
-    ) -> np.ndarray:
-        """T_world_camera at a joint configuration."""
-        self.set_joints(joints_rad)
-        return self.link_pose(self.HAND_LINK) @ T_hand_camera
 
 
 class SyntheticArm:

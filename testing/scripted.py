@@ -1,6 +1,6 @@
 """Scripted skills for testing behaviours and trees without running any algorithm.
 
-:class:`ScriptedSkills` implements :class:`bearchair.skills.toolbox.MissionSkills`, one
+:class:`ScriptedSkills` implements :class:`bearchair.skills.mission_skills.MissionSkills`, one
 method per skill with the protocol's own signature. Each skill returns a plausible typed
 result; a test overrides any of them with a value, a list of values (one per call), an
 exception to raise, a function of the skill's arguments, or a delay during which the
@@ -32,7 +32,7 @@ from bearchair.core.protocols import binding_error, protocol_members
 from bearchair.core.se2 import SE2Pose
 from bearchair.hardware.interfaces import Clock, Humanoid, ScanningArm
 from bearchair.skills import results as skill_results
-from bearchair.skills.toolbox import Locate, MissionSkills
+from bearchair.skills.mission_skills import Locate, MissionSkills
 
 SKILLS = protocol_members(MissionSkills)
 """Every skill of the protocol and its signature (without ``self``)."""

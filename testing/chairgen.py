@@ -18,7 +18,7 @@ Families (:data:`FAMILIES`):
 * ``footrest``: four legs and a footrest bar sticking out in front (a high chair);
 * ``stool``: round or square seat, no back;
 * ``bench``: a wide seat, no back;
-* and :mod:`bearchair.skills.chairgen_families`' real chairs' harder shapes: ``x_frame``
+* and :mod:`bearchair.testing.chairgen_families`' real chairs' harder shapes: ``x_frame``
   (folding, sling seat, armrest rails), ``basket`` (dished round seat), ``swivel_tub``,
   ``rocking``, ``small_plain`` (0.20-0.30 m wide seats), ``lounge`` (deep, low,
   reclined), ``slatted``, ``spindle_back``, ``sofa``.
@@ -38,7 +38,7 @@ from typing import NamedTuple, cast
 import numpy as np
 import trimesh
 
-from bearchair.skills.chairgen_families import FAMILY_SEATS, ROUND_FAMILIES, family_parts
+from bearchair.testing.chairgen_families import FAMILY_SEATS, ROUND_FAMILIES, family_parts
 
 FAMILIES: tuple[str, ...] = (
     "four_legs",
@@ -53,7 +53,7 @@ FAMILIES: tuple[str, ...] = (
     *FAMILY_SEATS,
 )
 """Every family :func:`generate_chair` makes (the harder shapes of real chairs from
-:mod:`bearchair.skills.chairgen_families` last)."""
+:mod:`bearchair.testing.chairgen_families` last)."""
 
 SEAT_HEIGHT_RANGE_M = (0.18, 0.45)
 """Seat heights drawn (metres): children's chairs, and a few beyond the NAO's reach."""

@@ -3,7 +3,7 @@
 Behaviours never import skill modules: they call methods of a :class:`MissionSkills`
 object passed to ``tree.setup(skills=...)``: the real ones
 (``bearchair.skills.default_skills.DefaultSkills``) or a test's stubs
-(``bearchair.skills.scripted.ScriptedSkills``). A stub for a skill that is not ready raises
+(``bearchair.testing.scripted.ScriptedSkills``). A stub for a skill that is not ready raises
 :class:`SkillNotReady`, and the tree fails at the leaf that needs it, naming it.
 """
 
