@@ -120,31 +120,34 @@ def shutdown_workers(timeout_s: float = 30.0) -> bool:
     """Stops the worker processes: each ends after its current task; those still running
     after ``timeout_s`` are killed. Returns True when none had to be killed.
 
+    The executor's own manager thread sends each worker its sentinel and reaps it; this
+    waits for that thread rather than joining the workers beside it (two threads reaping
+    one child race: the loser sees it alive after it has gone). The thread is taken
+    before ``shutdown``, which forgets it.
+
     The runtime's shutdown (``bearchair.core.runtime``) calls it, at the latest at exit."""
     with _pools_lock:
         pools = list(_pools.values())
         _pings.clear()
+    managers = [getattr(pool, "_executor_manager_thread", None) for pool in pools]  # private
     workers = [process for pool in pools for process in _worker_processes(pool)]
     for pool in pools:
         pool.shutdown(wait=False, cancel_futures=True)
     deadline = time.monotonic() + timeout_s
-    for process in workers:
-        process.join(max(deadline - time.monotonic(), 0.0))
-    late = [process for process in workers if process.is_alive()]
+    for manager in managers:
+        if manager is not None:
+            manager.join(max(deadline - time.monotonic(), 0.0))
+    stuck = any(manager is not None and manager.is_alive() for manager in managers)
+    late = [process for process in workers if stuck and process.exitcode is None]
     for process in late:
         process.kill()
-        process.join(5.0)
+    for manager in managers:  # its join returns once the killed workers are reaped
+        if manager is not None:
+            manager.join(5.0)
     with _pools_lock:  # only now: a second stop signal meanwhile still finds them
         for workers_asked, pool in list(_pools.items()):
             if pool in pools:
                 del _pools[workers_asked]
-    # The executor's manager thread holds the pool's queues, whose named semaphores
-    # unregister from the resource tracker when they are collected; joined here, the
-    # queues go now, not after the tracker has stopped (which would start a new one).
-    for pool in pools:
-        manager = getattr(pool, "_executor_manager_thread", None)  # private field
-        if manager is not None:
-            manager.join(max(deadline - time.monotonic(), 0.0))
     return not late
 
 
