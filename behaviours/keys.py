@@ -3,7 +3,7 @@
 Every key is absolute. Behaviours register the ones they read (READ access) and write
 (WRITE access) through their own blackboard client, so ``bearchair tree --blackboard``
 shows who touches what. The table below is generated from those registrations
-(``bearchair.executive.render.blackboard_table``); a test keeps it in step with the tree.
+(``bearchair.executive.tree_render.blackboard_table``); a test keeps it in step with the tree.
 
 ======================== =========================================================== ======================================================== =======================================================================================================
 key                      value                                                       written by                                               read by

@@ -59,10 +59,10 @@ def mission_specs(chairs: list[GeneratedChair], folder: Path, seed: int) -> list
 
 def run_missions(count: int, seed: int, workers: int, out: Path, timeout_s: float) -> int:
     """Runs the missions and prints the figures; returns the exit status."""
-    from bearchair.evaluation.backends import LocalBackend
     from bearchair.evaluation.campaign import run_campaign
-    from bearchair.evaluation.progress import Progress
+    from bearchair.evaluation.campaign_progress import Progress
     from bearchair.evaluation.store import TrialStore, campaign_lock
+    from bearchair.evaluation.trial_backends import LocalBackend
 
     chairs = [c for c in generate_chairs(count, seed) if c.front_yaw_rad is not None]
     specs = mission_specs(chairs, out / "chairs", seed)

@@ -15,10 +15,10 @@ from typing import NamedTuple
 
 from bearchair.core.errors import OutputError, RunRecordError
 from bearchair.core.userfiles import printable
-from bearchair.evaluation.backends import Backend, Job
-from bearchair.evaluation.progress import Progress
+from bearchair.evaluation.campaign_progress import Progress
 from bearchair.evaluation.protocol import TrialSpec
 from bearchair.evaluation.store import TrialStore, record_from_error, record_from_summary
+from bearchair.evaluation.trial_backends import Backend, Job
 from bearchair.evaluation.trial_record import TrialRecord
 from bearchair.evaluation.worker_process import WorkerOutcome
 from bearchair.executive.run_summary import RunSummary

@@ -21,10 +21,10 @@ from bearchair.executive.cli_types import positive_int, positive_seconds, seed_v
 from bearchair.skills.imagination import DEFAULT_WORKERS
 
 if TYPE_CHECKING:
-    from bearchair.evaluation.backends import Backend
     from bearchair.evaluation.campaign import CampaignResult
     from bearchair.evaluation.protocol import ChairEntry, SkippedChair, TrialSpec
     from bearchair.evaluation.store import TrialStore
+    from bearchair.evaluation.trial_backends import Backend
     from bearchair.evaluation.trial_record import TrialRecord
 
 DEFAULT_OUT = Path("trials")
@@ -255,7 +255,7 @@ def _chairs(args: argparse.Namespace) -> tuple[list[ChairEntry], list[SkippedCha
 def _backend(args: argparse.Namespace) -> Backend:
     """The backend of ``--backend``, with ``--worker-cmd`` if given."""
     from bearchair.core.errors import BackendUnavailable
-    from bearchair.evaluation.backends import LocalBackend, RayBackend
+    from bearchair.evaluation.trial_backends import LocalBackend, RayBackend
 
     command = shlex.split(args.worker_cmd) if args.worker_cmd else None
     try:
@@ -277,7 +277,7 @@ def _run_campaign(
     """``run_campaign`` with a progress bar; a backend that fails to start is one line."""
     from bearchair.core.errors import BackendUnavailable
     from bearchair.evaluation.campaign import run_campaign
-    from bearchair.evaluation.progress import Progress
+    from bearchair.evaluation.campaign_progress import Progress
 
     try:
         connect = getattr(backend, "connect", None)

@@ -4,7 +4,7 @@ The imagined-pose picture draws what the robot worked with: its reconstructed ch
 (``chair_reconstructed.ply``, kept by the trial worker) and the sitting pose g = (p, γ)
 of the trial's summary, both in that trial's world frame at the end of the trial, with
 the renderer ``bearchair imagine --image`` uses
-(``bearchair.skills.imagination.render.render_sitting``).
+(``bearchair.skills.imagination.sitting_picture.render_sitting``).
 """
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ def render_chair_pictures(records: list[TrialRecord], chairs_dir: Path) -> dict[
         import trimesh
 
         from bearchair.core.geometry import SittingPose
-        from bearchair.skills.imagination.render import render_sitting
+        from bearchair.skills.imagination.sitting_picture import render_sitting
 
         mesh = cast(
             "trimesh.Trimesh",  # force="mesh" makes it one

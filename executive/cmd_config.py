@@ -141,7 +141,7 @@ def check_run_inputs(config: Any) -> Any:
     from bearchair.core.meshes import load_chair_mesh
     from bearchair.core.userfiles import open_regular_file
     from bearchair.executive.tree_source import load_tree_factory
-    from bearchair.skills.plugins import check_skill_plugins
+    from bearchair.skills.skill_sets import check_skill_plugins
 
     factory = load_tree_factory(config.tree.factory)
     check_skill_plugins(config.skills.plugins)

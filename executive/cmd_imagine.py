@@ -87,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _draw(mesh: trimesh.Trimesh, result: ImaginationResult, name: str, image: Path) -> None:
     """The mesh and the sitting pose found (if any) drawn into the PNG ``image``."""
-    from bearchair.skills.imagination.render import render_sitting
+    from bearchair.skills.imagination.sitting_picture import render_sitting
 
     title = (
         f"{name}: yaw {math.degrees(result.sitting_pose.yaw):.1f} deg, "

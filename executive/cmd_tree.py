@@ -33,13 +33,13 @@ def register(subparsers: Any) -> None:
 
 def _tree(args: argparse.Namespace) -> int:
     from bearchair.executive.outputs import check_output_file
-    from bearchair.executive.render import TEXT_FORMATS, render_graph, render_text
+    from bearchair.executive.tree_render import TEXT_FORMATS, render_graph, render_text
     from bearchair.executive.tree_source import build_tree, load_tree_factory
 
     mission = mission_from_args(args)
     factory = load_tree_factory(mission.tree.factory)
     if args.format == "btcpp":
-        from bearchair.executive.render import write_btcpp
+        from bearchair.executive.tree_render import write_btcpp
 
         return write_btcpp(
             build_tree(factory, mission.tree.options(), mission.tree.factory), args.out

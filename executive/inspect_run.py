@@ -12,8 +12,8 @@ from py_trees.common import Status
 from bearchair.core.errors import RunRecordError
 from bearchair.core.userfiles import load_user_json, printable
 from bearchair.executive.record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, read_ticks
-from bearchair.executive.render import render_text
 from bearchair.executive.run_summary import RunSummary
+from bearchair.executive.tree_render import render_text
 
 __all__ = ["RecordedRun", "RunRecordError"]
 

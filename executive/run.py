@@ -365,7 +365,7 @@ def configured_skills(config: RunConfig) -> MissionSkills:
     """
     # Imported only when a mission runs: it imports every skill (about 2 s).
     from bearchair.skills.default_skills import DefaultSkills
-    from bearchair.skills.plugins import apply_skill_plugins
+    from bearchair.skills.skill_sets import apply_skill_plugins
 
     defaults = DefaultSkills(
         imagination_workers=config.imagination_workers, parameters=config.skill_parameters

@@ -11,8 +11,8 @@ import pytest
 
 from bearchair.behaviours import keys
 from bearchair.core.arena import DEFAULT_ARENA
-from bearchair.executive.render import blackboard_table
 from bearchair.executive.runner import MissionRunner
+from bearchair.executive.tree_render import blackboard_table
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.skills.perception.errors import RegistrationError
 from bearchair.skills.results import AccessibilityResult

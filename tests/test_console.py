@@ -191,7 +191,7 @@ def test_the_scan_and_the_imagination_report_their_steps():
 
 
 def test_trials_progress_is_a_tqdm_bar_on_a_terminal():
-    from bearchair.evaluation.progress import Progress
+    from bearchair.evaluation.campaign_progress import Progress
 
     terminal = _Terminal()
     progress = Progress(4, already_done=1, stream=terminal)

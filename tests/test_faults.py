@@ -428,7 +428,7 @@ def test_a_damaged_or_pickled_cache_entry_is_rebuilt_never_executed(tmp_path):
 
 def test_the_imagination_cache_survives_a_damaged_entry(tmp_path, monkeypatch):
     from bearchair.core.meshes import box_chair_mesh
-    from bearchair.skills.imagination import chair as imagination_chair
+    from bearchair.skills.imagination import chair_solid as imagination_chair
 
     monkeypatch.setenv("BEARCHAIR_CACHE", str(tmp_path))
     # The memory starts empty: the runtime is reset before every test (conftest.py).
@@ -529,9 +529,9 @@ CRASH_ONCE = FAKE_WORKER.replace(
 
 
 def test_a_killed_worker_is_retried_once_and_marked(tmp_path, monkeypatch):
-    from bearchair.evaluation.backends import LocalBackend
     from bearchair.evaluation.campaign import run_campaign
     from bearchair.evaluation.protocol import ChairEntry, expand_protocol
+    from bearchair.evaluation.trial_backends import LocalBackend
 
     command = fake_worker_command(tmp_path, monkeypatch, CRASH_ONCE).split()
     chairs = [ChairEntry(tmp_path / name, "chair", 90.0) for name in ("flaky.obj", "crash.obj")]

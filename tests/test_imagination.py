@@ -15,7 +15,7 @@ from bearchair.core.geometry import make_transform, rot_z, wrap_angle
 from bearchair.core.meshes import box_chair_mesh, solid_below_surface_boxes
 from bearchair.skills.imagination import imagine_sitting
 from bearchair.skills.imagination.agent import JOINTS, LINKS, TOTAL_MASS_KG, agent_urdf_path
-from bearchair.skills.imagination.chair import prepare_chair, yaw_obb
+from bearchair.skills.imagination.chair_solid import prepare_chair, yaw_obb
 from bearchair.skills.imagination.sam import joint_score, link_score
 
 
@@ -84,7 +84,7 @@ def test_preparation_is_cached(box_chair: trimesh.Trimesh) -> None:
 
 
 def test_the_chair_memory_keeps_the_most_recently_used_chairs(tmp_path, monkeypatch) -> None:
-    from bearchair.skills.imagination import chair as imagination_chair
+    from bearchair.skills.imagination import chair_solid as imagination_chair
 
     prepared: list[str] = []
 
@@ -533,7 +533,7 @@ def test_cli_json_reports_the_vote(tmp_path, capsys) -> None:
 def test_the_picture_without_matplotlib_names_the_extra(tmp_path, monkeypatch):
     from bearchair.core.errors import RenderError
     from bearchair.core.meshes import box_chair_mesh
-    from bearchair.skills.imagination.render import render_sitting
+    from bearchair.skills.imagination.sitting_picture import render_sitting
 
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib raises
     with pytest.raises(RenderError, match=r"bearchair\[trials\]"):

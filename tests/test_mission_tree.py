@@ -14,9 +14,9 @@ from bearchair.core.arena import DEFAULT_ARENA
 from bearchair.core.errors import RunRecordError
 from bearchair.executive.inspect_run import RecordedRun
 from bearchair.executive.record import RunRecorder
-from bearchair.executive.render import render_text
 from bearchair.executive.run_summary import RunInfo, RunSummary
 from bearchair.executive.runner import MissionRunner, summarise
+from bearchair.executive.tree_render import render_text
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.skills.mission_skills import SkillNotReady
 from bearchair.skills.perception.errors import RegistrationError

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from bearchair.executive.render import blackboard_users, render_graph
 from bearchair.executive.tree_picture import FONT, blackboard_matrix, tree_graph
+from bearchair.executive.tree_render import blackboard_users, render_graph
 from bearchair.trees.mission import create_tree
 
 needs_dot = pytest.mark.skipif(shutil.which("dot") is None, reason="Graphviz's dot is absent")
@@ -177,7 +177,7 @@ def test_imagine_image_and_the_report_draw_with_the_same_renderer(tmp_path, monk
     from bearchair.evaluation.pictures import render_chair_pictures
     from bearchair.evaluation.trial_record import TrialRecord
     from bearchair.executive import cmd_imagine
-    from bearchair.skills.imagination import render
+    from bearchair.skills.imagination import sitting_picture
 
     calls = []
 
@@ -186,7 +186,7 @@ def test_imagine_image_and_the_report_draw_with_the_same_renderer(tmp_path, monk
         Path(path).write_bytes(b"png")
         return Path(path)
 
-    monkeypatch.setattr(render, "render_sitting", recording)
+    monkeypatch.setattr(sitting_picture, "render_sitting", recording)
     mesh = box_chair_mesh()
     pose = types.SimpleNamespace(position=np.array([0.0, 0.0, 0.3]), yaw=math.radians(30.0))
     result = types.SimpleNamespace(found=True, sitting_pose=pose, n_correct=3, n_drops=24)
@@ -214,7 +214,7 @@ def test_the_imagined_pose_picture_is_two_metric_views(tmp_path):
 
     from bearchair.core.geometry import SittingPose
     from bearchair.core.meshes import box_chair_mesh
-    from bearchair.skills.imagination.render import render_sitting
+    from bearchair.skills.imagination.sitting_picture import render_sitting
 
     pose = SittingPose(np.array([0.02, 0.0, 0.30]), math.radians(20.0))
     path = render_sitting(box_chair_mesh(), pose, tmp_path / "pose.png", "box chair")

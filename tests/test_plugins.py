@@ -18,7 +18,7 @@ from bearchair.executive.tree_source import build_tree, load_tree_factory
 from bearchair.hardware.backends import build_device
 from bearchair.hardware.interfaces import Speaker
 from bearchair.skills.mission_skills import MissionSkills
-from bearchair.skills.plugins import apply_skill_plugins, check_skill_plugins
+from bearchair.skills.skill_sets import apply_skill_plugins, check_skill_plugins
 from bearchair.testing.scripted import ScriptedSkills
 from bearchair.trees.mission import create_tree
 from bearchair.trees.options import TreeOptions

@@ -22,7 +22,6 @@ from pathlib import Path
 
 import pytest
 
-from bearchair.evaluation.backends import NODE_FILE, RayBackend
 from bearchair.evaluation.shipping import (
     chair_files,
     pack_folder,
@@ -31,6 +30,7 @@ from bearchair.evaluation.shipping import (
     write_chair,
 )
 from bearchair.evaluation.store import TrialStore
+from bearchair.evaluation.trial_backends import NODE_FILE, RayBackend
 from bearchair.executive import cli
 from tests.test_trials import FAKE_WORKER, FakeRay, write_chairs
 

@@ -9,11 +9,11 @@ import pytest
 
 from bearchair.core.geometry import SittingPose, make_transform
 from bearchair.core.meshes import box_chair_mesh
+from bearchair.core.nao_carrying import PLACEMENT_TOLERANCE_M
 from bearchair.core.se2 import SE2Pose
 from bearchair.hardware.seating_criteria import judge_bear_pose
 from bearchair.skills.imagination.release import imagine_release, perturbations
 from bearchair.skills.planning.wholebody import InfeasibleSeating, release_choice
-from bearchair.skills.planning.wholebody.optimisation import PLACEMENT_TOLERANCE_M
 from bearchair.skills.planning.wholebody.seating import plan_seating
 
 SEAT_HEIGHT_M = 0.24

@@ -64,7 +64,7 @@ def test_a_named_memo_is_reset_by_the_runtime_and_an_unnamed_one_is_not():
 
 
 def test_the_process_wide_memos_and_pool_are_registered():
-    import bearchair.skills.imagination.chair
+    import bearchair.skills.imagination.chair_solid
     import bearchair.skills.imagination.workers
     import bearchair.skills.planning.preplan  # noqa: F401 - registers the pre-plan memo
 

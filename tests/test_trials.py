@@ -17,10 +17,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from bearchair.evaluation.backends import LocalBackend
 from bearchair.evaluation.campaign import run_campaign
+from bearchair.evaluation.campaign_progress import Progress, format_duration
 from bearchair.evaluation.pictures import copy_trial_scenes, render_chair_pictures
-from bearchair.evaluation.progress import Progress, format_duration
 from bearchair.evaluation.protocol import (
     ChairEntry,
     ChairSetError,
@@ -30,6 +29,7 @@ from bearchair.evaluation.protocol import (
 )
 from bearchair.evaluation.report import compute_table, failure_kind, format_table, markdown_report
 from bearchair.evaluation.store import TrialStore, record_from_error, record_from_summary
+from bearchair.evaluation.trial_backends import LocalBackend
 from bearchair.evaluation.trial_record import TrialRecord
 from bearchair.executive import cli
 from bearchair.executive.run_summary import RunSummary

@@ -18,6 +18,9 @@ from bearchair.core.nao_carrying import (
     BEAR_COM_HEIGHT_M,
     BEAR_SEAT_BELOW_HANDS_M,
     BEAR_SEAT_CLEARANCE_M,
+    CARRYING_POSTURE_RAD,
+    PALM_IN_WRIST_M,
+    PLACEMENT_TOLERANCE_M,
 )
 from bearchair.core.se2 import SE2Pose
 from bearchair.skills.planning.wholebody import (
@@ -41,6 +44,12 @@ from bearchair.skills.planning.wholebody.chair_profile import (
     largest_horizontal_surface_height,
 )
 from bearchair.skills.planning.wholebody.goal import goal_posture_candidates
+from bearchair.skills.planning.wholebody.held_bear import (
+    BEAR_DEPTH_M,
+    BEAR_HEIGHT_M,
+    BEAR_SNOUT_M,
+    BEAR_SNOUT_Z_M,
+)
 from bearchair.skills.planning.wholebody.nao_model import (
     DRIVEN_JOINTS,
     joint_values,
@@ -49,17 +58,10 @@ from bearchair.skills.planning.wholebody.nao_model import (
     planar_nao,
 )
 from bearchair.skills.planning.wholebody.optimisation import (
-    BEAR_DEPTH_M,
-    BEAR_HEIGHT_M,
     BEAR_LEAN_BACK_RAD,
-    BEAR_SNOUT_M,
-    BEAR_SNOUT_Z_M,
     BEAR_TILT_GOAL_RAD,
-    CARRYING_POSTURE_RAD,
     COARSE_KNOTS,
     NO_RELEASED_BEAR,
-    PALM_IN_WRIST_M,
-    PLACEMENT_TOLERANCE_M,
     released_bear,
     seating_problems,
 )

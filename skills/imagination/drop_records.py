@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 if TYPE_CHECKING:
-    from bearchair.skills.imagination.chair import PreparedChair
+    from bearchair.skills.imagination.chair_solid import PreparedChair
 
 
 class SimulationSettings(NamedTuple):

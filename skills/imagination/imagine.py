@@ -3,7 +3,7 @@
 The paper's procedure ("Sitting Imagination"):
 
 1. Prepare the chair: g_obb (yaw-only OBB alignment and horizontal centring), the solid
-   under its surface as boxes, mass properties (``bearchair.skills.imagination.chair``).
+   under its surface as boxes, mass properties (``bearchair.skills.imagination.chair_solid``).
 2. For each rotation α_i = iπ/4 (i = 0..7) drop the agent in its pre-sitting posture,
    facing +x, with the pelvis 15 cm above the OBB, at the OBB centre and at ±L_sit
    along x; if at most one correct sitting was found, drop again at ±2 L_sit and
@@ -65,7 +65,7 @@ from bearchair.core.geometry import wrap_angle
 from bearchair.skills.imagination import DEFAULT_WORKERS
 from bearchair.skills.imagination.agent import LINKS, agent_urdf_path
 from bearchair.skills.imagination.backrest import check_direction
-from bearchair.skills.imagination.chair import (
+from bearchair.skills.imagination.chair_solid import (
     ChairPreparationError,
     PreparedChair,
     horizontal_area_m2,

@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from bearchair.core.geometry import SittingPose, transform_points, wrap_angle
-from bearchair.skills.imagination.chair import PreparedChair
+from bearchair.skills.imagination.chair_solid import PreparedChair
 from bearchair.skills.imagination.drop_parameters import (
     MIN_CORRECT,
     N_ROTATIONS,

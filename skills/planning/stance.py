@@ -58,7 +58,8 @@ from bearchair.skills.planning.wholebody.chair_profile import (
     fit_chair_profile,
     stands_above_seat,
 )
-from bearchair.skills.planning.wholebody.optimisation import BEAR_CHAIR_MARGIN_M, BEAR_DEPTH_M
+from bearchair.skills.planning.wholebody.held_bear import BEAR_DEPTH_M
+from bearchair.skills.planning.wholebody.optimisation import BEAR_CHAIR_MARGIN_M
 from bearchair.skills.planning.wholebody.reach_model import ReachModel, reach_model
 from bearchair.skills.results import SeatReachability
 

@@ -7,7 +7,7 @@ import numpy as np
 from bearchair.core.geometry import SittingPose
 from bearchair.core.se2 import SE2Pose
 from bearchair.hardware.sim.helper import parse_instruction
-from bearchair.skills.plugins import apply_skill_plugins
+from bearchair.skills.skill_sets import apply_skill_plugins
 from bearchair.testing import ScriptedSkills
 from bearchair_example.skills import THANKS, polite_instruction
 
