@@ -27,7 +27,7 @@ demo: install-demo
 test: install
 	$(BIN)/pytest -q
 
-# The physics-heavy tests (marked slow: a call over ~1.5 s here) left out.
+# The quick loop: the tests marked slow (physics-heavy) left out.
 test-fast: install
 	$(BIN)/pytest -q -m "not slow"
 

@@ -1,6 +1,7 @@
-"""The running tree in Groot2: a client speaking Groot2's protocol (tests/helpers/groot2_client.py)
-reads the tree and its statuses from our loopback server and from BT.CPP's own publisher
-on a mirror; one whole simulated mission is watched through ``bearchair run --groot2``."""
+"""The running tree in Groot2: a client speaking Groot2's protocol
+(tests/helpers/groot2_client.py) reads the tree and its statuses from our loopback server
+and from BT.CPP's own publisher on a mirror; one whole simulated mission is watched
+through ``bearchair run --groot2``."""
 
 from __future__ import annotations
 
