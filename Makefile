@@ -2,6 +2,7 @@
 # the tests. Both install what is missing first: Debian packages (only those missing), a
 # .venv, the project. The demo's environment is the light one: the base package and its
 # voice, no test tools, robot SDKs or Ray; `make test` adds those to the same .venv.
+# `make test-fast` is the quick loop: the same suite without the tests marked slow.
 
 PYTHON ?= python3
 VENV := .venv
@@ -17,7 +18,7 @@ TEST_STAMP := $(VENV)/.bearchair-test-installed
 DEMO_OUT ?= runs/demo
 SEED ?= 0
 
-.PHONY: demo test system-demo system-test install install-demo lint format bench tree docs clean
+.PHONY: demo test test-fast system-demo system-test install install-demo lint format bench tree docs clean
 
 demo: install-demo
 	$(BIN)/bearchair run --seed $(SEED) --out $(DEMO_OUT) --overwrite --mute; \
@@ -25,6 +26,10 @@ demo: install-demo
 
 test: install
 	$(BIN)/pytest -q
+
+# The quick loop: the tests marked slow (physics-heavy) left out.
+test-fast: install
+	$(BIN)/pytest -q -m "not slow"
 
 # Installs the Debian packages of $(1) that are missing: nothing, and no root, when all are there.
 define apt_missing

@@ -1,11 +1,14 @@
 """The house's walls: which package may import which, and no import cycles.
 
 The import graph is grimp's (every ``import`` in the project's modules, those inside
-functions included, ``if TYPE_CHECKING:`` blocks excluded: they never run).
+functions included, ``if TYPE_CHECKING:`` blocks excluded: they never run). The tests
+have a wall of their own: no test module imports another (what two share is in
+tests/helpers/ or conftest.py), read from their syntax trees.
 """
 
 from __future__ import annotations
 
+import ast
 import graphlib
 import sys
 from pathlib import Path
@@ -148,3 +151,51 @@ def test_the_checks_see_a_breach_and_a_cycle(tmp_path):
         "toy_core.m:2 imports toy_skills.n"
     ]
     assert set(import_cycle(toy) or []) == {"toy_skills.n", "toy_skills.o"}
+
+
+def imports_of_test_modules(path: Path) -> list[str]:
+    """The imports in ``path`` (those inside functions too) that name a test module:
+    ``tests.test_x``, ``from tests import test_x``, ``from .test_x import y``."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            modules = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            # ``from tests import test_x`` and ``from . import test_x`` import modules.
+            names = [alias.name for alias in node.names] if base in {"", "tests"} else []
+            modules = [base, *(f"{base}.{name}" for name in names)]
+        else:
+            continue
+        if any(part.startswith("test_") for module in modules for part in module.split(".")):
+            found.append(f"{path.name}:{node.lineno}: {ast.unparse(node)}")
+    return found
+
+
+def test_no_test_module_imports_another():
+    # What two test modules share is a helper module in tests/helpers/ (or a fixture in
+    # conftest.py): a newcomer finds it there, and running one test file never collects
+    # the tests of another.
+    paths = sorted((ROOT / "tests").rglob("*.py")) + sorted((ROOT / "bench").glob("*.py"))
+    found = [line for path in paths for line in imports_of_test_modules(path)]
+    assert not found, "imports of test modules (move the helper to tests/helpers/):\n" + (
+        "\n".join(found)
+    )
+
+
+def test_the_test_module_check_sees_every_form_of_import(tmp_path):
+    path = tmp_path / "test_toy.py"
+    path.write_text(
+        "import tests.test_trials\n"
+        "from tests.test_trials import write_chairs\n"
+        "from tests import test_trials\n"
+        "from . import test_trials as trials\n"
+        "from .test_trials import write_chairs as chairs\n"
+        "def f():\n"
+        "    from tests.test_faults import FakeMission\n"
+        "from tests.helpers.campaigns import write_chairs as fine\n"
+        "from tests import helpers, conftest\n"
+    )
+    assert [line.split(":")[1] for line in imports_of_test_modules(path)] == [
+        "1", "2", "3", "4", "5", "7"
+    ]  # fmt: skip

@@ -24,19 +24,9 @@ from bearchair.evaluation.store import campaign_lock
 from bearchair.executive import cli
 from bearchair.executive.record import RunRecorder
 from bearchair.trees.mission import create_tree
+from tests.helpers.cli_calls import refused
 
 REPO = Path(__file__).resolve().parents[1]
-
-
-def refused(argv: list[str], capsys, status: int = 2) -> str:
-    """Runs the CLI; asserts the status, one stderr line and no traceback; returns it."""
-    got = cli.main(argv)
-    err = capsys.readouterr().err
-    lines = err.strip().splitlines()
-    assert got == status, err
-    assert len(lines) == 1, err
-    assert "Traceback" not in err
-    return lines[0]
 
 
 # --- files the cases use, made once -------------------------------------------------

@@ -18,8 +18,8 @@ import pytest
 
 from bearchair.core.meshes import box_chair_mesh
 from bearchair.executive import cli
-from tests.test_bad_inputs import refused
-from tests.test_trials import write_chairs
+from tests.helpers.campaigns import write_chairs
+from tests.helpers.cli_calls import refused
 
 DEEP = "[" * 100_000 + "]" * 100_000
 HUGE_INT = "1" * 401

@@ -10,26 +10,17 @@ import pytest
 
 from bearchair.executive.cell_config import CellConfigError, load_cell_config, parse_cell_config
 from bearchair.executive.cli import main
-
-GOOD = {
-    "nao_url": "tcp://nao.local:9559",
-    "panda_host": "172.16.0.2",
-    "T_world_base": np.eye(4).tolist(),
-    "T_flange_camera": [[0, 1, 0, 0.065], [-1, 0, 0, 0], [0, 0, 1, 0.02], [0, 0, 0, 1]],
-    "nao_start_x_m": 1.9,
-    "nao_start_y_m": 0.0,
-    "nao_start_yaw_rad": 3.14159,
-}
+from tests.helpers.cells import GOOD_CELL
 
 
 def _with(**changes):
-    cell = {**GOOD, **changes}
+    cell = {**GOOD_CELL, **changes}
     return {key: value for key, value in cell.items() if value is not None}
 
 
 def test_a_good_cell_file_loads(tmp_path):
     path = tmp_path / "cell.json"
-    path.write_text(json.dumps(GOOD))
+    path.write_text(json.dumps(GOOD_CELL))
     cell = load_cell_config(path)
     assert cell.nao_start.theta == pytest.approx(3.14159) and cell.camera == "carmine"
     assert cell.to_json()["T_flange_camera"][0][3] == 0.065

@@ -5,37 +5,19 @@ from __future__ import annotations
 import json
 import time
 
-import numpy as np
 import pytest
 
 from bearchair.executive.cli import main
+from tests.helpers.cells import standin_cell_file
 
 pytest.importorskip("qi")
-
-
-def _cell(tmp_path, nao_url):
-    path = tmp_path / "cell.json"
-    path.write_text(
-        json.dumps(
-            {
-                "nao_url": nao_url,
-                "panda_host": "standin",
-                "T_world_base": np.eye(4).tolist(),
-                "T_flange_camera": np.eye(4).tolist(),
-                "nao_start_x_m": 1.9,
-                "nao_start_y_m": 0.0,
-                "nao_start_yaw_rad": 3.14159,
-            }
-        )
-    )
-    return path
 
 
 def test_check_hardware_prints_every_check_and_moves_nothing(tmp_path, capsys):
     from bearchair.hardware.real.standins import NaoqiStandin
 
     with NaoqiStandin() as naoqi:
-        status = main(["check-hardware", "--robots", str(_cell(tmp_path, naoqi.url))])
+        status = main(["check-hardware", "--robots", str(standin_cell_file(tmp_path, naoqi.url))])
         out = capsys.readouterr().out
         moving = {"wakeUp", "move", "moveTo", "angleInterpolation", "goToPosture", "setState"}
         assert not moving & {name for _, name, _ in naoqi.calls}
@@ -57,7 +39,9 @@ def test_check_hardware_prints_every_check_and_moves_nothing(tmp_path, capsys):
 
 def test_check_hardware_names_an_unreachable_nao_within_five_seconds(tmp_path, capsys):
     started = time.monotonic()
-    status = main(["check-hardware", "--robots", str(_cell(tmp_path, "tcp://127.0.0.1:9"))])
+    status = main(
+        ["check-hardware", "--robots", str(standin_cell_file(tmp_path, "tcp://127.0.0.1:9"))]
+    )
     out = capsys.readouterr().out
     assert time.monotonic() - started < 5.0
     assert status == 1 and "[FAIL] nao:" in out
@@ -70,7 +54,7 @@ def test_run_on_robots_asks_first_then_records_the_cell_and_sdk_versions(
     from bearchair.hardware.real.standins import NaoqiStandin
 
     with NaoqiStandin(time_scale=20.0) as naoqi:
-        cell = _cell(tmp_path, naoqi.url)
+        cell = standin_cell_file(tmp_path, naoqi.url)
         monkeypatch.setattr("builtins.input", lambda prompt: "n")
         status = main(["run", "--robots", str(cell), "--out", str(tmp_path / "no")])
         assert status == 2 and "did not confirm: nothing moved" in capsys.readouterr().err

@@ -14,19 +14,17 @@ import functools
 import json
 import os
 import queue
-import random
 import signal
-import socket
 import subprocess
 import sys
 import threading
 import time
-from collections.abc import Iterator
 
 import numpy as np
 import pytest
 
 from bearchair.executive.cli import main
+from tests.helpers.silent_peers import silent_panda, silent_peer
 
 pytest.importorskip("qi")
 
@@ -34,48 +32,6 @@ TIMEOUT_S = 0.5
 """The ``--timeout`` the tests give each device."""
 STARTUP_S = 20.0
 """How long a subprocess may take to import bearchair (a loaded 2-core machine)."""
-
-
-@contextlib.contextmanager
-def silent_peer(host: str = "127.0.0.1", port: int = 0) -> Iterator[tuple[str, int]]:
-    """A TCP listener that accepts every connection and never sends a byte."""
-    server = socket.socket()
-    server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-    server.bind((host, port))
-    server.listen(16)
-    held: list[socket.socket] = []
-    closing = threading.Event()
-
-    def accept() -> None:
-        while not closing.is_set():
-            try:
-                connection, _ = server.accept()
-            except OSError:
-                return
-            held.append(connection)
-
-    threading.Thread(target=accept, daemon=True).start()
-    try:
-        yield server.getsockname()
-    finally:
-        closing.set()
-        server.close()
-        for connection in held:
-            connection.close()
-
-
-@contextlib.contextmanager
-def silent_panda() -> Iterator[str]:
-    """A silent peer on libfranka's port 1337 at a free loopback address."""
-    for _ in range(20):
-        host = f"127.0.{random.randrange(1, 255)}.{random.randrange(2, 255)}"
-        try:
-            with silent_peer(host, 1337):
-                yield host
-                return
-        except OSError:
-            continue
-    pytest.skip("no free loopback address for a silent Panda")
 
 
 def _cell(tmp_path, nao_url: str, panda_host: str = "standin"):

@@ -34,34 +34,11 @@ from bearchair.executive.run_summary import RunInfo
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.testing.scripted import ScriptedSkills
 from bearchair.trees.mission import create_tree
-from tests.test_trials import (
-    FAKE_WORKER,
-    REPO,
-    process_alive,
-    table_without_timing,
-    worker_pids,
-    write_chairs,
-)
+from tests.helpers.campaigns import FAKE_WORKER, table_without_timing, worker_pids, write_chairs
+from tests.helpers.missions import FakeMission
+from tests.helpers.process_tree import REPO, process_alive
 
 # --- a mission on fakes behind the real CLI ----------------------------------------------
-
-
-class FakeMission:
-    """Stands in for ``bearchair.executive.run.run_in_simulation``: the real tree, runner and
-    record on a fake robot, with scripted skills (no physics)."""
-
-    def __init__(self, delays_s: dict[str, float] | None = None, on_tick=None) -> None:
-        self.robot = fake_robot(judge=FakeJudge())
-        self.skills = ScriptedSkills(delays_s=delays_s or {})
-        self.on_tick = on_tick
-
-    def __call__(self, config, skills=None, on_tick=None, tree=None):
-        root = (tree or create_tree)(config.tree_options)
-        recorder = RunRecorder(config.out_dir, root)
-        run_info = RunInfo(chair="stub", placement="accessible", helper="obeys", seed=0)
-        return executive_run._run_tree(
-            root, recorder, self.robot, config, run_info, self.skills, self.on_tick, None
-        )
 
 
 def signal_later(signum: int, after_s: float) -> threading.Timer:

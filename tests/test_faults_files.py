@@ -25,9 +25,10 @@ from bearchair.executive import cli, operator, outputs
 from bearchair.executive.record import RecordWriteError, RunRecorder
 from bearchair.executive.run_summary import RunSummary
 from bearchair.trees.mission import create_tree
-from tests.test_bad_inputs import refused
-from tests.test_faults_inspect import recorded_run
-from tests.test_trials import FAKE_WORKER, REPO, write_chairs
+from tests.helpers.campaigns import FAKE_WORKER, write_chairs
+from tests.helpers.cli_calls import refused
+from tests.helpers.missions import FakeMission, one_tick_record
+from tests.helpers.process_tree import REPO
 
 # --- the campaign's lock, runs folder and records -----------------------------------------
 
@@ -156,7 +157,6 @@ def test_overwrite_of_a_folder_another_run_writes_is_refused(tmp_path, capsys):
 
 def test_a_finished_run_releases_its_folder_for_the_next_overwrite(tmp_path, monkeypatch, capsys):
     from bearchair.executive import run as executive_run
-    from tests.test_faults import FakeMission
 
     monkeypatch.setattr(executive_run, "run_in_simulation", FakeMission())
     out = tmp_path / "run"
@@ -271,7 +271,7 @@ def test_tree_on_a_full_device_is_exit_2_with_one_line(capsys):
 
 
 def test_inspect_on_a_full_device_is_exit_2_with_one_line(tmp_path, capsys):
-    recorded_run(tmp_path / "run")
+    one_tick_record(tmp_path / "run")
     with stdout_on_a_full_device():
         status = cli.main(["inspect", str(tmp_path / "run")])
     assert status == 2
@@ -348,13 +348,14 @@ def test_a_piped_yes_is_not_the_operators_yes(monkeypatch):
 
 
 def test_run_on_robots_with_a_piped_yes_moves_nothing(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("qi")  # the NAO stand-in speaks qi
     from bearchair.hardware.real.standins import NaoqiStandin
-    from tests.test_check_hardware import _cell
+    from tests.helpers.cells import standin_cell_file
 
     monkeypatch.setattr(sys, "stdin", _Stdin("y\n", tty=False))
     monkeypatch.setattr("builtins.input", lambda prompt: "y")
     with NaoqiStandin(time_scale=20.0) as naoqi:
-        cell = _cell(tmp_path, naoqi.url)
+        cell = standin_cell_file(tmp_path, naoqi.url)
         line = refused(["run", "--robots", str(cell), "--out", str(tmp_path / "run")], capsys)
         assert not naoqi.called("wakeUp") and not naoqi.called("moveTo")
     assert "did not confirm: nothing moved" in line and "pass --yes" in line

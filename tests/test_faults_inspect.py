@@ -6,31 +6,23 @@ from __future__ import annotations
 
 import json
 import os
-from pathlib import Path
 
 import pytest
 
 from bearchair.executive import cli
 from bearchair.executive.record import RunRecorder
 from bearchair.trees.mission import create_tree
-from tests.test_bad_inputs import refused
+from tests.helpers.cli_calls import refused
+from tests.helpers.missions import one_tick_record
 
 # --- inspect: read-only, escaped ------------------------------------------------------------
-
-
-def recorded_run(run: Path) -> Path:
-    """A run record of the mission tree with one tick."""
-    recorder = RunRecorder(run, create_tree())
-    recorder.record_tick(1, 0.0)
-    recorder.close()
-    return run
 
 
 def test_inspect_writes_its_crash_log_outside_the_record(tmp_path, capsys, monkeypatch):
     from bearchair.executive import inspect_run
 
     run = tmp_path / "run"
-    recorded_run(run)
+    one_tick_record(run)
     before = sorted(p.name for p in run.iterdir())
     monkeypatch.setenv("BEARCHAIR_CACHE", str(tmp_path / "cache"))
 
@@ -69,7 +61,7 @@ def test_inspect_prints_escape_sequences_of_a_record_escaped(tmp_path, capsys):
 @pytest.mark.parametrize("content", ["[" * 100_000, '{"tick": ' + "9" * 401 + "}"])
 def test_a_hostile_tick_line_is_skipped_and_named(tmp_path, capsys, content):
     run = tmp_path / "run"
-    recorded_run(run)
+    one_tick_record(run)
     good = (run / "ticks.jsonl").read_text()
     (run / "ticks.jsonl").write_text(content + "\n" + good)
     assert cli.main(["inspect", str(run)]) == 0
@@ -78,7 +70,7 @@ def test_a_hostile_tick_line_is_skipped_and_named(tmp_path, capsys, content):
 
 def test_a_summary_that_is_a_fifo_is_noted_not_waited_for(tmp_path, capsys):
     run = tmp_path / "run"
-    recorded_run(run)
+    one_tick_record(run)
     os.mkfifo(run / "summary.json")
     assert cli.main(["inspect", str(run)]) == 0
     assert "summary.json ignored" in capsys.readouterr().out
@@ -86,7 +78,7 @@ def test_a_summary_that_is_a_fifo_is_noted_not_waited_for(tmp_path, capsys):
 
 def test_a_deep_tree_json_is_one_line(tmp_path, capsys):
     run = tmp_path / "run"
-    recorded_run(run)
+    one_tick_record(run)
     (run / "tree.json").write_text("[" * 100_000 + "]" * 100_000)
     line = refused(["inspect", str(run)], capsys)
     assert "tree.json: not valid JSON (nested too deeply)" in line

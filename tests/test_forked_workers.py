@@ -8,7 +8,7 @@ from pathlib import Path
 
 from bearchair.evaluation.forked_workers import STDOUT_NAME, PreloadedLauncher
 from bearchair.evaluation.worker_process import run_worker, run_worker_with_retry
-from tests import forked_fakes
+from tests.helpers import forked_fakes
 
 
 def payload(tmp_path: Path, name: str, seed: int = 0) -> dict:

@@ -1,6 +1,7 @@
-"""The running tree in Groot2: a client speaking Groot2's protocol (tests/groot2_client.py)
-reads the tree and its statuses from our loopback server and from BT.CPP's own publisher
-on a mirror; one whole simulated mission is watched through ``bearchair run --groot2``."""
+"""The running tree in Groot2: a client speaking Groot2's protocol
+(tests/helpers/groot2_client.py) reads the tree and its statuses from our loopback server
+and from BT.CPP's own publisher on a mirror; one whole simulated mission is watched
+through ``bearchair run --groot2``."""
 
 from __future__ import annotations
 
@@ -25,7 +26,7 @@ from bearchair.executive import groot2, groot2_server
 from bearchair.executive.cli import main
 from bearchair.executive.groot2 import Groot2Monitor, Groot2Unavailable
 from bearchair.trees.mission import STAGES
-from tests.groot2_client import Groot2Client, Groot2Error, free_port_pair
+from tests.helpers.groot2_client import Groot2Client, Groot2Error, free_port_pair
 
 CODES = {Status.INVALID: 0, Status.RUNNING: 1, Status.SUCCESS: 2, Status.FAILURE: 3}
 

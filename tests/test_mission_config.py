@@ -146,9 +146,14 @@ def test_the_run_record_holds_the_resolved_configuration(tmp_path):
 
 
 def test_the_record_masks_an_inline_password(tmp_path):
-    from tests.test_cell_config import GOOD
+    from tests.helpers.cells import GOOD_CELL
 
-    cell = {**GOOD, "nao_url": "tcps://nao.local:9503", "nao_user": "nao", "nao_password": "pw"}
+    cell = {
+        **GOOD_CELL,
+        "nao_url": "tcps://nao.local:9503",
+        "nao_user": "nao",
+        "nao_password": "pw",
+    }
     config = parse_mission_config({"robots": {"cell": cell}}).run_config(tmp_path)
     assert config.resolved is not None
     assert config.resolved["robots"]["cell"]["nao_password"] == "***"

@@ -14,40 +14,20 @@ from bearchair.core.arena import DEFAULT_ARENA
 from bearchair.core.errors import RunRecordError
 from bearchair.executive.inspect_run import RecordedRun
 from bearchair.executive.record import RunRecorder
-from bearchair.executive.run_summary import RunInfo, RunSummary
+from bearchair.executive.run_summary import RunInfo
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.executive.tree_render import render_text
-from bearchair.hardware.fakes import FakeJudge, fake_robot
+from bearchair.hardware.fakes import fake_robot
 from bearchair.skills.mission_skills import SkillNotReady
 from bearchair.skills.perception.errors import RegistrationError
 from bearchair.skills.results import AccessibilityResult, SeatReachability
 from bearchair.testing.scripted import ScriptedSkills, default_results
 from bearchair.trees.mission import STAGES, create_tree
+from tests.helpers.missions import run_scripted_mission
 
 DEFAULTS = default_results()
 ACCESSIBLE = DEFAULTS["check_accessibility"]
 BLOCKED = AccessibilityResult(False, None, ACCESSIBLE.sitting_pose, (), "s_goal outside the arena")
-
-
-def run(skills: ScriptedSkills, out_dir=None, robot=None) -> tuple[RunSummary, MissionRunner]:
-    root = create_tree()
-    recorder = RunRecorder(out_dir, root) if out_dir else None
-    runner = MissionRunner(
-        root,
-        skills,
-        robot or fake_robot(judge=FakeJudge()),
-        seed=3,
-        arena=DEFAULT_ARENA,
-        recorder=recorder,
-        tick_period_s=0.002,
-        timeout_s=60,
-    )
-    outcome = runner.run()
-    summary = summarise(outcome, RunInfo(chair="stub"))
-    if recorder:
-        recorder.write_summary(summary)
-        recorder.close()
-    return summary, runner
 
 
 def test_the_tree_has_the_mission_stages_in_order():
@@ -64,7 +44,7 @@ def test_every_leaf_is_a_named_behaviour_with_no_hardware_before_setup():
 
 
 def test_accessible_mission_succeeds_without_instructions():
-    summary, _ = run(ScriptedSkills())
+    summary, _ = run_scripted_mission(ScriptedSkills())
     assert summary.outcome == "success", summary.reason
     assert summary.failed_stage is None
     assert [s.status for s in summary.stages] == ["SUCCESS"] * len(STAGES)
@@ -77,7 +57,7 @@ def test_accessible_mission_succeeds_without_instructions():
 def test_assistance_loop_asks_until_accessible(rotations_needed):
     checks = [BLOCKED] * rotations_needed + [ACCESSIBLE]
     skills = ScriptedSkills({"check_accessibility": checks})
-    summary, _ = run(skills)
+    summary, _ = run_scripted_mission(skills)
     assert summary.outcome == "success", summary.reason
     assert summary.rotations == rotations_needed
     assert len(summary.instructions) == rotations_needed
@@ -91,7 +71,7 @@ def test_a_turned_chair_no_fit_accepts_is_scanned_and_imagined_anew():
     skills = ScriptedSkills(
         {"check_accessibility": [BLOCKED, ACCESSIBLE], "measure_chair_rotation": rejected}
     )
-    summary, runner = run(skills)
+    summary, runner = run_scripted_mission(skills)
     assert summary.outcome == "success", summary.reason
     assert summary.rotations == 1
     assert len(skills.calls["scan_chair"]) == 2 and len(skills.calls["imagine_sitting"]) == 2
@@ -104,7 +84,7 @@ def test_a_turned_chair_no_fit_accepts_is_scanned_and_imagined_anew():
 
 def test_assistance_loop_gives_up_after_the_third_rotation():
     skills = ScriptedSkills({"check_accessibility": BLOCKED})
-    summary, _ = run(skills)
+    summary, _ = run_scripted_mission(skills)
     assert summary.outcome == "failure"
     assert summary.failed_stage == "MakeChairAccessible"
     assert summary.rotations == 3
@@ -131,7 +111,7 @@ def test_a_seat_out_of_reach_is_refused_before_anyone_is_asked_to_turn_it():
         0.47,
     )
     skills = ScriptedSkills({"check_seat_reachable": refusal})
-    summary, _ = run(skills)
+    summary, _ = run_scripted_mission(skills)
     assert summary.outcome == "failure"
     assert summary.failed_stage == "CheckSeatReachable"
     assert summary.reason.startswith("CheckSeatReachable: refused: seat too high for the NAO")
@@ -144,7 +124,7 @@ def test_missing_skill_fails_at_its_stage_and_names_it():
     error = SkillNotReady(
         "skill 'imagine_sitting' is not implemented: no module skills.imagination"
     )
-    summary, _ = run(ScriptedSkills({"imagine_sitting": error}))
+    summary, _ = run_scripted_mission(ScriptedSkills({"imagine_sitting": error}))
     assert summary.outcome == "failure"
     assert summary.failed_stage == "ImagineSitting"
     assert "imagine_sitting" in summary.reason
@@ -152,7 +132,9 @@ def test_missing_skill_fails_at_its_stage_and_names_it():
 
 
 def test_a_skill_exception_never_crashes_the_executive():
-    summary, _ = run(ScriptedSkills({"walk_path": ZeroDivisionError("division by zero")}))
+    summary, _ = run_scripted_mission(
+        ScriptedSkills({"walk_path": ZeroDivisionError("division by zero")})
+    )
     assert summary.outcome == "failure"
     assert summary.failed_stage == "WalkToChair"
     assert "ZeroDivisionError" in summary.reason
@@ -184,7 +166,7 @@ def test_timeout_stops_the_tree_and_cancels_the_running_skill():
 
 def test_run_record_and_inspect_replay(tmp_path):
     checks = [BLOCKED, ACCESSIBLE]
-    _, runner = run(
+    _, runner = run_scripted_mission(
         ScriptedSkills({"check_accessibility": checks}, delays_s={"scan_chair": 0.05}),
         out_dir=tmp_path,
     )
@@ -219,7 +201,9 @@ def test_run_record_and_inspect_replay(tmp_path):
 
 @pytest.mark.parametrize("checks", [[ACCESSIBLE], [BLOCKED] * 4], ids=["seated", "gave-up"])
 def test_inspect_draws_the_recorded_tree_as_py_trees_draws_the_live_one(tmp_path, checks):
-    _, runner = run(ScriptedSkills({"check_accessibility": checks}), out_dir=tmp_path)
+    _, runner = run_scripted_mission(
+        ScriptedSkills({"check_accessibility": checks}), out_dir=tmp_path
+    )
     live = render_text(runner.root, "unicode", with_blackboard=False, show_status=True)
     assert RecordedRun(tmp_path).tree_text(None) == live.rstrip()
 

@@ -26,7 +26,7 @@ from bearchair.skills.perception import (
 )
 from bearchair.skills.perception.views import HOME_CONFIGURATION, SCAN_CONFIGURATIONS, look_at
 from bearchair.testing.synthetic_scenes import SyntheticArm, SyntheticScene
-from tests.test_perception_views import frames_of
+from tests.helpers.scans import frames_of
 
 T_WORLD_CHAIR = yaw_transform(0.6, np.array([0.58, 0.08, 0.0]))
 

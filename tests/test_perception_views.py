@@ -40,23 +40,9 @@ from bearchair.skills.perception.views import (
 )
 from bearchair.testing.chairgen import generate_chair
 from bearchair.testing.synthetic_scenes import SyntheticArm, SyntheticScene
+from tests.helpers.scans import frames_of
 
 T_WORLD_CHAIR = yaw_transform(0.6, np.array([0.58, 0.08, 0.0]))
-
-
-def frames_of(mesh, T_world_chair, views, seed=3):
-    scene = SyntheticScene(seed=seed)
-    scene.add_mesh(mesh, T_world_chair)
-    arm = SyntheticArm(scene)
-    try:
-        frames = []
-        for joints in views:
-            arm.move_to(joints)
-            frames.append(arm.capture())
-        return frames
-    finally:
-        arm.close()
-        scene.close()
 
 
 @pytest.fixture(scope="module")

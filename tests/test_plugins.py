@@ -22,7 +22,7 @@ from bearchair.skills.skill_sets import apply_skill_plugins, check_skill_plugins
 from bearchair.testing.scripted import ScriptedSkills
 from bearchair.trees.mission import create_tree
 from bearchair.trees.options import TreeOptions
-from tests.test_cell_config import GOOD as VALID_CELL
+from tests.helpers.cells import GOOD_CELL
 
 
 def fake_entry_points(monkeypatch, group: str, **objects) -> None:
@@ -218,11 +218,11 @@ def test_a_backend_whose_device_misses_the_protocol_is_refused(monkeypatch):
 
 
 def test_a_cell_section_names_a_backend_and_frees_the_built_in_fields():
-    arm_only = {k: v for k, v in VALID_CELL.items() if k not in ("panda_host", "T_flange_camera")}
+    arm_only = {k: v for k, v in GOOD_CELL.items() if k not in ("panda_host", "T_flange_camera")}
     cell = parse_cell_config({**arm_only, "arm": {"backend": "my-ur5", "host": "10.0.0.2"}})
     assert cell.devices == {"arm": {"backend": "my-ur5", "host": "10.0.0.2"}}
     assert cell.panda_host is None
-    assert parse_cell_config({**VALID_CELL, "humanoid": {"backend": "nao"}}).devices == {}
+    assert parse_cell_config({**GOOD_CELL, "humanoid": {"backend": "nao"}}).devices == {}
 
 
 @pytest.mark.parametrize(
@@ -235,12 +235,12 @@ def test_a_cell_section_names_a_backend_and_frees_the_built_in_fields():
 )
 def test_a_wrong_device_section_is_one_line(section, named):
     with pytest.raises(CellConfigError) as error:
-        parse_cell_config({**VALID_CELL, "arm": section})
+        parse_cell_config({**GOOD_CELL, "arm": section})
     assert named in str(error.value)
 
 
 def test_a_built_in_arm_still_needs_its_fields():
-    without = {k: v for k, v in VALID_CELL.items() if k != "panda_host"}
+    without = {k: v for k, v in GOOD_CELL.items() if k != "panda_host"}
     with pytest.raises(CellConfigError, match="missing field panda_host"):
         parse_cell_config({**without, "speaker": {"backend": "example-log-speaker", "path": "x"}})
 
@@ -273,9 +273,9 @@ def test_each_trial_payload_names_the_campaign_tree(tmp_path):
 
 
 def test_inspect_says_whether_the_record_is_of_the_tree_a_spec_builds(tmp_path, capsys):
-    from tests.test_mission_tree import run
+    from tests.helpers.missions import run_scripted_mission
 
-    run(ScriptedSkills(), out_dir=tmp_path)
+    run_scripted_mission(ScriptedSkills(), out_dir=tmp_path)
     assert cli.main(["inspect", str(tmp_path), "--tree", "mission"]) == 0
     assert "tree: the one mission builds (20 nodes)" in capsys.readouterr().out
     assert cli.main(["inspect", str(tmp_path), "--tree", "example-no-assistance"]) == 0
@@ -294,7 +294,7 @@ def test_connect_robots_makes_the_plugin_devices_and_skips_the_nao(tmp_path, mon
 
     fake_entry_points(monkeypatch, "bearchair.backends", toy=lambda settings: ActiveHumanoid())
     said = tmp_path / "said.txt"
-    raw = {k: v for k, v in VALID_CELL.items() if k != "nao_url"}
+    raw = {k: v for k, v in GOOD_CELL.items() if k != "nao_url"}
     cell = parse_cell_config(
         {
             **raw,

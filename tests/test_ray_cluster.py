@@ -32,7 +32,7 @@ from bearchair.evaluation.shipping import (
 from bearchair.evaluation.store import TrialStore
 from bearchair.evaluation.trial_backends import NODE_FILE, RayBackend
 from bearchair.executive import cli
-from tests.test_trials import FAKE_WORKER, FakeRay, write_chairs
+from tests.helpers.campaigns import FAKE_WORKER, FakeRay, write_chairs
 
 REPO = Path(__file__).resolve().parents[1]
 

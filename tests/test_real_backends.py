@@ -472,7 +472,7 @@ def _ends_within(job, bound_s: float) -> BaseException | None:
 def test_connecting_to_a_silent_nao_ends_in_its_timeout_naming_it():
     pytest.importorskip("qi")
     from bearchair.hardware.real.nao import connect
-    from tests.test_check_hardware_silent import silent_peer
+    from tests.helpers.silent_peers import silent_peer
 
     with silent_peer() as (host, port):
         started = time.monotonic()
@@ -483,7 +483,7 @@ def test_connecting_to_a_silent_nao_ends_in_its_timeout_naming_it():
 
 def test_connecting_to_a_silent_panda_ends_in_its_timeout_naming_it():
     pytest.importorskip("panda_py")
-    from tests.test_check_hardware_silent import silent_panda
+    from tests.helpers.silent_peers import silent_panda
 
     with silent_panda() as host:
         started = time.monotonic()

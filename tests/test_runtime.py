@@ -17,7 +17,7 @@ import pytest
 
 from bearchair.core.memo import BoundedMemo
 from bearchair.core.runtime import RUNTIME, Runtime, reap
-from tests.process_tree import REPO, descendants
+from tests.helpers.process_tree import REPO, descendants
 
 
 def test_reset_forgets_and_shutdown_stops_in_reverse_order_and_names_what_did_not():
@@ -209,7 +209,7 @@ def test_the_trial_server_and_its_forks_stop_with_the_runtime():
         "from bearchair.core.runtime import RUNTIME\n"
         "from bearchair.evaluation.forked_workers import PreloadedLauncher\n"
         "from bearchair.evaluation.worker_process import run_worker\n"
-        "from tests import forked_fakes\n"
+        "from tests.helpers import forked_fakes\n"
         "out = tempfile.mkdtemp()\n"
         "outcome = run_worker(PreloadedLauncher(forked_fakes.report), "
         "{'out_dir': out, 'seed': 3}, 120)\n"

@@ -21,7 +21,7 @@ import pytest
 
 from bearchair.core.meshes import box_chair_mesh
 from bearchair.executive import cli
-from tests.process_tree import REPO, bearchair, descendants, reap_all, survivors, wait_for
+from tests.helpers.process_tree import REPO, bearchair, descendants, reap_all, survivors, wait_for
 
 STOP_SIGNALS = [
     signal.SIGINT,

@@ -9,7 +9,6 @@ import signal
 import sqlite3
 import subprocess
 import sys
-import textwrap
 import time
 from pathlib import Path
 
@@ -33,65 +32,17 @@ from bearchair.evaluation.trial_backends import LocalBackend
 from bearchair.evaluation.trial_record import TrialRecord
 from bearchair.executive import cli
 from bearchair.executive.run_summary import RunSummary
+from tests.helpers.campaigns import (
+    FAKE_WORKER,
+    FakeRay,
+    table_without_timing,
+    worker_pids,
+    worker_starts,
+    write_chairs,
+)
+from tests.helpers.process_tree import process_alive
 
 REPO = Path(__file__).resolve().parents[1]
-
-# The fake worker speaks the real worker's protocol. Its summary depends only on the
-# trial's seed and placement, so the same campaign seed gives the same records. Chairs
-# named "crash*" segfault on trial 1, "hang*" sleep forever on trial 2; FAKE_SLEEP_S
-# slows every trial; every start is appended to FAKE_LOG.
-FAKE_WORKER = textwrap.dedent(
-    """
-    import json, os, signal, sys, time
-    from pathlib import Path
-    payload = json.loads(sys.argv[-1])
-    out = Path(payload["out_dir"]); out.mkdir(parents=True, exist_ok=True)
-    chair = Path(payload["chair_path"]).name
-    index, seed = payload["trial_index"], payload["seed"]
-    with open(os.environ["FAKE_LOG"], "a") as log:
-        log.write(f"{chair} {index} {seed} {os.getpid()}\\n")
-    time.sleep(float(os.environ.get("FAKE_SLEEP_S", "0")))
-    if chair.startswith("crash") and index == 1:
-        os.kill(os.getpid(), signal.SIGSEGV)
-    if chair.startswith("hang") and index == 2:
-        time.sleep(1000)
-    inaccessible = payload["placement"] == "inaccessible"
-    success = seed % 4 != 0
-    accessible = seed % 7 != 0
-    failed = None if success else ("ReleaseAndStand" if seed % 3 else "ImagineSitting")
-    stages = [{"name": n, "status": "SUCCESS", "seconds": round(1 + (seed % 10) / 10 * k, 3),
-               "message": ""} for k, n in enumerate(["ScanChair", "ImagineSitting", "WalkToChair"], 1)]
-    summary = {
-        "outcome": "success" if success else "failure", "failed_stage": failed,
-        "reason": "" if success else f"{failed}: fake failure {seed % 3}",
-        "stages": stages, "sitting_pose": {"position_m": [0.8, 0.0, 0.3], "yaw_deg": 10.0},
-        "instructions": ["turn the chair"] * (2 if inaccessible else 0),
-        "rotations": 2 if inaccessible else 0, "accessible": accessible,
-        "judgement": {"seated": success, "on_seat": True, "torso_tilt_deg": 3.0,
-                      "facing_error_deg": float(seed % 50), "reason": ""},
-        "wall_seconds": 12.5, "interrupted": False,
-    }
-    (out / "summary.json").write_text(json.dumps(summary))
-    scene = os.environ.get("FAKE_SCENE")
-    if scene:
-        (out / "final_scene.png").write_bytes(Path(scene).read_bytes())
-        (out / "chair_reconstructed.ply").write_bytes(Path(os.environ["FAKE_PLY"]).read_bytes())
-    print("noise on stdout")
-    print("BEARCHAIR-TRIAL-RESULT " + json.dumps({"summary": summary}), flush=True)
-    """
-)
-
-
-def write_chairs(folder: Path, names: list[str], manifest: dict | None = None) -> Path:
-    """Box "chairs" with a manifest (by default each with a front of 90 degrees)."""
-    folder.mkdir(parents=True, exist_ok=True)
-    box = trimesh.creation.box((0.4, 0.4, 0.5))
-    for name in names:
-        box.export(folder / name)
-    if manifest is None:
-        manifest = {"meshes": [{"file": n, "kind": "chair", "front_yaw_deg": 90.0} for n in names]}
-    (folder / "manifest.json").write_text(json.dumps(manifest))
-    return folder
 
 
 @pytest.fixture
@@ -102,31 +53,8 @@ def fake_worker(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> list[str]:
     return [sys.executable, str(script)]
 
 
-def worker_starts(tmp_path: Path) -> list[str]:
-    log = tmp_path / "fake_worker.log"
-    return log.read_text().splitlines() if log.exists() else []
-
-
-def worker_pids(tmp_path: Path) -> list[int]:
-    return [int(line.split()[3]) for line in worker_starts(tmp_path)]
-
-
-def process_alive(pid: int) -> bool:
-    """Running (a zombie waiting for its reaper counts as gone)."""
-    try:
-        status = Path(f"/proc/{pid}/status").read_text()
-    except OSError:
-        return False
-    return "State:\tZ" not in status
-
-
 def entries(names: list[str], folder: Path = Path("/chairs")) -> list[ChairEntry]:
     return [ChairEntry(folder / name, "chair", 90.0) for name in names]
-
-
-def table_without_timing(records: list[TrialRecord]) -> tuple:
-    table = compute_table(records)
-    return table.seating, table.assistance, table.failure_causes, table.stage_median_s
 
 
 # --- protocol ------------------------------------------------------------------------
@@ -575,59 +503,6 @@ def test_progress_lines_and_eta():
     assert len(lines) == 2 and "\r" not in stream.text  # not a terminal: a line per trial
     assert "4/10" in lines[-1] and "ETA 3m00s" in lines[-1] and "at ReleaseAndStand" in lines[-1]
     assert format_duration(3725) == "1h02m" and format_duration(42) == "42s"
-
-
-class FakeRay:
-    """The few Ray calls the backend makes, on threads (Ray itself is an optional extra)."""
-
-    def __init__(self, cpus: float = 3.0):
-        from concurrent.futures import ThreadPoolExecutor
-
-        self.pool = ThreadPoolExecutor(max_workers=4)
-        self.init_kwargs = None
-        self.remote_options = None
-        self.cpus = cpus
-        self.shipped_files: list[Path] = []
-
-    def init(self, **kwargs):
-        self.init_kwargs = kwargs
-        for folder in (kwargs.get("runtime_env") or {}).get("py_modules", []):
-            # Ray zips the folder during init; the head removes its copy afterwards.
-            self.shipped_files = [p for p in Path(folder).rglob("*")]
-            self.shipped_links = [p for p in self.shipped_files if p.is_symlink()]
-
-    def cluster_resources(self):
-        return {"CPU": self.cpus}
-
-    def nodes(self):
-        return [{"Alive": True}, {"Alive": True}]
-
-    def remote(self, **options):
-        self.remote_options = options
-        fake = self
-
-        def decorate(function):
-            class Task:
-                @staticmethod
-                def remote(*args):
-                    return fake.pool.submit(function, *args)
-
-            return Task
-
-        return decorate
-
-    def wait(self, refs, num_returns=1):
-        from concurrent.futures import FIRST_COMPLETED, wait
-
-        done, _ = wait(refs, return_when=FIRST_COMPLETED)
-        ready = list(done)[:num_returns]
-        return ready, [r for r in refs if r not in ready]
-
-    def get(self, ref):
-        return ref.result()
-
-    def cancel(self, ref, force=False):
-        ref.cancel()
 
 
 def test_ray_backend_runs_the_same_trials_with_the_same_records(tmp_path, fake_worker, monkeypatch):

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from bearchair.evaluation.worker_process import EOF_GRACE_S, run_worker
-from tests.process_tree import wait_for
+from tests.helpers.process_tree import wait_for
 
 # The worker prints its result, then starts a grandchild that inherits its stdout and
 # outlives it: in the worker's own process group, or daemonised into a session of its

@@ -16,7 +16,8 @@ try:
 except ImportError:  # pragma: no cover - psutil comes with ray, in the trials extra
     psutil = None
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
+"""The repository's root (tests/helpers/ is two folders below it)."""
 
 
 def bearchair(args: list[str], stderr_path: Path, **kwargs) -> subprocess.Popen:
@@ -34,7 +35,8 @@ def bearchair(args: list[str], stderr_path: Path, **kwargs) -> subprocess.Popen:
     )
 
 
-def _alive(pid: int) -> bool:
+def process_alive(pid: int) -> bool:
+    """Running (a zombie waiting for its reaper counts as gone)."""
     try:
         status = Path(f"/proc/{pid}/status").read_text()
     except OSError:
@@ -46,7 +48,9 @@ def descendants(pid: int) -> list[int]:
     """The live descendants of ``pid``."""
     if psutil is not None:
         try:
-            return [p.pid for p in psutil.Process(pid).children(recursive=True) if _alive(p.pid)]
+            return [
+                p.pid for p in psutil.Process(pid).children(recursive=True) if process_alive(p.pid)
+            ]
         except psutil.NoSuchProcess:
             return []
     children: dict[int, list[int]] = {}
@@ -62,7 +66,7 @@ def descendants(pid: int) -> list[int]:
         for child in children.get(todo.pop(), []):
             found.append(child)
             todo.append(child)
-    return [p for p in found if _alive(p)]
+    return [p for p in found if process_alive(p)]
 
 
 def session_members(sid: int) -> list[int]:

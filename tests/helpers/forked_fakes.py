@@ -1,5 +1,5 @@
-"""Trial-worker entries for tests/test_forked_workers.py: module-level, so the trial
-server can import them by name."""
+"""Trial-worker entries for tests/test_forked_workers.py and tests/test_runtime.py:
+module-level, so the trial server can import them by name."""
 
 from __future__ import annotations
 
