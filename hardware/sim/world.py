@@ -51,6 +51,15 @@ TAPE_WIDTH_M = 0.03
 planner keeps the humanoid inside it, but the chair may stand across it."""
 PLACEMENT_TOLERANCE_DEG = 30.0
 SETTLE_S = 0.5
+SET_DOWN_CLEARANCE_M = 0.05
+"""A chair is set down at least this far (metres) from the Panda as it stands and from the
+NAO with the bear at its start, as a person sets a chair down in a cell: in front of the
+arm, not into it. 5 cm is the clearance the scan's views were chosen with to the floor
+(``bench/perception_views.py``), the arm's own margin."""
+SET_DOWN_STEP_M = 0.01
+"""The chair is slid away from the arm's base in steps of this (metres) until clear."""
+SET_DOWN_DRAWS = 20
+"""Placements drawn at most before keeping one that only clears the arm (with a warning)."""
 PERSPECTIVE_PITCH_RAD = math.radians(45.0)
 """How far the report's perspective camera looks down. With the 46.8 degree vertical
 field of view its top row is 21.6 degrees below the horizon, so from the eye's height
@@ -137,6 +146,7 @@ class SimWorld:
                 self.nao = self._build_nao(config.arena.humanoid_start, nao_rng)
                 self._ignore_floor(self.nao.body, self.panda.body)
                 self._build_bear_helper_and_judge(config, helper_rng)
+                self._set_down_clear(config, placement_rng, T_world_chair)
             self.clock.sleep(SETTLE_S)
         except BaseException:
             bullet.disconnect_once()
@@ -352,6 +362,72 @@ class SimWorld:
             placement_yaw = wrap_angle(sitting_yaw - self.front_yaw_rad)
         self.placement_yaw_rad = placement_yaw
         return make_transform(rot_z(placement_yaw), np.array([x, y, 0.0]))
+
+    def _set_down_clear(
+        self, config: SimConfig, rng: np.random.Generator, first: np.ndarray
+    ) -> None:
+        """Places the chair where a person would set it down: the drawn placement, pulled
+        out in front of the arm until it is :data:`SET_DOWN_CLEARANCE_M` clear of the arm
+        (``_slid_clear_of_arm``); when it then stands in the NAO's way at its start, the
+        next drawn placement (at most :data:`SET_DOWN_DRAWS`).
+
+        The chair area holds a chair's centre, and a chair far larger than the area (a
+        1.7 m sofa turned lengthwise) drawn near its arm-side edge would otherwise stand
+        through the arm's base. A chair clear where it was drawn stays exactly there (the
+        same seed, the same world as before for every chair that fits the cell).
+        """
+        kept: tuple[np.ndarray, float] | None = None
+        for draw in range(SET_DOWN_DRAWS):
+            T = first if draw == 0 else self._placement(config, rng)
+            T = self._slid_clear_of_arm(T)
+            if kept is None:
+                kept = (T, self.placement_yaw_rad)
+            if self._chair_clearance(self.nao.body, self.bear.body) >= SET_DOWN_CLEARANCE_M:
+                kept = (T, self.placement_yaw_rad)
+                break
+        else:
+            log.warning(
+                "chair %s: no placement of %d drawn leaves the NAO's start clear; kept the "
+                "first, slid clear of the arm",
+                config.chair_path,
+                SET_DOWN_DRAWS,
+            )
+        assert kept is not None
+        self.chair.set_T_world_chair(kept[0])
+        self.placement_yaw_rad = kept[1]
+
+    def _slid_clear_of_arm(self, T_world_chair: np.ndarray) -> np.ndarray:
+        """``T_world_chair`` pulled straight out in front of the arm (+x) until the whole
+        chair stands :data:`SET_DOWN_CLEARANCE_M` in front of the arm's footprint (the
+        arena's obstacle around the arm's base) and as far from every link of the Panda."""
+        arena = self.config.arena
+        base_x, base_y = arena.arm_base_xy
+        fronts = [
+            box.x_max
+            for box in arena.obstacles
+            if box.x_min <= base_x <= box.x_max and box.y_min <= base_y <= box.y_max
+        ]
+        front = max(fronts, default=base_x) + SET_DOWN_CLEARANCE_M
+        footprint = self.chair.mesh_local.vertices[:, :2]
+        T = T_world_chair.copy()
+        lowest = float(np.min(footprint @ T[0, :2]))  # the chair's x extent about its centre
+        if T[0, 3] + lowest < front:
+            T[0, 3] = front - lowest
+        for _ in range(math.ceil(float(arena.x_max - T[0, 3]) / SET_DOWN_STEP_M)):
+            self.chair.set_T_world_chair(T)
+            if self._chair_clearance(self.panda.body) >= SET_DOWN_CLEARANCE_M:
+                break
+            T[0, 3] += SET_DOWN_STEP_M
+        return T
+
+    def _chair_clearance(self, *bodies: int) -> float:
+        """The chair's smallest distance to ``bodies`` (metres; up to 1 m)."""
+        distances = [
+            point[8]
+            for body in bodies
+            for point in self._bullet.getClosestPoints(self.chair.body, body, 1.0)
+        ]
+        return min(distances, default=1.0)
 
     def _ignore_floor(self, *bodies: int) -> None:
         """No collision between the floor and the links of kinematic or fixed robots.

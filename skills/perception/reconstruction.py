@@ -134,19 +134,37 @@ def open3d_seed(seed: int) -> int:
     return int(seed) & 0x7FFFFFFF
 
 
+FLOOR_PLANE_SEARCHES = 5
+"""How many planes RANSAC takes off the fused points, largest first, looking for the floor:
+a sofa's seat or a table top can be a larger horizontal plane than the floor in view, and
+with its backrest, armrest tops and seat cushion that is at most four planes above it."""
+
+FLOOR_LAYER_M = 0.03
+"""Horizontal planes less than this (metres) above the lowest are layers of the floor, not a
+seat: no seat a NAO can use is this low (the bear's own seat is 8.5 cm deep)."""
+
+FLOOR_NORMAL_MIN_Z = 0.95
+"""A floor candidate's normal has at least this vertical component (within 18 degrees)."""
+
+
 def fit_floor(points: np.ndarray, config: ReconstructionConfig) -> np.ndarray:
     """The floor plane (a, b, c, d), c > 0, from RANSAC on the fused points.
 
-    The largest plane found whose normal is within about 18 degrees of vertical; planes
-    that are not horizontal (a large wall or table top is unlikely here, but a backrest
-    could be) are removed and the search repeated, at most three times.
+    Planes are taken off the points, largest first, up to :data:`FLOOR_PLANE_SEARCHES`
+    times; of those within about 18 degrees of horizontal and with at least
+    ``3 * min_chair_points`` inliers, the floor is the **lowest** (at the middle of the
+    points): everything stands on the floor, and a seat can be the largest horizontal
+    plane in view (a sofa's seat, seen from above, outnumbers the floor around it).
+    Planes that are not horizontal (a backrest) are removed and the search goes on.
 
     Raises:
         PerceptionError: no horizontal plane was found.
     """
     o3d.utility.random.seed(open3d_seed(config.seed))
     remaining = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
-    for _ in range(3):
+    middle = points.mean(axis=0)
+    candidates: list[tuple[float, int, np.ndarray]] = []
+    for _ in range(FLOOR_PLANE_SEARCHES):
         if len(remaining.points) < 3 * config.min_chair_points:
             break
         plane, inliers = remaining.segment_plane(
@@ -158,10 +176,18 @@ def fit_floor(points: np.ndarray, config: ReconstructionConfig) -> np.ndarray:
         plane /= np.linalg.norm(plane[:3])
         if plane[2] < 0:
             plane = -plane
-        if plane[2] > 0.95:
-            return plane
+        if plane[2] > FLOOR_NORMAL_MIN_Z and len(inliers) >= 3 * config.min_chair_points:
+            # The plane's height under the points' middle.
+            height = -(plane[3] + plane[0] * middle[0] + plane[1] * middle[1]) / plane[2]
+            candidates.append((height, len(inliers), plane))
         remaining = remaining.select_by_index(inliers, invert=True)
-    raise PerceptionError("no floor plane found in the scan (is the floor in view?)")
+    if not candidates:
+        raise PerceptionError("no floor plane found in the scan (is the floor in view?)")
+    # The floor's own noisy layers can make a second plane a few millimetres off it: of
+    # the planes as low as the lowest (within FLOOR_LAYER_M), the best supported.
+    lowest = min(height for height, _, _ in candidates)
+    floor_layers = [c for c in candidates if c[0] <= lowest + FLOOR_LAYER_M]
+    return max(floor_layers, key=lambda candidate: candidate[1])[2]
 
 
 CHAIR_PART_SHARE = 0.05
