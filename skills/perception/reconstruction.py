@@ -52,6 +52,9 @@ class ReconstructionConfig:
         min_chair_points: fewer chair points than this is a failure.
         with_mesh: extract the triangle mesh (off when only the points are needed).
         seed: RANSAC seed.
+        object_box: (min corner, max corner) of what the scan's looks saw of the object
+            (``clearance.chair_extent``); the scan volume widens to hold it (a sofa
+            reaching farther than ``chair_margin_m``). None: the chair area's volume.
     """
 
     voxel_size_m: float = 0.008
@@ -65,14 +68,18 @@ class ReconstructionConfig:
     min_chair_points: int = 300
     with_mesh: bool = True
     seed: int = 0
+    object_box: tuple[tuple[float, ...], tuple[float, ...]] | None = None
 
     def volume(self) -> tuple[np.ndarray, np.ndarray]:
-        """The scan volume's (min corner, max corner) in the world frame."""
+        """The scan volume's (min corner, max corner) in the world frame: the chair area
+        widened by ``chair_margin_m``, and ``object_box`` when given (z as configured)."""
         a, m = self.chair_area, self.chair_margin_m
-        return (
-            np.array([a.x_min - m, a.y_min - m, self.volume_z_m[0]]),
-            np.array([a.x_max + m, a.y_max + m, self.volume_z_m[1]]),
-        )
+        lower = np.array([a.x_min - m, a.y_min - m, self.volume_z_m[0]])
+        upper = np.array([a.x_max + m, a.y_max + m, self.volume_z_m[1]])
+        if self.object_box is not None:
+            lower[:2] = np.minimum(lower[:2], np.asarray(self.object_box[0], float)[:2])
+            upper[:2] = np.maximum(upper[:2], np.asarray(self.object_box[1], float)[:2])
+        return lower, upper
 
 
 def crop_depth(frame: RGBDFrame, config: ReconstructionConfig) -> np.ndarray:
@@ -201,9 +208,11 @@ def chair_cluster(
     points: np.ndarray, config: ReconstructionConfig, cell_m: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Keeps the 26-connected components of occupied cells that make the chair: the
-    biggest whose centre is in the chair area (grown by 5 cm), with every other one of at
-    least ``CHAIR_PART_SHARE`` of its size whose centre lies within ``MAX_CHAIR_REACH_M``
-    of its centre (horizontally: a part of the same chair).
+    biggest whose centre is in the chair area (grown by 5 cm), or a bigger one standing
+    over that area (a sofa whose centre lies beyond it), with every other one of at least
+    ``CHAIR_PART_SHARE`` of its size whose centre lies within ``MAX_CHAIR_REACH_M`` of its
+    centre, or within the main component's own half diagonal when that is larger
+    (horizontally: a part of the same chair).
 
     Returns:
         (mask over ``points``, boolean occupancy grid of the chair, grid origin).
@@ -234,22 +243,35 @@ def chair_cluster(
         ]
     )
     area = config.chair_area
-    main = next(
-        (
-            label
-            for label in by_size
-            if area.x_min - 0.05 <= centres[label][0] <= area.x_max + 0.05
-            and area.y_min - 0.05 <= centres[label][1] <= area.y_max + 0.05
-        ),
-        None,
+    over_area = (
+        (points[:, 0] >= area.x_min - 0.05)
+        & (points[:, 0] <= area.x_max + 0.05)
+        & (points[:, 1] >= area.y_min - 0.05)
+        & (points[:, 1] <= area.y_max + 0.05)
     )
+    centred = {
+        label
+        for label in by_size
+        if area.x_min - 0.05 <= centres[label][0] <= area.x_max + 0.05
+        and area.y_min - 0.05 <= centres[label][1] <= area.y_max + 0.05
+    }
+    # A chair larger than the area (a sofa) may have its centre outside it: then the
+    # biggest component standing over the area.
+    over = set(np.unique(point_labels[over_area]).tolist()) - {0}
+    main = next((label for label in by_size if label in centred), None)
+    biggest_over = next((label for label in by_size if label in over), None)
+    if biggest_over is not None and (main is None or sizes[biggest_over] > sizes[main]):
+        main = biggest_over
     if main is None:
-        raise PerceptionError("no object found with its centre in the chair area")
+        raise PerceptionError("no object found over the chair area")
+    # Parts lie within a chair's reach of its centre, or of a larger chair's own extent.
+    own = points[point_labels == main][:, :2]
+    reach = max(MAX_CHAIR_REACH_M, float(np.hypot(*(np.ptp(own, axis=0) / 2.0))))
     parts = [
         label
         for label in by_size
         if sizes[label] >= CHAIR_PART_SHARE * sizes[main]
-        and np.hypot(*(centres[label] - centres[main])) <= MAX_CHAIR_REACH_M
+        and np.hypot(*(centres[label] - centres[main])) <= reach
     ]
     return np.isin(point_labels, parts), np.isin(labels, parts), origin
 
