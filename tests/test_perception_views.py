@@ -15,6 +15,7 @@ from bearchair.core.geometry import transform_points, wrap_angle, yaw_of, yaw_tr
 from bearchair.core.meshes import box_chair_mesh
 from bearchair.skills.perception import PerceptionError, ReconstructionConfig, reconstruct_chair
 from bearchair.skills.perception.clearance import (
+    HIDDEN_MARGIN_M,
     MIN_SCAN_VIEWS,
     ArmClearance,
     ChairExtent,
@@ -346,3 +347,37 @@ def test_a_sofa_wider_than_the_home_view_is_looked_at_sideways_and_scanned_whole
     for end in (-1.0, 1.0):
         near_end = points[(end * points[:, 1] > 0.35 * WIDE_SOFA_M)]
         assert np.any(np.abs(near_end[:, 2] - seat_height) < 0.03), end
+
+
+def test_the_side_looks_bound_the_whole_sofa_so_the_views_are_checked_against_it(clearance):
+    from bearchair.skills.perception.clearance import side_looks
+
+    mesh, _ = _wide_sofa()
+    T = yaw_transform(0.0, np.array([0.75, 0.0, 0.0]))
+    scene = SyntheticScene(seed=3)
+    scene.add_mesh(mesh, T)
+    arm = SyntheticArm(scene)
+    try:
+        arm.move_to(HOME_CONFIGURATION)
+        home = arm.capture()
+        looks, notes = side_looks(arm, home, clearance)
+        assert np.allclose(arm.joint_positions(), HOME_CONFIGURATION), "back at HOME"
+    finally:
+        arm.close()
+        scene.close()
+    true = transform_points(T, np.asarray(mesh.vertices))
+    seen_home = chair_extent(home)
+    extent = chair_extent([home, *looks])
+    assert len(looks) >= 2 and len(notes) == 2, notes
+    # From HOME alone the sofa's ends are outside the box the views are checked against;
+    # with the side looks the box holds the whole sofa (to the 2 cm voxels).
+    assert seen_home.lower[1] > true[:, 1].min() + 0.1
+    assert seen_home.upper[1] < true[:, 1].max() - 0.1
+    assert np.all(extent.lower[:2] <= true.min(axis=0)[:2] + 0.02)
+    assert np.all(extent.upper <= true.max(axis=0) + HIDDEN_MARGIN_M + 0.03)
+    assert np.all(extent.upper[:2] >= true.max(axis=0)[:2] - 0.02)
+    # Every view still planned keeps its clearance from that box.
+    planned = plan_views(SCAN_CONFIGURATIONS, extent, clearance)
+    kept = [view for view in planned if view.status != "skipped"]
+    assert len(kept) >= MIN_SCAN_VIEWS
+    assert all(view.clearance_m >= VIEW_CLEARANCE_M for view in kept)
