@@ -14,6 +14,13 @@ Panda's links and the box, along the straight joint-space motion into it):
 * neither: replaced by the configuration partway from HOME to it (the camera higher
   and farther, still looking at the chair) that is clear, or skipped.
 
+An object larger than the chair area (a sofa) runs past the HOME view's side edges: the
+arm then turns its base joint from HOME, half a field of view at a time, and looks again
+until the object ends inside a look (``side_looks``); the extent is what all the looks
+saw, inside the volume or connected to what stands over the chair area, so the views are
+checked against the whole object, and the scan's crop widens to hold it. The side looks
+are fused into the scan too.
+
 Where nothing is seen (an empty frame), the whole volume is the extent. A motion that
 still stops short (``TimeoutError``) skips that view after backing out; the scan fails
 only when fewer than :data:`MIN_SCAN_VIEWS` views were captured.

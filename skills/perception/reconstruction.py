@@ -3,14 +3,17 @@
 Pipeline (each step timed in ``ChairScan.seconds``):
 
 1. ``crop``: every depth pixel is back-projected to the world; pixels outside the scan
-   volume (the box any chair in the chair area lies in, floor included) are dropped, so
-   the TSDF only allocates blocks where the chair can be.
+   volume (the box any chair in the chair area lies in, widened to what the scan's looks
+   saw of a larger object, floor included) are dropped, so the TSDF only allocates
+   blocks where the chair can be.
 2. ``tsdf``: the depths are fused in an open3d tensor ``VoxelBlockGrid``.
-3. ``floor``: the fused points' dominant horizontal plane (RANSAC) is the floor;
+3. ``floor``: the lowest well-supported horizontal plane (RANSAC, several planes taken
+   off in turn) is the floor, not the largest (a sofa's seat can be larger);
    everything within ``floor_band_m`` of it, or below it, is removed.
 4. ``cluster``: the remaining points are voxelised and split into 26-connected
-   components; the chair is the largest component whose centre lies in the chair area,
-   with the other sizeable ones there (its parts, where the scan lost a thin bar).
+   components; the chair is the largest component whose centre lies in the chair area
+   (or a larger one standing over it), with the other sizeable ones near it (its parts,
+   where the scan lost a thin bar).
 5. ``mesh``: marching cubes on the same grid; the faces whose vertices lie in the
    chair's voxels are kept, and the legs' cut ends are lowered onto the floor plane.
 """
