@@ -15,6 +15,7 @@ from bearchair.core.geometry import transform_points, wrap_angle, yaw_of, yaw_tr
 from bearchair.core.meshes import box_chair_mesh
 from bearchair.skills.perception import PerceptionError, ReconstructionConfig, reconstruct_chair
 from bearchair.skills.perception.clearance import (
+    HIDDEN_MARGIN_M,
     MIN_SCAN_VIEWS,
     ArmClearance,
     ChairExtent,
@@ -266,3 +267,103 @@ def test_when_the_best_fitting_yaw_is_wrong_the_views_pick_another():
     fit = register_chair(new, reference.chair_points, None, frames)
     assert abs(math.degrees(wrap_angle(yaw_of(fit.T_world_new_old) - turn_rad))) < 3.0
     assert fit.visible_fitness >= RegistrationConfig().min_visible_fitness
+
+
+# --- objects larger than the chair area: a sofa ------------------------------------------
+
+WIDE_SOFA_M = 1.6
+"""As wide as the cell in front of the arm is deep: from the arm's footprint (x 0.15 m) to
+the NAO waiting at x 1.9 m less its half depth, about 1.6 m."""
+
+
+def _wide_sofa():
+    """A generated sofa stretched across to :data:`WIDE_SOFA_M`, its front along +x."""
+    chair = max((generate_chair(seed, "sofa") for seed in range(6)), key=lambda c: c.seat_width_m)
+    mesh = chair.mesh.copy()
+    mesh.apply_scale([1.0, WIDE_SOFA_M / float(np.ptp(mesh.vertices[:, 1])), 1.0])
+    return mesh, chair.seat_height_m
+
+
+def test_the_floor_is_the_plane_under_a_seat_larger_than_the_floor_in_view():
+    from bearchair.skills.perception.reconstruction import fit_floor
+
+    rng = np.random.default_rng(0)
+    # A sofa's seat seen from above, 0.3 m up, with three times the points of the floor.
+    seat = np.column_stack([rng.uniform(0.3, 0.9, (6000, 2)), rng.normal(0.3, 0.002, 6000)])
+    floor_xy = rng.uniform(-0.2, 1.4, (6000, 2))
+    floor_xy = floor_xy[(floor_xy[:, 0] < 0.25) | (floor_xy[:, 0] > 0.95)][:2000]
+    floor = np.column_stack([floor_xy, rng.normal(0.0, 0.002, len(floor_xy))])
+    plane = fit_floor(np.concatenate([seat, floor]), ReconstructionConfig(seed=0))
+    assert plane[2] > 0.99 and abs(plane[3]) < 0.01, plane
+
+
+def test_a_chair_inside_the_home_view_needs_no_side_looks():
+    from bearchair.skills.perception.clearance import cut_sides
+
+    (frame,) = frames_of(box_chair_mesh(), T_WORLD_CHAIR, [HOME_CONFIGURATION])
+    assert cut_sides(frame) == (False, False)
+
+
+def test_a_sofa_wider_than_the_home_view_is_looked_at_sideways_and_scanned_whole(clearance):
+    from bearchair.skills.perception.clearance import cut_sides
+
+    mesh, seat_height = _wide_sofa()
+    T = yaw_transform(0.0, np.array([0.75, 0.0, 0.0]))
+    scene = SyntheticScene(seed=3)
+    scene.add_mesh(mesh, T)
+    arm = SyntheticArm(scene)
+    try:
+        arm.move_to(HOME_CONFIGURATION)
+        assert cut_sides(arm.capture()) == (True, True), "the test needs a sofa past both edges"
+        # The tracking views (the fewest a scan accepts) keep the test short.
+        scan = scan_chair(
+            arm, seed=0, config=ReconstructionConfig(with_mesh=False), views=TRACKING_VIEWS
+        )
+    finally:
+        arm.close()
+        scene.close()
+    true = transform_points(T, np.asarray(mesh.vertices))
+    points = scan.chair_points
+    # The whole width is in the scan (1.63 m; without the side looks, 1.42 m of the 1.6),
+    # and the floor under it is the floor, not its seat.
+    assert np.ptp(points[:, 1]) >= 0.95 * np.ptp(true[:, 1]), np.ptp(points[:, 1])
+    assert points[:, 2].min() < 0.1
+    assert any("side look" in note for note in scan.notes)
+    # The seat is there near both ends, where the bear might be seated.
+    for end in (-1.0, 1.0):
+        near_end = points[(end * points[:, 1] > 0.35 * WIDE_SOFA_M)]
+        assert np.any(np.abs(near_end[:, 2] - seat_height) < 0.03), end
+
+
+def test_the_side_looks_bound_the_whole_sofa_so_the_views_are_checked_against_it(clearance):
+    from bearchair.skills.perception.clearance import side_looks
+
+    mesh, _ = _wide_sofa()
+    T = yaw_transform(0.0, np.array([0.75, 0.0, 0.0]))
+    scene = SyntheticScene(seed=3)
+    scene.add_mesh(mesh, T)
+    arm = SyntheticArm(scene)
+    try:
+        arm.move_to(HOME_CONFIGURATION)
+        home = arm.capture()
+        looks, notes = side_looks(arm, home, clearance)
+        assert np.allclose(arm.joint_positions(), HOME_CONFIGURATION), "back at HOME"
+    finally:
+        arm.close()
+        scene.close()
+    true = transform_points(T, np.asarray(mesh.vertices))
+    seen_home = chair_extent(home)
+    extent = chair_extent([home, *looks])
+    assert len(looks) >= 2 and len(notes) == 2, notes
+    # From HOME alone the sofa's ends are outside the box the views are checked against;
+    # with the side looks the box holds the whole sofa (to the 2 cm voxels).
+    assert seen_home.lower[1] > true[:, 1].min() + 0.1
+    assert seen_home.upper[1] < true[:, 1].max() - 0.1
+    assert np.all(extent.lower[:2] <= true.min(axis=0)[:2] + 0.02)
+    assert np.all(extent.upper <= true.max(axis=0) + HIDDEN_MARGIN_M + 0.03)
+    assert np.all(extent.upper[:2] >= true.max(axis=0)[:2] - 0.02)
+    # Every view still planned keeps its clearance from that box.
+    planned = plan_views(SCAN_CONFIGURATIONS, extent, clearance)
+    kept = [view for view in planned if view.status != "skipped"]
+    assert len(kept) >= MIN_SCAN_VIEWS
+    assert all(view.clearance_m >= VIEW_CLEARANCE_M for view in kept)

@@ -517,3 +517,51 @@ def test_a_bear_reclining_against_a_reclined_back_is_seated(tmp_path):
     assert _leans_back(np.array([-0.5, 0.0, 0.8]), facing)
     assert not _leans_back(np.array([0.5, 0.0, 0.8]), facing)
     assert not _leans_back(np.array([0.0, 0.5, 0.8]), facing)
+
+
+def _wide_sofa_file(tmp_path: Path) -> Path:
+    """A 1.6 m sofa (as wide as the cell in front of the arm is deep), front along +x."""
+    from bearchair.testing.chairgen import generate_chair
+
+    mesh = generate_chair(0, "sofa").mesh.copy()
+    mesh.apply_scale([1.0, 1.6 / float(np.ptp(mesh.vertices[:, 1])), 1.0])
+    path = tmp_path / "wide-sofa.obj"
+    mesh.export(path)
+    return path
+
+
+def test_a_sofa_larger_than_the_chair_area_is_set_down_clear_of_the_arm(tmp_path):
+    from bearchair.hardware.sim.world import SET_DOWN_CLEARANCE_M, SET_DOWN_STEP_M
+
+    path = _wide_sofa_file(tmp_path)
+    arm_front = max(box.x_max for box in DEFAULT_ARENA.obstacles)
+    moved = 0
+    for placement, seed in [(p, s) for p in ("accessible", "inaccessible") for s in range(3)]:
+        config = SimConfig(
+            chair_path=path, front_yaw_deg=0.0, placement=placement, camera_noise=False, seed=seed
+        )
+        with SimWorld(config) as world:
+            vertices = np.asarray(world.chair_mesh_true.vertices)
+            closest = world._bullet.getClosestPoints(world.chair.body, world.panda.body, 1.0)
+            assert min(point[8] for point in closest) >= SET_DOWN_CLEARANCE_M - 1e-3, seed
+            assert vertices[:, 0].min() >= arm_front + SET_DOWN_CLEARANCE_M - 1e-3, seed
+            nao = world._bullet.getClosestPoints(world.chair.body, world.nao.body, 1.0)
+            assert min((point[8] for point in nao), default=1.0) >= SET_DOWN_CLEARANCE_M - 1e-3
+            centre = world.T_world_chair_true()[:3, 3]
+            # Pulled out to the set-down line (drawn where it stood through the arm).
+            moved += vertices[:, 0].min() < arm_front + SET_DOWN_CLEARANCE_M + SET_DOWN_STEP_M
+            # The helper's rule still holds: the placement's sitting direction.
+            start = DEFAULT_ARENA.humanoid_start
+            toward = math.atan2(start.y - centre[1], start.x - centre[0])
+            if placement == "accessible":
+                assert abs(wrap_angle(world.sitting_yaw_true() - toward)) <= math.radians(45.0)
+    assert moved, "no draw needed moving: the test would not test"
+
+
+def test_a_chair_that_fits_the_cell_stands_where_it_was_drawn():
+    # The box chair drawn clear of the arm is not moved: the same worlds as before.
+    for seed in range(4):
+        with SimWorld(SimConfig(seed=seed, camera_noise=False)) as world:
+            area = DEFAULT_ARENA.chair_area
+            x, y = world.T_world_chair_true()[:2, 3]
+            assert area.x_min <= x <= area.x_max and area.y_min <= y <= area.y_max

@@ -51,6 +51,15 @@ TAPE_WIDTH_M = 0.03
 planner keeps the humanoid inside it, but the chair may stand across it."""
 PLACEMENT_TOLERANCE_DEG = 30.0
 SETTLE_S = 0.5
+SET_DOWN_CLEARANCE_M = 0.05
+"""A chair is set down at least this far (metres) outside the bounding boxes of the
+Panda's links as it stands and of the NAO's and the bear's at its start, as a person sets a chair down in a cell: in front of the
+arm, not into it. 5 cm is the clearance the scan's views were chosen with to the floor
+(``bench/perception_views.py``), the arm's own margin."""
+SET_DOWN_STEP_M = 0.01
+"""The chair is slid away from the arm's base in steps of this (metres) until clear."""
+SET_DOWN_DRAWS = 20
+"""Placements drawn at most before keeping one that only clears the arm (with a warning)."""
 PERSPECTIVE_PITCH_RAD = math.radians(45.0)
 """How far the report's perspective camera looks down. With the 46.8 degree vertical
 field of view its top row is 21.6 degrees below the horizon, so from the eye's height
@@ -107,6 +116,7 @@ class SimWorld:
         self.config = config
         self._hands_cache: tuple[int, np.ndarray] | None = None
         self._hands_in_feet: tuple[int, np.ndarray] | None = None
+        self._surface_cache: np.ndarray | None = None
         chair_mesh = box_chair_mesh() if config.chair_path is None else load_mesh(config.chair_path)
         front_yaw_deg = (
             0.0
@@ -137,6 +147,7 @@ class SimWorld:
                 self.nao = self._build_nao(config.arena.humanoid_start, nao_rng)
                 self._ignore_floor(self.nao.body, self.panda.body)
                 self._build_bear_helper_and_judge(config, helper_rng)
+                self._set_down_clear(config, placement_rng, T_world_chair)
             self.clock.sleep(SETTLE_S)
         except BaseException:
             bullet.disconnect_once()
@@ -353,6 +364,99 @@ class SimWorld:
         self.placement_yaw_rad = placement_yaw
         return make_transform(rot_z(placement_yaw), np.array([x, y, 0.0]))
 
+    def _set_down_clear(
+        self, config: SimConfig, rng: np.random.Generator, first: np.ndarray
+    ) -> None:
+        """Places the chair where a person would set it down: the drawn placement, pulled
+        out in front of the arm until it is :data:`SET_DOWN_CLEARANCE_M` clear of the arm
+        (``_slid_clear_of_arm``); when it then stands in the NAO's way at its start, the
+        next drawn placement (at most :data:`SET_DOWN_DRAWS`).
+
+        The chair area holds a chair's centre, and a chair far larger than the area (a
+        1.7 m sofa turned lengthwise) drawn near its arm-side edge would otherwise stand
+        through the arm's base. A chair clear where it was drawn stays exactly there (the
+        same seed, the same world as before for every chair that fits the cell).
+        """
+        kept: tuple[np.ndarray, float] | None = None
+        for draw in range(SET_DOWN_DRAWS):
+            T = first if draw == 0 else self._placement(config, rng)
+            T = self._slid_clear_of_arm(T)
+            if kept is None:
+                kept = (T, self.placement_yaw_rad)
+            if self._chair_clearance(self.nao.body, self.bear.body) >= SET_DOWN_CLEARANCE_M:
+                kept = (T, self.placement_yaw_rad)
+                break
+        else:
+            log.warning(
+                "chair %s: no placement of %d drawn leaves the NAO's start clear; kept the "
+                "first, slid clear of the arm",
+                config.chair_path,
+                SET_DOWN_DRAWS,
+            )
+        assert kept is not None
+        self.chair.set_T_world_chair(kept[0])
+        self.placement_yaw_rad = kept[1]
+
+    def _slid_clear_of_arm(self, T_world_chair: np.ndarray) -> np.ndarray:
+        """``T_world_chair`` pulled straight out in front of the arm (+x) until the whole
+        chair stands :data:`SET_DOWN_CLEARANCE_M` in front of the arm's footprint (the
+        arena's obstacle around the arm's base) and outside every link's bounding box of
+        the Panda grown by as much."""
+        arena = self.config.arena
+        base_x, base_y = arena.arm_base_xy
+        fronts = [
+            box.x_max
+            for box in arena.obstacles
+            if box.x_min <= base_x <= box.x_max and box.y_min <= base_y <= box.y_max
+        ]
+        front = max(fronts, default=base_x) + SET_DOWN_CLEARANCE_M
+        T = T_world_chair.copy()
+        surface = self._chair_surface_points() @ T[:3, :3].T
+        lowest = float(surface[:, 0].min())  # the chair's x extent about its centre
+        if T[0, 3] + lowest < front:
+            T[0, 3] = front - lowest
+        boxes = self._link_boxes(self.panda.body)
+        for _ in range(math.ceil(float(arena.x_max - T[0, 3]) / SET_DOWN_STEP_M)):
+            if not _any_inside(surface + T[:3, 3], boxes):
+                break
+            T[0, 3] += SET_DOWN_STEP_M
+        self.chair.set_T_world_chair(T)
+        return T
+
+    def _chair_clearance(self, *bodies: int) -> float:
+        """0 when the chair at its current pose reaches into a link's bounding box of
+        ``bodies`` grown by :data:`SET_DOWN_CLEARANCE_M`, else that clearance."""
+        T = self.chair.T_world_chair()
+        surface = self._chair_surface_points() @ T[:3, :3].T + T[:3, 3]
+        boxes = np.concatenate([self._link_boxes(body) for body in bodies])
+        return 0.0 if _any_inside(surface, boxes) else SET_DOWN_CLEARANCE_M
+
+    def _chair_surface_points(self) -> np.ndarray:
+        """Points on the chair's surface (chair frame) no farther apart than the set-down
+        clearance: its faces subdivided, so that no part of the chair passes through a
+        grown box between two points. (pybullet's closest points between a concave
+        triangle mesh and the arm crashed, or returned garbage, on some meshes.)"""
+        if self._surface_cache is None:
+            mesh = self.chair.mesh_local
+            subdivided = trimesh.remesh.subdivide_to_size(
+                mesh.vertices, mesh.faces, max_edge=SET_DOWN_CLEARANCE_M, max_iter=20
+            )
+            self._surface_cache = np.asarray(subdivided[0], float)
+        return self._surface_cache
+
+    def _link_boxes(self, body: int) -> np.ndarray:
+        """(N, 2, 3): every link's world bounding box of ``body``, grown by the clearance."""
+        boxes = []
+        for link in range(-1, self._bullet.getNumJoints(body)):
+            lower, upper = self._bullet.getAABB(body, link)
+            boxes.append(
+                (
+                    np.asarray(lower) - SET_DOWN_CLEARANCE_M,
+                    np.asarray(upper) + SET_DOWN_CLEARANCE_M,
+                )
+            )
+        return np.asarray(boxes, float)
+
     def _ignore_floor(self, *bodies: int) -> None:
         """No collision between the floor and the links of kinematic or fixed robots.
 
@@ -418,6 +522,14 @@ class SimWorld:
                 )
             )
         return bodies
+
+
+def _any_inside(points: np.ndarray, boxes: np.ndarray) -> bool:
+    """Whether any of ``points`` (N, 3) lies in any of ``boxes`` (M, 2, 3)."""
+    for lower, upper in boxes:
+        if np.any(np.all((points >= lower) & (points <= upper), axis=1)):
+            return True
+    return False
 
 
 _PALM = make_transform(np.eye(3), np.asarray(PALM_IN_WRIST_M))

@@ -14,6 +14,13 @@ Panda's links and the box, along the straight joint-space motion into it):
 * neither: replaced by the configuration partway from HOME to it (the camera higher
   and farther, still looking at the chair) that is clear, or skipped.
 
+An object larger than the chair area (a sofa) runs past the HOME view's side edges: the
+arm then turns its base joint from HOME, half a field of view at a time, and looks again
+until the object ends inside a look (``side_looks``); the extent is what all the looks
+saw, inside the volume or connected to what stands over the chair area, so the views are
+checked against the whole object, and the scan's crop widens to hold it. The side looks
+are fused into the scan too.
+
 Where nothing is seen (an empty frame), the whole volume is the extent. A motion that
 still stops short (``TimeoutError``) skips that view after backing out; the scan fails
 only when fewer than :data:`MIN_SCAN_VIEWS` views were captured.
@@ -26,10 +33,12 @@ import math
 import threading
 import time
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
+from scipy import ndimage
 
+from bearchair.core.arena import DEFAULT_ARENA, Box2D
 from bearchair.core.progress import report as report_progress
 from bearchair.hardware.interfaces import RGBDFrame, ScanningArm
 from bearchair.skills.perception.camera import clean_depth, depth_to_world
@@ -68,6 +77,34 @@ MAX_AIM_ERROR_DEG = 20.0
 PATH_STEP_RAD = 0.05
 """Largest joint step between two collision checks along a motion."""
 
+LOOK_RANGE_M = 2.0
+"""How far (metres) from the arm's base an object's parts are looked for: the depth the
+reconstruction fuses (``ReconstructionConfig.depth_max_m``), where the Carmine's depth
+noise (growing with the square of the distance) is still a few millimetres."""
+
+BORDER_PX = 4
+"""An object whose pixels come within this many columns of the image's side edge goes on
+past it (the HOME look saw only part of it): the arm turns to look further that way."""
+
+MAX_SIDE_TURN_RAD = math.pi / 2.0
+"""The arm turns its base joint at most this far from HOME for the side looks: past a
+quarter turn the camera would look back along the arm's own side, away from the cell."""
+
+
+def look_volume(
+    arena=DEFAULT_ARENA, volume: tuple[np.ndarray, np.ndarray] = CHAIR_VOLUME
+) -> tuple[np.ndarray, np.ndarray]:
+    """The world box an object reaching out of the chair area is looked for in (metres):
+    in front of the arm's footprint (the chair volume's near side) to
+    :data:`LOOK_RANGE_M` from the arm's base, as high as the chair volume."""
+    base_x, base_y = arena.arm_base_xy
+    lower = np.array([volume[0][0], base_y - LOOK_RANGE_M, volume[0][2]])
+    upper = np.array([base_x + LOOK_RANGE_M, base_y + LOOK_RANGE_M, volume[1][2]])
+    return lower, upper
+
+
+LOOK_VOLUME = look_volume()
+
 
 class ChairExtent(NamedTuple):
     """An axis-aligned world box (metres) the chair lies in, and how it was found."""
@@ -77,32 +114,115 @@ class ChairExtent(NamedTuple):
     source: str  # "seen" (from the HOME view) or "volume" (nothing seen: the whole volume)
 
 
+def _occupied_cells(
+    frames: Sequence[RGBDFrame], lower: np.ndarray, upper: np.ndarray
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """The :data:`VOXEL_M` cells (integer indices) with at least
+    :data:`MIN_POINTS_PER_VOXEL` depth points of ``frames`` inside the box, above the floor;
+    and per frame, every pixel's cell (-1 rows where the pixel counts for none)."""
+    per_frame: list[np.ndarray] = []
+    all_cells: list[np.ndarray] = []
+    for frame in frames:
+        points = depth_to_world(frame, clean_depth(frame)).reshape(-1, 3)
+        valid = np.all(np.isfinite(points), axis=1)
+        valid[valid] = np.all((points[valid] >= lower) & (points[valid] <= upper), axis=1)
+        valid &= np.nan_to_num(points[:, 2], nan=-1.0) > lower[2] + FLOOR_MARGIN_M
+        cells = np.full((len(points), 3), -1, dtype=np.int64)
+        cells[valid] = np.floor(points[valid] / VOXEL_M).astype(np.int64)
+        per_frame.append(np.where(valid[:, None], cells, np.iinfo(np.int64).min))
+        all_cells.append(cells[valid])
+    stacked = np.concatenate(all_cells) if all_cells else np.zeros((0, 3), np.int64)
+    if len(stacked) == 0:
+        return stacked, per_frame
+    # Counted as one integer key per cell: np.unique over rows sorts far slower.
+    low = np.floor(lower / VOXEL_M).astype(np.int64) - 1
+    span = np.floor(upper / VOXEL_M).astype(np.int64) + 2 - low
+    shifted = stacked - low
+    keys = (shifted[:, 0] * span[1] + shifted[:, 1]) * span[2] + shifted[:, 2]
+    unique, counts = np.unique(keys, return_counts=True)
+    unique = unique[counts >= MIN_POINTS_PER_VOXEL]
+    cells = np.column_stack(
+        (unique // (span[1] * span[2]), (unique // span[2]) % span[1], unique % span[2])
+    )
+    return cells + low, per_frame
+
+
+def _connected_to_area(cells: np.ndarray, area: Box2D) -> np.ndarray:
+    """The cells 26-connected to a cell standing over ``area`` (xy, grown by a cell)."""
+    if len(cells) == 0:
+        return cells
+    origin = cells.min(axis=0) - 1
+    shifted = cells - origin
+    grid = np.zeros(shifted.max(axis=0) + 2, dtype=bool)
+    grid[tuple(shifted.T)] = True
+    labels, _ = cast(
+        tuple[np.ndarray, int], ndimage.label(grid, structure=np.ones((3, 3, 3), dtype=bool))
+    )
+    cell_labels = labels[tuple(shifted.T)]
+    centre = (cells[:, :2] + 0.5) * VOXEL_M
+    over = (
+        (centre[:, 0] >= area.x_min - VOXEL_M)
+        & (centre[:, 0] <= area.x_max + VOXEL_M)
+        & (centre[:, 1] >= area.y_min - VOXEL_M)
+        & (centre[:, 1] <= area.y_max + VOXEL_M)
+    )
+    return cells[np.isin(cell_labels, np.unique(cell_labels[over]))]
+
+
 def chair_extent(
-    frame: RGBDFrame | None,
+    frame: RGBDFrame | Sequence[RGBDFrame] | None,
     volume: tuple[np.ndarray, np.ndarray] = CHAIR_VOLUME,
     margin_m: float = HIDDEN_MARGIN_M,
+    area: Box2D = DEFAULT_ARENA.chair_area,
+    wide: tuple[np.ndarray, np.ndarray] | None = LOOK_VOLUME,
 ) -> ChairExtent:
-    """The box holding what ``frame`` sees above the floor inside ``volume``, grown by
-    ``margin_m`` (the floor stays the bottom); the whole volume when nothing is seen."""
+    """The box holding what the frames see above the floor inside ``volume``, and whatever
+    seen inside ``wide`` is connected to what stands over the chair area (a sofa reaching
+    beyond the volume), grown by ``margin_m`` (the floor stays the bottom); the whole
+    volume when nothing is seen."""
     lower, upper = (np.asarray(v, float) for v in volume)
-    if frame is None:
-        return ChairExtent(lower, upper, "volume")
-    points = depth_to_world(frame, clean_depth(frame)).reshape(-1, 3)
-    points = points[np.all(np.isfinite(points), axis=1)]
-    inside = np.all((points >= lower) & (points <= upper), axis=1)
-    points = points[inside & (points[:, 2] > lower[2] + FLOOR_MARGIN_M)]
-    if len(points) == 0:
-        return ChairExtent(lower, upper, "volume")
-    cells, counts = np.unique(
-        np.floor(points / VOXEL_M).astype(np.int64), axis=0, return_counts=True
-    )
-    cells = cells[counts >= MIN_POINTS_PER_VOXEL]
+    frames = [] if frame is None else [frame] if isinstance(frame, RGBDFrame) else list(frame)
+    cells, _ = _occupied_cells(frames, lower, upper)
+    if wide is not None and frames:
+        wide_cells, _ = _occupied_cells(frames, *(np.asarray(v, float) for v in wide))
+        connected = _connected_to_area(wide_cells, area)
+        cells = np.concatenate([cells, connected]) if len(connected) else cells
     if len(cells) == 0:
         return ChairExtent(lower, upper, "volume")
     seen_lower = cells.min(axis=0) * VOXEL_M - margin_m
     seen_upper = (cells.max(axis=0) + 1) * VOXEL_M + margin_m
     seen_lower[2] = lower[2]
     return ChairExtent(seen_lower, seen_upper, "seen")
+
+
+def cut_sides(
+    frame: RGBDFrame,
+    area: Box2D = DEFAULT_ARENA.chair_area,
+    wide: tuple[np.ndarray, np.ndarray] = LOOK_VOLUME,
+    border_px: int = BORDER_PX,
+) -> tuple[bool, bool]:
+    """(left, right): whether the object standing over the chair area runs into the
+    image's left or right edge in ``frame`` (it goes on beyond what this view sees)."""
+    cells, (pixel_cells,) = _occupied_cells([frame], *(np.asarray(v, float) for v in wide))
+    connected = _connected_to_area(cells, area)
+    if len(connected) == 0:
+        return False, False
+    width = frame.intrinsics.width
+    on_object = _rows_in(pixel_cells, connected).reshape(frame.intrinsics.height, width)
+    return bool(on_object[:, :border_px].any()), bool(on_object[:, width - border_px :].any())
+
+
+def _rows_in(rows: np.ndarray, members: np.ndarray) -> np.ndarray:
+    """Which rows of ``rows`` (N, 3 ints) are rows of ``members``."""
+    lowest = np.minimum(members.min(axis=0), 0)
+    span = np.maximum(members.max(axis=0), 0) - lowest + 1
+    inside = np.all((rows >= lowest) & (rows < lowest + span), axis=1)
+    keys = np.full(len(rows), -1, dtype=np.int64)
+    shifted = rows[inside] - lowest
+    keys[inside] = (shifted[:, 0] * span[1] + shifted[:, 1]) * span[2] + shifted[:, 2]
+    wanted = members - lowest
+    member_keys = (wanted[:, 0] * span[1] + wanted[:, 1]) * span[2] + wanted[:, 2]
+    return inside & np.isin(keys, member_keys)
 
 
 class ArmClearance:
@@ -304,6 +424,123 @@ def _back_out(arm: ScanningArm, last: Sequence[float], home: Sequence[float]) ->
             ) from error
 
 
+class ScanCapture(NamedTuple):
+    """What :func:`capture_scan` brings back.
+
+    Attributes:
+        frames: one per scan view captured, in visiting order.
+        looks: the side looks from HOME turned (an object wider than the HOME view).
+        notes: views skipped or replaced, side looks taken.
+        seconds: wall time: ``motion``, ``capture``, ``plan``.
+        extent: the object's extent the views were checked against.
+    """
+
+    frames: list[RGBDFrame]
+    looks: list[RGBDFrame]
+    notes: list[str]
+    seconds: dict[str, float]
+    extent: ChairExtent
+
+
+def side_look_step_rad(frame: RGBDFrame) -> float:
+    """How far the base joint turns between side looks: half the camera's horizontal field
+    of view, so that each look overlaps the one before by half an image."""
+    intr = frame.intrinsics
+    return math.atan(intr.width / (2.0 * intr.fx))
+
+
+def side_looks(
+    arm: ScanningArm,
+    home_frame: RGBDFrame,
+    clearance: ArmClearance,
+    home: Sequence[float] = HOME_CONFIGURATION,
+) -> tuple[list[RGBDFrame], list[str]]:
+    """Turns the arm's base joint from HOME toward each side where the object runs out of
+    the HOME view (:func:`cut_sides`), a half field of view at a time, while it still runs
+    out of the latest look, up to :data:`MAX_SIDE_TURN_RAD`; each turn checked against the
+    extent seen so far (:data:`VIEW_CLEARANCE_M`). Ends at HOME.
+
+    Returns:
+        (the looks captured, a note per side looked at).
+    """
+    home = tuple(float(v) for v in home)
+    T = np.asarray(home_frame.T_world_camera, float)
+    forward, right = T[:3, 2], T[:3, 0]
+    # Turning the base joint by +angle moves the view toward z x forward.
+    left_sign = 1.0 if float(np.cross([0.0, 0.0, 1.0], forward) @ -right) > 0.0 else -1.0
+    step = side_look_step_rad(home_frame)
+    looks: list[RGBDFrame] = []
+    notes: list[str] = []
+    cut = cut_sides(home_frame)
+    for side, sign in ((0, left_sign), (1, -left_sign)):
+        if not cut[side]:
+            continue
+        current = home
+        taken = 0
+        turns = int(MAX_SIDE_TURN_RAD // step)
+        for turn in range(1, turns + 1):
+            joints = (home[0] + sign * turn * step, *home[1:])
+            extent = chair_extent([home_frame, *looks])
+            clearance.set_box(extent.lower, extent.upper)
+            if clearance.path_clearance(current, joints) < VIEW_CLEARANCE_M:
+                break
+            try:
+                arm.move_to(joints)
+            except (TimeoutError, ValueError) as error:
+                log.warning("side look not reached (%s)", error)
+                break
+            current = joints
+            look = arm.capture()
+            looks.append(look)
+            taken += 1
+            if not cut_sides(look)[side]:
+                break
+        if current != home:
+            arm.move_to(home)
+        if taken:
+            notes.append(
+                f"{taken} side look(s) {math.degrees(sign * step):+.0f} deg apart: the object "
+                "runs past the HOME view's " + ("left" if side == 0 else "right") + " edge"
+            )
+    return looks, notes
+
+
+def capture_scan(
+    arm: ScanningArm,
+    views: Sequence[Sequence[float]],
+    cancel: threading.Event | None,
+    cancelled: type[Exception] = PerceptionError,
+    look_sideways: bool = True,
+) -> ScanCapture:
+    """Frames from ``views`` (from and back to HOME), each checked against the object's
+    extent as seen from HOME first (``bearchair.skills.perception.clearance``); where the
+    object runs out of the HOME view, side looks from HOME turned (:func:`side_looks`)
+    first, and the extent is what all of them saw."""
+    tick = time.perf_counter()
+    arm.move_to(HOME_CONFIGURATION)
+    motion_s = time.perf_counter() - tick
+    tick = time.perf_counter()
+    home_frame = arm.capture()
+    looks: list[RGBDFrame] = []
+    look_notes: list[str] = []
+    with ArmClearance() as clearance:
+        if look_sideways:
+            looks, look_notes = side_looks(arm, home_frame, clearance)
+        extent = chair_extent([home_frame, *looks])
+        planned = plan_views(views, extent, clearance)
+    plan_s = time.perf_counter() - tick
+    frames, notes, seconds = capture_planned(arm, planned, cancel, cancelled)
+    for note in look_notes + notes:
+        log.warning("%s", note)
+    return ScanCapture(
+        frames,
+        looks,
+        look_notes + notes,
+        {**seconds, "motion": seconds["motion"] + motion_s, "plan": plan_s},
+        extent,
+    )
+
+
 def capture_views(
     arm: ScanningArm,
     views: Sequence[Sequence[float]],
@@ -311,21 +548,12 @@ def capture_views(
     cancelled: type[Exception] = PerceptionError,
 ) -> tuple[list[RGBDFrame], list[str], dict[str, float]]:
     """Frames from ``views`` (from and back to HOME), each checked against the chair's
-    extent as seen from HOME first (``bearchair.skills.perception.clearance``).
+    extent as seen from HOME first (``bearchair.skills.perception.clearance``); no side
+    looks (the tracking views of a chair already scanned).
 
     Returns:
         (frames, notes on views skipped or replaced, wall time: ``motion``, ``capture``
         and ``plan`` (the HOME look and the clearance checks)).
     """
-    tick = time.perf_counter()
-    arm.move_to(HOME_CONFIGURATION)
-    motion_s = time.perf_counter() - tick
-    tick = time.perf_counter()
-    extent = chair_extent(arm.capture())
-    with ArmClearance() as clearance:
-        planned = plan_views(views, extent, clearance)
-    plan_s = time.perf_counter() - tick
-    frames, notes, seconds = capture_planned(arm, planned, cancel, cancelled)
-    for note in notes:
-        log.warning("%s", note)
-    return frames, notes, {**seconds, "motion": seconds["motion"] + motion_s, "plan": plan_s}
+    capture = capture_scan(arm, views, cancel, cancelled, look_sideways=False)
+    return capture.frames, capture.notes, capture.seconds

@@ -3,14 +3,17 @@
 Pipeline (each step timed in ``ChairScan.seconds``):
 
 1. ``crop``: every depth pixel is back-projected to the world; pixels outside the scan
-   volume (the box any chair in the chair area lies in, floor included) are dropped, so
-   the TSDF only allocates blocks where the chair can be.
+   volume (the box any chair in the chair area lies in, widened to what the scan's looks
+   saw of a larger object, floor included) are dropped, so the TSDF only allocates
+   blocks where the chair can be.
 2. ``tsdf``: the depths are fused in an open3d tensor ``VoxelBlockGrid``.
-3. ``floor``: the fused points' dominant horizontal plane (RANSAC) is the floor;
+3. ``floor``: the lowest well-supported horizontal plane (RANSAC, several planes taken
+   off in turn) is the floor, not the largest (a sofa's seat can be larger);
    everything within ``floor_band_m`` of it, or below it, is removed.
 4. ``cluster``: the remaining points are voxelised and split into 26-connected
-   components; the chair is the largest component whose centre lies in the chair area,
-   with the other sizeable ones there (its parts, where the scan lost a thin bar).
+   components; the chair is the largest component whose centre lies in the chair area
+   (or a larger one standing over it), with the other sizeable ones near it (its parts,
+   where the scan lost a thin bar).
 5. ``mesh``: marching cubes on the same grid; the faces whose vertices lie in the
    chair's voxels are kept, and the legs' cut ends are lowered onto the floor plane.
 """
@@ -52,6 +55,9 @@ class ReconstructionConfig:
         min_chair_points: fewer chair points than this is a failure.
         with_mesh: extract the triangle mesh (off when only the points are needed).
         seed: RANSAC seed.
+        object_box: (min corner, max corner) of what the scan's looks saw of the object
+            (``clearance.chair_extent``); the scan volume widens to hold it (a sofa
+            reaching farther than ``chair_margin_m``). None: the chair area's volume.
     """
 
     voxel_size_m: float = 0.008
@@ -65,14 +71,18 @@ class ReconstructionConfig:
     min_chair_points: int = 300
     with_mesh: bool = True
     seed: int = 0
+    object_box: tuple[tuple[float, ...], tuple[float, ...]] | None = None
 
     def volume(self) -> tuple[np.ndarray, np.ndarray]:
-        """The scan volume's (min corner, max corner) in the world frame."""
+        """The scan volume's (min corner, max corner) in the world frame: the chair area
+        widened by ``chair_margin_m``, and ``object_box`` when given (z as configured)."""
         a, m = self.chair_area, self.chair_margin_m
-        return (
-            np.array([a.x_min - m, a.y_min - m, self.volume_z_m[0]]),
-            np.array([a.x_max + m, a.y_max + m, self.volume_z_m[1]]),
-        )
+        lower = np.array([a.x_min - m, a.y_min - m, self.volume_z_m[0]])
+        upper = np.array([a.x_max + m, a.y_max + m, self.volume_z_m[1]])
+        if self.object_box is not None:
+            lower[:2] = np.minimum(lower[:2], np.asarray(self.object_box[0], float)[:2])
+            upper[:2] = np.maximum(upper[:2], np.asarray(self.object_box[1], float)[:2])
+        return lower, upper
 
 
 def crop_depth(frame: RGBDFrame, config: ReconstructionConfig) -> np.ndarray:
@@ -134,19 +144,37 @@ def open3d_seed(seed: int) -> int:
     return int(seed) & 0x7FFFFFFF
 
 
+FLOOR_PLANE_SEARCHES = 5
+"""How many planes RANSAC takes off the fused points, largest first, looking for the floor:
+a sofa's seat or a table top can be a larger horizontal plane than the floor in view, and
+with its backrest, armrest tops and seat cushion that is at most four planes above it."""
+
+FLOOR_LAYER_M = 0.03
+"""Horizontal planes less than this (metres) above the lowest are layers of the floor, not a
+seat: no seat a NAO can use is this low (the bear's own seat is 8.5 cm deep)."""
+
+FLOOR_NORMAL_MIN_Z = 0.95
+"""A floor candidate's normal has at least this vertical component (within 18 degrees)."""
+
+
 def fit_floor(points: np.ndarray, config: ReconstructionConfig) -> np.ndarray:
     """The floor plane (a, b, c, d), c > 0, from RANSAC on the fused points.
 
-    The largest plane found whose normal is within about 18 degrees of vertical; planes
-    that are not horizontal (a large wall or table top is unlikely here, but a backrest
-    could be) are removed and the search repeated, at most three times.
+    Planes are taken off the points, largest first, up to :data:`FLOOR_PLANE_SEARCHES`
+    times; of those within about 18 degrees of horizontal and with at least
+    ``3 * min_chair_points`` inliers, the floor is the **lowest** (at the middle of the
+    points): everything stands on the floor, and a seat can be the largest horizontal
+    plane in view (a sofa's seat, seen from above, outnumbers the floor around it).
+    Planes that are not horizontal (a backrest) are removed and the search goes on.
 
     Raises:
         PerceptionError: no horizontal plane was found.
     """
     o3d.utility.random.seed(open3d_seed(config.seed))
     remaining = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
-    for _ in range(3):
+    middle = points.mean(axis=0)
+    candidates: list[tuple[float, int, np.ndarray]] = []
+    for _ in range(FLOOR_PLANE_SEARCHES):
         if len(remaining.points) < 3 * config.min_chair_points:
             break
         plane, inliers = remaining.segment_plane(
@@ -158,10 +186,18 @@ def fit_floor(points: np.ndarray, config: ReconstructionConfig) -> np.ndarray:
         plane /= np.linalg.norm(plane[:3])
         if plane[2] < 0:
             plane = -plane
-        if plane[2] > 0.95:
-            return plane
+        if plane[2] > FLOOR_NORMAL_MIN_Z and len(inliers) >= 3 * config.min_chair_points:
+            # The plane's height under the points' middle.
+            height = -(plane[3] + plane[0] * middle[0] + plane[1] * middle[1]) / plane[2]
+            candidates.append((height, len(inliers), plane))
         remaining = remaining.select_by_index(inliers, invert=True)
-    raise PerceptionError("no floor plane found in the scan (is the floor in view?)")
+    if not candidates:
+        raise PerceptionError("no floor plane found in the scan (is the floor in view?)")
+    # The floor's own noisy layers can make a second plane a few millimetres off it: of
+    # the planes as low as the lowest (within FLOOR_LAYER_M), the best supported.
+    lowest = min(height for height, _, _ in candidates)
+    floor_layers = [c for c in candidates if c[0] <= lowest + FLOOR_LAYER_M]
+    return max(floor_layers, key=lambda candidate: candidate[1])[2]
 
 
 CHAIR_PART_SHARE = 0.05
@@ -175,9 +211,11 @@ def chair_cluster(
     points: np.ndarray, config: ReconstructionConfig, cell_m: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Keeps the 26-connected components of occupied cells that make the chair: the
-    biggest whose centre is in the chair area (grown by 5 cm), with every other one of at
-    least ``CHAIR_PART_SHARE`` of its size whose centre lies within ``MAX_CHAIR_REACH_M``
-    of its centre (horizontally: a part of the same chair).
+    biggest whose centre is in the chair area (grown by 5 cm), or a bigger one standing
+    over that area (a sofa whose centre lies beyond it), with every other one of at least
+    ``CHAIR_PART_SHARE`` of its size whose centre lies within ``MAX_CHAIR_REACH_M`` of its
+    centre, or within the main component's own half diagonal when that is larger
+    (horizontally: a part of the same chair).
 
     Returns:
         (mask over ``points``, boolean occupancy grid of the chair, grid origin).
@@ -208,22 +246,35 @@ def chair_cluster(
         ]
     )
     area = config.chair_area
-    main = next(
-        (
-            label
-            for label in by_size
-            if area.x_min - 0.05 <= centres[label][0] <= area.x_max + 0.05
-            and area.y_min - 0.05 <= centres[label][1] <= area.y_max + 0.05
-        ),
-        None,
+    over_area = (
+        (points[:, 0] >= area.x_min - 0.05)
+        & (points[:, 0] <= area.x_max + 0.05)
+        & (points[:, 1] >= area.y_min - 0.05)
+        & (points[:, 1] <= area.y_max + 0.05)
     )
+    centred = {
+        label
+        for label in by_size
+        if area.x_min - 0.05 <= centres[label][0] <= area.x_max + 0.05
+        and area.y_min - 0.05 <= centres[label][1] <= area.y_max + 0.05
+    }
+    # A chair larger than the area (a sofa) may have its centre outside it: then the
+    # biggest component standing over the area.
+    over = set(np.unique(point_labels[over_area]).tolist()) - {0}
+    main = next((label for label in by_size if label in centred), None)
+    biggest_over = next((label for label in by_size if label in over), None)
+    if biggest_over is not None and (main is None or sizes[biggest_over] > sizes[main]):
+        main = biggest_over
     if main is None:
-        raise PerceptionError("no object found with its centre in the chair area")
+        raise PerceptionError("no object found over the chair area")
+    # Parts lie within a chair's reach of its centre, or of a larger chair's own extent.
+    own = points[point_labels == main][:, :2]
+    reach = max(MAX_CHAIR_REACH_M, float(np.hypot(*(np.ptp(own, axis=0) / 2.0))))
     parts = [
         label
         for label in by_size
         if sizes[label] >= CHAIR_PART_SHARE * sizes[main]
-        and np.hypot(*(centres[label] - centres[main])) <= MAX_CHAIR_REACH_M
+        and np.hypot(*(centres[label] - centres[main])) <= reach
     ]
     return np.isin(point_labels, parts), np.isin(labels, parts), origin
 

@@ -6,7 +6,7 @@ import threading
 
 from bearchair.core.errors import Cancelled
 from bearchair.hardware.interfaces import ScanningArm
-from bearchair.skills.perception.clearance import MIN_SCAN_VIEWS, capture_views
+from bearchair.skills.perception.clearance import MIN_SCAN_VIEWS, capture_scan
 from bearchair.skills.perception.errors import PerceptionError
 from bearchair.skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
 from bearchair.skills.perception.views import SCAN_CONFIGURATIONS
@@ -27,7 +27,8 @@ def scan_chair(
 ) -> ChairScan:
     """Captures RGB-D at each of :data:`SCAN_CONFIGURATIONS` and reconstructs the chair.
 
-    The arm goes HOME and looks at the chair area from there; views whose motion would
+    The arm goes HOME and looks at the chair area from there; where the object runs past
+    that view's side edges it turns its base to look further (side looks, fused too); views whose motion would
     pass within 3 cm of the chair it sees are visited through HOME, replaced by a view
     higher up, or skipped (``bearchair.skills.perception.clearance``); then through the views in
     order, and back HOME.
@@ -53,7 +54,8 @@ def scan_chair(
     configurations = (
         SCAN_CONFIGURATIONS if views is None else tuple(SCAN_CONFIGURATIONS[i] for i in views)
     )
-    frames, notes, timing = capture_views(arm, configurations, cancel, ScanCancelled)
+    capture = capture_scan(arm, configurations, cancel, ScanCancelled)
+    frames, notes, timing = capture.frames, capture.notes, capture.seconds
     if len(frames) < MIN_SCAN_VIEWS:
         raise PerceptionError(
             f"chair scan: only {len(frames)} of {len(configurations)} views could be "
@@ -61,6 +63,11 @@ def scan_chair(
         )
     if cancel is not None and cancel.is_set():
         raise ScanCancelled("chair scan cancelled")
-    scan = reconstruct_chair(frames, config)
+    if capture.extent.source == "seen":
+        # The crop holds what the looks saw of the object, however far it reaches.
+        box = (tuple(capture.extent.lower), tuple(capture.extent.upper))
+        config = ReconstructionConfig(**{**config.__dict__, "object_box": box})
+    fused = [*capture.looks, *frames]
+    scan = reconstruct_chair(fused, config)
     seconds = {**timing, **scan.seconds}
-    return scan._replace(seconds=seconds, notes=tuple(notes), frames=tuple(frames))
+    return scan._replace(seconds=seconds, notes=tuple(notes), frames=tuple(fused))
