@@ -31,7 +31,7 @@ import numpy as np
 import open3d as o3d
 import trimesh
 from scipy import ndimage
-from scipy.spatial import cKDTree
+from scipy.spatial import ConvexHull, cKDTree
 
 from bearchair.core.arena import DEFAULT_ARENA, Box2D
 from bearchair.core.nao_carrying import BEAR_COM_AHEAD_M, BEAR_COM_HEIGHT_M, BEAR_TORSO_DEPTH_M
@@ -406,8 +406,8 @@ def _one_view_support(
     config: ReconstructionConfig,
 ) -> trimesh.Trimesh:
     """The support surfaces a single view saw (:data:`SUPPORT_TILT_RAD`) that the chair's
-    mesh lacks: faces of the one-view mesh over the chair's footprint (its cells seen from
-    above, enclosed holes filled: a seat inside its rim), above the floor band, facing up
+    mesh lacks: faces of the one-view mesh over the chair's footprint
+    (:func:`_over_footprint`: a seat the two-view surfaces lost lies inside it), above the floor band, facing up
     within the tilt (their vertices' normals, averaged over the neighbouring faces, so a
     facet of marching cubes' staircase does not decide), and farther than a voxel from
     every vertex of the chair's mesh (not a second copy of a surface it has)."""
@@ -416,13 +416,7 @@ def _one_view_support(
     faces = single.triangle.indices.numpy().astype(np.int64)
     if len(faces) == 0 or len(chair.vertices) == 0:
         return trimesh.Trimesh()
-    footprint = ndimage.binary_fill_holes(
-        ndimage.binary_dilation(chair_cells.any(axis=2), structure=np.ones((3, 3), dtype=bool))
-    )
-    cells = np.floor((vertices[:, :2] - origin[:2]) / cell_m).astype(np.int64)
-    inside = np.all((cells >= 0) & (cells < np.array(footprint.shape)), axis=1)
-    keep = np.zeros(len(vertices), dtype=bool)
-    keep[inside] = cast(np.ndarray, footprint)[tuple(cells[inside].T)]
+    keep = _over_footprint(vertices[:, :2], chair_cells, origin, cell_m)
     keep &= vertices @ plane[:3] + plane[3] > config.floor_band_m + config.voxel_size_m
     over_chair = trimesh.Trimesh(vertices, faces[np.all(keep[faces], axis=1)], process=False)
     over_chair.remove_unreferenced_vertices()
@@ -437,6 +431,20 @@ def _one_view_support(
     )
     support.remove_unreferenced_vertices()
     return support
+
+
+def _over_footprint(
+    xy: np.ndarray, chair_cells: np.ndarray, origin: np.ndarray, cell_m: float
+) -> np.ndarray:
+    """(N,) which points lie over the chair's footprint: the convex hull, seen from above,
+    of the chair's cells (grown by a cell). A seat the two-view surfaces lost lies between
+    the chair's legs, rails, armrests and back, so inside it."""
+    columns = np.argwhere(chair_cells.any(axis=2))
+    corners = np.array([(dx, dy) for dx in (-1.0, 2.0) for dy in (-1.0, 2.0)])
+    cells = (columns[:, None, :] + corners[None]).reshape(-1, 2)
+    hull = ConvexHull(cells)
+    inside = (np.asarray(xy) - origin[:2]) / cell_m @ hull.equations[:, :2].T
+    return np.all(inside + hull.equations[:, 2] <= 1e-9, axis=1)
 
 
 def _sorted_rows(points: np.ndarray) -> np.ndarray:

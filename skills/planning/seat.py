@@ -26,6 +26,7 @@ from bearchair.core.nao_carrying import (
     BEAR_TORSO_DEPTH_M,
     PLACEMENT_TOLERANCE_M,
 )
+from bearchair.hardware.bear_model import BEAR_TORSO_FOOTPRINT_M
 
 SEAT_HEIGHT_TOLERANCE_M = 0.03
 """How much the seat's height may change under a sliding p and still count as the seat
@@ -141,9 +142,13 @@ SEAT_MAP_BEHIND_M = 0.15
 """The seat map starts this far (metres) behind p: the bear's footprint and a hole's rim."""
 SEAT_MAP_HALF_WIDTH_M = 0.15
 """... and reaches this far (metres) either side of the ray."""
-SLAT_GAP_M = 0.06
-"""Gaps in the seat up to this wide (metres) are closed: slats, a scan's cracks. The bear's
-torso (0.085 m deep, 0.10 m wide) bridges them."""
+SLAT_GAP_M = min(BEAR_TORSO_FOOTPRINT_M) - 2.0 * PLACEMENT_TOLERANCE_M
+"""Gaps in the seat up to this wide (metres) are closed on the seat map: the gaps between
+slats, a scan's cracks. The bear's torso, its contact footprint (0.085 m by 0.10 m in
+``hardware/bear_model.py``), rests on both sides of such a gap however it is turned and
+wherever the whole-body goal sets it down within its placement tolerance (1.5 cm either
+way): the footprint's smaller side less twice the tolerance, 0.055 m. The closing's disc
+on the map's 1 cm grid is 7 cells across (a radius of 3)."""
 
 
 class SeatMap(NamedTuple):
