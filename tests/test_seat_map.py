@@ -10,6 +10,7 @@ from the generator's truth (the test's oracle, not the mission's), 8 cm over the
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
 import pytest
@@ -127,7 +128,7 @@ def _slats(gap_m: float) -> trimesh.Trimesh:
         box((slat, width, 0.02), (0.20 - slat / 2.0 - k * (slat + gap_m), 0.0, top - 0.01))
         for k in range(int(0.40 // (slat + gap_m)) + 1)
     ]
-    return trimesh.util.concatenate(parts)
+    return cast(trimesh.Trimesh, trimesh.util.concatenate(parts))
 
 
 def test_gaps_narrower_than_the_bears_footprint_allows_are_closed():

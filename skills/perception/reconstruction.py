@@ -31,7 +31,10 @@ import numpy as np
 import open3d as o3d
 import trimesh
 from scipy import ndimage
-from scipy.spatial import ConvexHull, cKDTree
+from scipy.spatial import (
+    ConvexHull,
+    cKDTree,  # pyright: ignore[reportAttributeAccessIssue]  # no stub for scipy's compiled _ckdtree
+)
 
 from bearchair.core.arena import DEFAULT_ARENA, Box2D
 from bearchair.core.nao_carrying import BEAR_COM_AHEAD_M, BEAR_COM_HEIGHT_M, BEAR_TORSO_DEPTH_M
