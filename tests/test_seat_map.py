@@ -23,7 +23,13 @@ from bearchair.hardware.interfaces import RGBDFrame
 from bearchair.skills.perception import ReconstructionConfig, reconstruct_chair
 from bearchair.skills.perception.reconstruction import SUPPORT_TILT_RAD
 from bearchair.skills.perception.views import SCAN_CONFIGURATIONS
-from bearchair.skills.planning.seat import SLAT_GAP_M, STEP_M, seat_map, seat_ray
+from bearchair.skills.planning.seat import (
+    SLAT_GAP_M,
+    STEP_M,
+    UNSEEN_SLIDE_M,
+    seat_map,
+    seat_ray,
+)
 from bearchair.testing.chairgen import GeneratedChair, generate_chair
 from bearchair.testing.chairgen_families import box
 from tests.test_perception_views import frames_of
@@ -158,3 +164,39 @@ def test_the_seat_maps_numbers_come_from_the_bear():
     assert BEAR_TORSO_FOOTPRINT_M[0] == BEAR_TORSO_DEPTH_M
     assert pytest.approx(min(BEAR_TORSO_FOOTPRINT_M) - 2 * PLACEMENT_TOLERANCE_M) == SLAT_GAP_M
     assert math.degrees(SUPPORT_TILT_RAD) == pytest.approx(16.4, abs=0.1)
+
+
+def test_a_seat_hidden_in_front_of_a_tub_back_is_taken_where_the_scan_sees_it():
+    # The tub's back, wrapping round the seat, hides the 5 cm of seat in front of it from
+    # the views behind the chair, and p sits there: the bear moves to where the scan sees
+    # the seat under its whole torso, no farther than its depth.
+    chair, mesh = scanned("swivel_tub", 0)
+    ray = seat_ray(mesh, sitting_pose(chair))
+    assert ray.seat_seen
+    assert 0.0 < ray.unseen_m <= UNSEEN_SLIDE_M
+    assert float(ray.slides_m[0]) == pytest.approx(ray.unseen_m)
+    assert float(ray.seat_heights_m[0]) == pytest.approx(chair.seat_height_m, abs=0.01)
+
+
+def _seat_from(start_m: float) -> trimesh.Trimesh:
+    """A flat seat 0.30 m high whose top the scan shows only from ``start_m`` ahead of p
+    (at the origin, facing +x) to 0.30 m ahead, and a strip behind p (the seat's back)."""
+    parts = [
+        box((0.30 - start_m, 0.32, 0.02), ((0.30 + start_m) / 2.0, 0.0, 0.29)),
+        box((0.03, 0.32, 0.02), (-0.10, 0.0, 0.29)),
+    ]
+    return cast(trimesh.Trimesh, trimesh.util.concatenate(parts))
+
+
+def test_the_seat_starts_where_the_bears_torso_is_wholly_on_seen_seat():
+    pose = SittingPose(np.array([0.0, 0.0, 0.38]), 0.0)
+    assert seat_ray(_seat_from(0.0), pose).unseen_m == 0.0
+    ray = seat_ray(_seat_from(0.03), pose)
+    assert ray.seat_seen
+    # The torso's rear half (4 rows of 1 cm) on the seen seat from 3 cm on.
+    half = round(BEAR_TORSO_DEPTH_M / 2.0 / STEP_M) * STEP_M
+    assert ray.unseen_m == pytest.approx(0.03 + half, abs=0.011)
+    assert float(ray.seat_heights_m[0]) == pytest.approx(0.30, abs=1e-3)
+    # Seen seat that starts farther than a torso's depth ahead is not where the child sat.
+    far = seat_ray(_seat_from(UNSEEN_SLIDE_M), pose)
+    assert not far.seat_seen and far.unseen_m == 0.0
