@@ -24,6 +24,7 @@ the worst families. Usage::
         [--seat] [--family sled] [--workers 2] [--verbose]
     .venv/bin/python bench/generalization.py --calibration 24
     .venv/bin/python bench/generalization.py --missions 200 [--workers 2] [--out DIR]
+        [--family basket --family x_frame]
 
 ``--missions N`` runs whole simulated missions instead (``bench/generalization_missions.py``).
 """
@@ -300,7 +301,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--imagine", action="store_true", help="imagine the sitting pose")
     parser.add_argument("--seat", action="store_true", help="seat the bear in simulation")
-    parser.add_argument("--family", choices=FAMILIES, help="only this family")
+    parser.add_argument(
+        "--family",
+        choices=FAMILIES,
+        action="append",
+        help="only this family (repeat for several); with --missions, that family's chairs "
+        "among the N generated, the same chairs as the whole bench's",
+    )
     parser.add_argument("--verbose", action="store_true", help="a line per chair")
     parser.add_argument("--workers", type=int, default=1, help="processes (chairs are independent)")
     parser.add_argument(
@@ -325,11 +332,13 @@ def main(argv: list[str] | None = None) -> int:
         sys.path.insert(0, str(Path(__file__).resolve().parent))
         from generalization_missions import run_missions
 
-        return run_missions(args.missions, args.seed, args.workers, args.out, args.timeout)
+        return run_missions(
+            args.missions, args.seed, args.workers, args.out, args.timeout, args.family
+        )
     if args.calibration:
         calibration_reach(args.calibration)
         return 0
-    families = (args.family,) if args.family else FAMILIES
+    families = tuple(args.family) if args.family else FAMILIES
     jobs = [(args.seed + i, families[i % len(families)], args) for i in range(args.chairs)]
     outcomes = []
     began = time.perf_counter()

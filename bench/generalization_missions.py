@@ -57,8 +57,17 @@ def mission_specs(chairs: list[GeneratedChair], folder: Path, seed: int) -> list
     return specs
 
 
-def run_missions(count: int, seed: int, workers: int, out: Path, timeout_s: float) -> int:
-    """Runs the missions and prints the figures; returns the exit status."""
+def run_missions(
+    count: int,
+    seed: int,
+    workers: int,
+    out: Path,
+    timeout_s: float,
+    families: list[str] | None = None,
+) -> int:
+    """Runs the missions and prints the figures; returns the exit status. With
+    ``families``, only their chairs among the ``count`` generated (the same chairs, seeds
+    and conditions as the whole bench's)."""
     from bearchair.evaluation.campaign import run_campaign
     from bearchair.evaluation.campaign_progress import Progress
     from bearchair.evaluation.store import TrialStore, campaign_lock
@@ -66,6 +75,10 @@ def run_missions(count: int, seed: int, workers: int, out: Path, timeout_s: floa
 
     chairs = [c for c in generate_chairs(count, seed) if c.front_yaw_rad is not None]
     specs = mission_specs(chairs, out / "chairs", seed)
+    if families:
+        kept = {c.name + ".obj" for c in chairs if c.family in families}
+        chairs = [c for c in chairs if c.name + ".obj" in kept]
+        specs = [s for s in specs if s.chair in kept]
     print(
         f"{len(specs)} missions over {len(chairs)} generated chairs with a front "
         f"(of {count}); records in {out}",

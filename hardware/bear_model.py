@@ -49,6 +49,11 @@ BEAR_PARTS: tuple[BearPart, ...] = (
     BearPart("sphere", (0.008,), (0.068, 0.0, 0.172), colour=_DARK),
 )
 
+BEAR_TORSO_FOOTPRINT_M: tuple[float, float] = (BEAR_PARTS[0].size[0], BEAR_PARTS[0].size[1])
+"""The bear's contact footprint when it sits (metres): the bottom of its torso, the box it
+sits on (its first part), as (depth along x, width along y). Its legs rest on the seat
+ahead of it too, but the torso carries it."""
+
 
 def _volume(part: BearPart) -> float:
     if part.kind == "box":

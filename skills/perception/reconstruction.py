@@ -16,10 +16,15 @@ Pipeline (each step timed in ``ChairScan.seconds``):
    where the scan lost a thin bar).
 5. ``mesh``: marching cubes on the same grid; the faces whose vertices lie in the
    chair's voxels are kept, and the legs' cut ends are lowered onto the floor plane.
+   Surfaces that at least two views saw make the mesh; where only one view saw a surface
+   that faces up, flat enough to hold the bear, over the chair's footprint, it is added
+   too (:data:`SUPPORT_TILT_RAD`): the floor of a dished seat or a sling's middle, which
+   only the view from straight above sees past the rim or the rails.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -29,8 +34,13 @@ import numpy as np
 import open3d as o3d
 import trimesh
 from scipy import ndimage
+from scipy.spatial import (
+    ConvexHull,
+    cKDTree,  # pyright: ignore[reportAttributeAccessIssue]  # no stub for scipy's compiled _ckdtree
+)
 
 from bearchair.core.arena import DEFAULT_ARENA, Box2D
+from bearchair.core.nao_carrying import BEAR_COM_AHEAD_M, BEAR_COM_HEIGHT_M, BEAR_TORSO_DEPTH_M
 from bearchair.hardware.interfaces import RGBDFrame
 from bearchair.skills.perception.camera import clean_depth, depth_to_world, validate_frame
 from bearchair.skills.perception.determinism import one_open3d_thread
@@ -200,6 +210,22 @@ def fit_floor(points: np.ndarray, config: ReconstructionConfig) -> np.ndarray:
     return max(floor_layers, key=lambda candidate: candidate[1])[2]
 
 
+MIN_VIEWS_WEIGHT = 1.5
+"""A TSDF voxel is surface when more than this weight (one per view that saw it) fused into
+it: two views agree, so one view's noise is not chair."""
+ONE_VIEW_WEIGHT = 0.5
+"""... and, for the support surfaces of :data:`SUPPORT_TILT_RAD`, when one view saw it."""
+SUPPORT_TILT_RAD = math.atan((BEAR_TORSO_DEPTH_M / 2.0 - BEAR_COM_AHEAD_M) / BEAR_COM_HEIGHT_M)
+"""A surface seen by a single view is added to the chair where it faces up within this
+angle of vertical (radians): flat enough for the bear to rest on it, which tips at a lean
+of atan((D/2 - c_x)/c_z) = 16 deg (D the torso's depth, c its centre of mass ahead of and
+over its seat point). The floor of a dished seat inside its rim, the middle of a sling
+between its rails, a seat deep inside armrests: only the view from straight above sees
+them, and two views are needed for :data:`MIN_VIEWS_WEIGHT`. A single view's noise at
+depth edges lies along its rays, which are steeper than this in every scan view (they
+look down at the chair area at 30-70 deg, their streaks' surfaces at least 20 deg from
+level), so it is not taken for a seat."""
+
 CHAIR_PART_SHARE = 0.05
 """A component of the scan near the chair with at least this share of the chair's largest
 component's cells is a part of the chair: where a bar is thinner than the TSDF's voxels
@@ -304,7 +330,7 @@ def reconstruct_chair(frames: Sequence[RGBDFrame], config: ReconstructionConfig)
 
     tick = time.perf_counter()
     grid = fuse_tsdf(frames, depths, config)
-    cloud = grid.extract_point_cloud(weight_threshold=1.5)
+    cloud = grid.extract_point_cloud(weight_threshold=MIN_VIEWS_WEIGHT)
     points = cloud.point.positions.numpy().astype(np.float64)
     seconds["tsdf"] = time.perf_counter() - tick
     if len(points) < config.min_chair_points:
@@ -366,22 +392,16 @@ def _chair_mesh(
     plane: np.ndarray,
     config: ReconstructionConfig,
 ) -> trimesh.Trimesh:
-    mesh = grid.extract_triangle_mesh(weight_threshold=1.5)
-    vertices = mesh.vertex.positions.numpy().astype(np.float64)
-    faces = mesh.triangle.indices.numpy().astype(np.int64)
-    # A vertex belongs to the chair when its cell, or a neighbour, is a chair cell.
-    grown = ndimage.binary_dilation(chair_cells, structure=np.ones((3, 3, 3), dtype=bool))
-    cells = np.floor((vertices - origin) / cell_m).astype(np.int64)
-    inside = np.all((cells >= 0) & (cells < np.array(grown.shape)), axis=1)
-    on_chair = np.zeros(len(vertices), dtype=bool)
-    on_chair[inside] = grown[tuple(cells[inside].T)]
-    height = vertices @ plane[:3] + plane[3]
-    on_chair &= height > config.floor_band_m
-    faces = faces[np.all(on_chair[faces], axis=1)]
-    if len(faces) == 0:
+    chair = _on_chair(
+        grid.extract_triangle_mesh(weight_threshold=MIN_VIEWS_WEIGHT),
+        chair_cells,
+        origin,
+        cell_m,
+        plane,
+        config,
+    )
+    if len(chair.faces) == 0:
         raise PerceptionError("the chair's surface could not be extracted from the TSDF")
-    chair = trimesh.Trimesh(vertices, faces, process=False)
-    chair.remove_unreferenced_vertices()
     # Floor removal cut the legs a band above the floor: lower their ends onto it.
     vertices = np.array(chair.vertices)
     height = vertices @ plane[:3] + plane[3]
@@ -396,7 +416,89 @@ def _chair_mesh(
             trimesh.Trimesh,
             trimesh.util.concatenate([p for p in parts if len(p.faces) >= 0.02 * biggest]),
         )
+    support = _one_view_support(grid, chair, chair_cells, origin, cell_m, plane, config)
+    if len(support.faces):
+        chair = cast(trimesh.Trimesh, trimesh.util.concatenate([chair, support]))
     return _canonical(chair)
+
+
+def _on_chair(
+    mesh: o3d.t.geometry.TriangleMesh,
+    chair_cells: np.ndarray,
+    origin: np.ndarray,
+    cell_m: float,
+    plane: np.ndarray,
+    config: ReconstructionConfig,
+) -> trimesh.Trimesh:
+    """The faces of a TSDF mesh whose vertices lie in (or next to) the chair's cells and
+    above the floor band."""
+    vertices = mesh.vertex.positions.numpy().astype(np.float64)
+    faces = mesh.triangle.indices.numpy().astype(np.int64)
+    if len(faces) == 0:
+        return trimesh.Trimesh()
+    # A vertex belongs to the chair when its cell, or a neighbour, is a chair cell.
+    grown = ndimage.binary_dilation(chair_cells, structure=np.ones((3, 3, 3), dtype=bool))
+    cells = np.floor((vertices - origin) / cell_m).astype(np.int64)
+    inside = np.all((cells >= 0) & (cells < np.array(grown.shape)), axis=1)
+    on_chair = np.zeros(len(vertices), dtype=bool)
+    on_chair[inside] = grown[tuple(cells[inside].T)]
+    height = vertices @ plane[:3] + plane[3]
+    on_chair &= height > config.floor_band_m
+    faces = faces[np.all(on_chair[faces], axis=1)]
+    chair = trimesh.Trimesh(vertices, faces, process=False)
+    chair.remove_unreferenced_vertices()
+    return chair
+
+
+def _one_view_support(
+    grid: o3d.t.geometry.VoxelBlockGrid,
+    chair: trimesh.Trimesh,
+    chair_cells: np.ndarray,
+    origin: np.ndarray,
+    cell_m: float,
+    plane: np.ndarray,
+    config: ReconstructionConfig,
+) -> trimesh.Trimesh:
+    """The support surfaces a single view saw (:data:`SUPPORT_TILT_RAD`) that the chair's
+    mesh lacks: faces of the one-view mesh over the chair's footprint
+    (:func:`_over_footprint`: a seat the two-view surfaces lost lies inside it), above the floor band, facing up
+    within the tilt (their vertices' normals, averaged over the neighbouring faces, so a
+    facet of marching cubes' staircase does not decide), and farther than a voxel from
+    every vertex of the chair's mesh (not a second copy of a surface it has)."""
+    single = grid.extract_triangle_mesh(weight_threshold=ONE_VIEW_WEIGHT)
+    vertices = single.vertex.positions.numpy().astype(np.float64)
+    faces = single.triangle.indices.numpy().astype(np.int64)
+    if len(faces) == 0 or len(chair.vertices) == 0:
+        return trimesh.Trimesh()
+    keep = _over_footprint(vertices[:, :2], chair_cells, origin, cell_m)
+    keep &= vertices @ plane[:3] + plane[3] > config.floor_band_m + config.voxel_size_m
+    over_chair = trimesh.Trimesh(vertices, faces[np.all(keep[faces], axis=1)], process=False)
+    over_chair.remove_unreferenced_vertices()
+    if len(over_chair.faces) == 0:
+        return over_chair
+    normals = np.asarray(over_chair.vertex_normals)[over_chair.faces].mean(axis=1)
+    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+    up = np.flatnonzero(normals @ plane[:3] >= math.cos(SUPPORT_TILT_RAD))
+    distance, _ = cKDTree(np.asarray(chair.vertices)).query(over_chair.triangles_center[up])
+    support = trimesh.Trimesh(
+        over_chair.vertices, over_chair.faces[up[distance > config.voxel_size_m]], process=False
+    )
+    support.remove_unreferenced_vertices()
+    return support
+
+
+def _over_footprint(
+    xy: np.ndarray, chair_cells: np.ndarray, origin: np.ndarray, cell_m: float
+) -> np.ndarray:
+    """(N,) which points lie over the chair's footprint: the convex hull, seen from above,
+    of the chair's cells (grown by a cell). A seat the two-view surfaces lost lies between
+    the chair's legs, rails, armrests and back, so inside it."""
+    columns = np.argwhere(chair_cells.any(axis=2))
+    corners = np.array([(dx, dy) for dx in (-1.0, 2.0) for dy in (-1.0, 2.0)])
+    cells = (columns[:, None, :] + corners[None]).reshape(-1, 2)
+    hull = ConvexHull(cells)
+    inside = (np.asarray(xy) - origin[:2]) / cell_m @ hull.equations[:, :2].T
+    return np.all(inside + hull.equations[:, 2] <= 1e-9, axis=1)
 
 
 def _sorted_rows(points: np.ndarray) -> np.ndarray:

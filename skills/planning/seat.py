@@ -26,6 +26,7 @@ from bearchair.core.nao_carrying import (
     BEAR_TORSO_DEPTH_M,
     PLACEMENT_TOLERANCE_M,
 )
+from bearchair.hardware.bear_model import BEAR_TORSO_FOOTPRINT_M
 
 SEAT_HEIGHT_TOLERANCE_M = 0.03
 """How much the seat's height may change under a sliding p and still count as the seat
@@ -127,23 +128,30 @@ class SeatRay(NamedTuple):
     Attributes:
         slides_m: (S,) candidate slides s of p toward the NAO, supported ones only.
         seat_heights_m: (S,) the seat's height under each p(s).
-        seat_seen: the scan has the seat's top under p; when not (a scan that lost it,
-            while the imagined child sat there), p stays and nothing is known of the seat
-            ahead of it.
+        seat_seen: the scan has the seat's top under p, or under the bear's footprint
+            within :data:`UNSEEN_SLIDE_M` ahead of it (the slides then start there); when
+            not (a scan that lost it, while the imagined child sat there), p stays and
+            nothing is known of the seat ahead of it.
+        unseen_m: how far ahead of p the seen seat starts (metres; 0: under p).
     """
 
     slides_m: np.ndarray
     seat_heights_m: np.ndarray
     seat_seen: bool = True
+    unseen_m: float = 0.0
 
 
 SEAT_MAP_BEHIND_M = 0.15
 """The seat map starts this far (metres) behind p: the bear's footprint and a hole's rim."""
 SEAT_MAP_HALF_WIDTH_M = 0.15
 """... and reaches this far (metres) either side of the ray."""
-SLAT_GAP_M = 0.06
-"""Gaps in the seat up to this wide (metres) are closed: slats, a scan's cracks. The bear's
-torso (0.085 m deep, 0.10 m wide) bridges them."""
+SLAT_GAP_M = min(BEAR_TORSO_FOOTPRINT_M) - 2.0 * PLACEMENT_TOLERANCE_M
+"""Gaps in the seat up to this wide (metres) are closed on the seat map: the gaps between
+slats, a scan's cracks. The bear's torso, its contact footprint (0.085 m by 0.10 m in
+``hardware/bear_model.py``), rests on both sides of such a gap however it is turned and
+wherever the whole-body goal sets it down within its placement tolerance (1.5 cm either
+way): the footprint's smaller side less twice the tolerance, 0.055 m. The closing's disc
+on the map's 1 cm grid is 7 cells across (a radius of 3)."""
 
 
 class SeatMap(NamedTuple):
@@ -220,12 +228,23 @@ def _seat_height_under(heights: np.ndarray, distance_m: np.ndarray, p_z: float) 
     return float(np.median(heights[near])) if near.any() else math.nan
 
 
+UNSEEN_SLIDE_M = BEAR_TORSO_DEPTH_M
+"""Where the scan lost the seat under p, the bear's seat point may move this far (metres)
+ahead along the ray to where the scan shows the seat under its whole torso: one torso
+depth. A pelvis sits against the backrest, and the strip of seat in front of a back is
+what the views from behind the chair do not see past it (a tub or basket's back wrapping
+round its seat hides 5-8 cm of it); the bear, its torso wholly on seen seat, still sits
+where the child did to within its own depth."""
+
+
 def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
     """The supported sitting points along the ray from p toward the NAO (see module doc).
 
     A point p(s) is on the seat when at least half of the seat map's cells within
     ``SUPPORT_RADIUS_M`` across the ray at s are seat; the seat ends at the first s that
-    is not, and p(s) is supported up to ``BEAR_EDGE_MARGIN_M`` before that.
+    is not, and p(s) is supported up to ``BEAR_EDGE_MARGIN_M`` before that. Where p
+    itself is not on the seat, the seat starts at the first p(s), s up to
+    :data:`UNSEEN_SLIDE_M`, with seat under the whole torso (half its depth either side).
     """
     along, seat, heights, h0 = seat_map(chair_mesh, sitting_pose)
     if math.isnan(h0):
@@ -241,9 +260,14 @@ def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
     row_heights[has] = np.nanmedian(measured[has], axis=1)
     ahead = along >= -1e-9
     along, on_seat, row_heights = along[ahead], on_seat[ahead], row_heights[ahead]
+    unseen_m = 0.0
     if not on_seat[0]:
-        # The scan lost the seat's top here, yet the imagined child sat on it: p stays.
-        return SeatRay(np.zeros(1), np.full(1, h0), seat_seen=False)
+        start = _first_seen_torso(on_seat, along)
+        if start is None:
+            # The scan lost the seat's top here, yet the imagined child sat on it: p stays.
+            return SeatRay(np.zeros(1), np.full(1, h0), seat_seen=False)
+        along, on_seat, row_heights = along[start:], on_seat[start:], row_heights[start:]
+        unseen_m = float(along[0])
     if on_seat.all():
         limit = MAX_SLIDE_M
     else:
@@ -258,11 +282,25 @@ def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
     supported = (along <= max(limit, 0.0) + 1e-9) & on_seat
     supported &= np.cumprod(supported).astype(bool)
     slides, slide_heights = along[supported], row_heights[supported]
+    if not len(slides):
+        # The seen seat ahead of p is shallower than the bear's margin to its edge.
+        return SeatRay(np.zeros(1), np.full(1, h0), seat_seen=False)
     if limit > slides[-1] + EDGE_RESOLUTION_M:
         # The last grid point may lie up to a step short of the margin: add the margin's.
         slides = np.append(slides, limit)
         slide_heights = np.append(slide_heights, slide_heights[-1])
-    return SeatRay(slides, slide_heights)
+    return SeatRay(slides, slide_heights, unseen_m=unseen_m)
+
+
+def _first_seen_torso(on_seat: np.ndarray, along_m: np.ndarray) -> int | None:
+    """The first row (index into ``along_m``, rows from p ahead) within
+    :data:`UNSEEN_SLIDE_M` of p whose rows within half the torso's depth either side are
+    all seat, or None."""
+    half = round(BEAR_TORSO_DEPTH_M / 2.0 / STEP_M)
+    for row in np.flatnonzero(along_m <= UNSEEN_SLIDE_M + 1e-9):
+        if row >= half and on_seat[row - half : row + half + 1].all():
+            return int(row)
+    return None
 
 
 EDGE_RESOLUTION_M = 0.001
