@@ -110,6 +110,7 @@ BAD_MESHES = [
     [["run", "--mute", "--chair"], ["imagine"], ["scan", "--chair"]],
     ids=["run", "imagine", "scan"],
 )
+@pytest.mark.slow
 def test_a_bad_mesh_is_one_line_before_any_work(files, capsys, tmp_path, command, name, problem):
     extra = ["--out", str(tmp_path / "out")] if command[0] != "imagine" else []
     line = refused([*command, str(files[name]), *extra], capsys)
@@ -481,6 +482,7 @@ def test_a_tall_or_y_up_chair_is_warned_with_what_to_do():
         (["inspect", "/no/such/run"], "not a run record"),
     ],
 )
+@pytest.mark.slow
 def test_the_console_process_exits_2_with_one_line(argv, problem):
     done = subprocess.run(
         [sys.executable, "-m", "bearchair.executive.cli", *argv],

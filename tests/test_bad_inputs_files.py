@@ -187,6 +187,7 @@ def check_hardware(path: Path) -> list[str]:
     ],
     ids=["yaml-bomb", "deep-json", "401-digits"],
 )
+@pytest.mark.slow
 def test_a_hostile_cell_file_is_one_line_at_once(tmp_path, capsys, name, content, said):
     path = tmp_path / name
     path.write_text(content)
@@ -236,6 +237,7 @@ def test_a_password_with_edge_spaces_is_not_stripped_silently(tmp_path, capsys):
 # --- calibration files -----------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_a_calibration_file_of_18000_views_is_refused_at_once(tmp_path, capsys):
     view = {"name": "v", "configuration_rad": [0] * 7, "T_base_flange": [[0]]}
     path = tmp_path / "views.json"

@@ -59,6 +59,7 @@ def test_a_bad_cell_file_is_one_line_naming_the_field(cell, message):
     assert message in str(caught.value) and "\n" not in str(caught.value)
 
 
+@pytest.mark.slow
 def test_the_cli_refuses_a_bad_cell_file_in_one_line(tmp_path, capsys):
     path = tmp_path / "cell.json"
     path.write_text(json.dumps(_with(nao_start_yaw_rad=math.degrees(math.pi))))

@@ -13,6 +13,7 @@ from tests.helpers.cells import standin_cell_file
 pytest.importorskip("qi")
 
 
+@pytest.mark.slow
 def test_check_hardware_prints_every_check_and_moves_nothing(tmp_path, capsys):
     from bearchair.hardware.real.standins import NaoqiStandin
 
@@ -48,6 +49,7 @@ def test_check_hardware_names_an_unreachable_nao_within_five_seconds(tmp_path, c
     assert out.strip().splitlines()[-1] == "check-hardware: FAILED: nao"
 
 
+@pytest.mark.slow
 def test_run_on_robots_asks_first_then_records_the_cell_and_sdk_versions(
     tmp_path, capsys, monkeypatch
 ):

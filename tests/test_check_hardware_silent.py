@@ -97,6 +97,7 @@ def _wait_for_line(
     raise AssertionError(f"no line {prefix!r} within {within_s:g} s after {seen}")
 
 
+@pytest.mark.slow
 def test_a_silent_nao_is_named_within_its_timeout(tmp_path):
     with silent_peer() as (host, port):
         process = _check_hardware(_cell(tmp_path, f"tcp://{host}:{port}"), TIMEOUT_S)
@@ -112,6 +113,7 @@ def test_a_silent_nao_is_named_within_its_timeout(tmp_path):
     assert rest[-1].strip() == "check-hardware: FAILED: nao"
 
 
+@pytest.mark.slow
 def test_a_silent_panda_is_named_within_its_timeout(tmp_path):
     from bearchair.hardware.real.standins import NaoqiStandin
 
@@ -163,6 +165,7 @@ def test_a_silent_camera_is_named_within_its_timeout(tmp_path, monkeypatch):
     assert out.strip().splitlines()[-1] == "check-hardware: FAILED: camera"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("signum", "status"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 @pytest.mark.parametrize("device", ["nao", "panda"])
 def test_a_stop_signal_ends_check_hardware_within_a_second(tmp_path, signum, status, device):

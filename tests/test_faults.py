@@ -119,6 +119,7 @@ class SlowWorld:
         pass
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("swallow", [False, True], ids=["raised", "swallowed-by-a-library"])
 def test_ctrl_c_while_the_world_is_built_leaves_a_summary(tmp_path, monkeypatch, swallow):
     import bearchair.hardware.sim.world
@@ -277,6 +278,7 @@ def test_a_bug_outside_a_run_logs_to_the_cache(tmp_path, monkeypatch, capsys):
     assert len(logs) == 1 and "ZeroDivisionError" in logs[0].read_text()
 
 
+@pytest.mark.slow
 def test_a_closed_stdout_is_not_a_traceback():
     # `bearchair tree | head -1`: the reader goes away after the first line.
     command = f"{sys.executable} -m bearchair.executive.cli tree --format ascii | head -1"
@@ -505,6 +507,7 @@ CRASH_ONCE = FAKE_WORKER.replace(
 )
 
 
+@pytest.mark.slow
 def test_a_killed_worker_is_retried_once_and_marked(tmp_path, monkeypatch):
     from bearchair.evaluation.campaign import run_campaign
     from bearchair.evaluation.protocol import ChairEntry, expand_protocol
@@ -524,6 +527,7 @@ def test_a_killed_worker_is_retried_once_and_marked(tmp_path, monkeypatch):
     assert records[("crash.obj", 0)].attempts == 1
 
 
+@pytest.mark.slow
 def test_a_sigkilled_campaign_resumes_to_the_same_table_with_no_orphan(tmp_path, monkeypatch):
     command = fake_worker_command(tmp_path, monkeypatch)
     folder = write_chairs(tmp_path / "chairs", ["a.obj"])
@@ -574,6 +578,7 @@ def test_a_sigkilled_campaign_resumes_to_the_same_table_with_no_orphan(tmp_path,
     assert all((run_dir / "summary.json").is_file() for run_dir in run_dirs)
 
 
+@pytest.mark.slow
 def test_a_closed_stderr_does_not_stop_a_campaign(tmp_path, monkeypatch):
     command = fake_worker_command(tmp_path, monkeypatch)
     folder = write_chairs(tmp_path / "chairs", ["a.obj"])
@@ -592,6 +597,7 @@ def test_a_closed_stderr_does_not_stop_a_campaign(tmp_path, monkeypatch):
 # --- meshes: the up-axis check over the calibration chairs ----------------------------
 
 
+@pytest.mark.slow
 def test_up_axis_warnings_over_the_calibration_meshes(shared_chairs, shared_manifest):
     from bearchair.core.meshes import check_chair_mesh, load_mesh
 

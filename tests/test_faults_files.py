@@ -305,6 +305,7 @@ def test_imagine_json_on_a_full_device_is_exit_2_with_one_line(tmp_path, capsys,
     assert "cannot write to standard output" in line
 
 
+@pytest.mark.slow
 def test_the_console_to_dev_full_exits_2(tmp_path):
     with open("/dev/full", "w") as full:
         done = subprocess.run(
@@ -321,6 +322,7 @@ def test_the_console_to_dev_full_exits_2(tmp_path):
     ]
 
 
+@pytest.mark.slow
 def test_a_reader_that_goes_away_is_not_an_error():
     shell = f"{sys.executable} -m bearchair.executive.cli tree --format ascii | head -c 1"
     done = subprocess.run(["bash", "-c", shell], cwd=REPO, capture_output=True, text=True)
@@ -391,6 +393,7 @@ def test_is_terminal_of_a_closed_stream_is_false():
 # --- seeds and replaced chairs ---------------------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [2**31, 2**32 - 1])
 def test_a_seed_above_open3ds_range_works(seed):
     from bearchair.skills.perception.reconstruction import (

@@ -6,6 +6,8 @@ import os
 import time
 from pathlib import Path
 
+import pytest
+
 from bearchair.evaluation.forked_workers import STDOUT_NAME, PreloadedLauncher
 from bearchair.evaluation.worker_process import run_worker, run_worker_with_retry
 from tests.helpers import forked_fakes
@@ -25,6 +27,7 @@ def alive(pid: int) -> bool:
         return stat.read().split(")")[-1].split()[0] != "Z"
 
 
+@pytest.mark.slow
 def test_each_trial_is_a_fresh_fork_of_the_preloaded_server(tmp_path):
     launcher = PreloadedLauncher(forked_fakes.report)
     first = run_worker(launcher, payload(tmp_path, "a", seed=1), 120)
@@ -43,6 +46,7 @@ def test_each_trial_is_a_fresh_fork_of_the_preloaded_server(tmp_path):
     assert not (tmp_path / "a" / STDOUT_NAME).exists()
 
 
+@pytest.mark.slow
 def test_a_forked_trial_past_its_timeout_is_killed(tmp_path):
     started = time.monotonic()
     outcome = run_worker(PreloadedLauncher(forked_fakes.sleep_forever), payload(tmp_path, "t"), 8)

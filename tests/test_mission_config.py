@@ -159,6 +159,7 @@ def test_the_record_masks_an_inline_password(tmp_path):
     assert config.resolved["robots"]["cell"]["nao_password"] == "***"
 
 
+@pytest.mark.slow
 def test_the_tuned_parameters_reach_the_default_skills(tmp_path):
     from bearchair.skills.default_skills import DefaultSkills
 

@@ -61,6 +61,7 @@ def test_box_chair_is_reconstructed_in_the_world_frame(box_chair_scan):
     assert {"tsdf", "floor", "cluster", "mesh"} <= set(box_chair_scan.seconds)
 
 
+@pytest.mark.slow
 def test_reconstruction_is_deterministic(box_chair_frames, box_chair_scan):
     # Bit for bit: with open3d's threads, marching cubes moved vertices by 1-3 µm per run.
     for _ in range(3):
@@ -70,6 +71,7 @@ def test_reconstruction_is_deterministic(box_chair_frames, box_chair_scan):
         assert np.array_equal(again.chair_mesh.faces, box_chair_scan.chair_mesh.faces)
 
 
+@pytest.mark.slow
 def test_registration_is_deterministic(box_chair_scan):
     reference = box_chair_scan.chair_points
     moved = transform_points(
@@ -104,6 +106,7 @@ def test_registration_recovers_known_rotations(box_chair_scan, yaw_deg):
     assert fit.fitness > 0.8
 
 
+@pytest.mark.slow
 def test_registration_rejects_a_different_object(box_chair_scan):
     rng = np.random.default_rng(0)
     blob = rng.normal([0.6, 0.0, 0.3], 0.12, size=(4000, 3))
@@ -176,6 +179,7 @@ def test_a_bad_camera_pose_is_rejected(box_chair_frames):
         reconstruct_chair([frame], ReconstructionConfig())
 
 
+@pytest.mark.slow
 def test_no_chair_in_the_area_is_a_clear_failure():
     scene = SyntheticScene(seed=2)
     arm = SyntheticArm(scene)
@@ -219,6 +223,7 @@ class TurningChairArm:
 @pytest.mark.parametrize(
     ("start_s", "end_s", "low", "high"), [(0.5, 3.0, 3.0, 5.5), (99.0, 100.0, 2.9, 4.0)]
 )
+@pytest.mark.slow
 def test_wait_until_chair_still(start_s, end_s, low, high):
     clock = FakeClock()
     arm = TurningChairArm(clock, start_s, end_s)
@@ -230,6 +235,7 @@ def test_wait_until_chair_still(start_s, end_s, low, high):
     assert low <= waited <= high
 
 
+@pytest.mark.slow
 def test_a_chair_the_scan_splits_keeps_every_part():
     # A backrest on a stem thinner than the TSDF's voxels: the scan sees a panel floating
     # 4 cm over the chair's low back rail, a component of its own.

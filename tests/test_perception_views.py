@@ -126,6 +126,7 @@ class BlockedArm(SyntheticArm):
         self.visited.append(target)
 
 
+@pytest.mark.slow
 def test_a_motion_that_stops_short_skips_the_view_and_the_scan_goes_on():
     scene = SyntheticScene(seed=3)
     scene.add_mesh(box_chair_mesh(), T_WORLD_CHAIR)
@@ -142,6 +143,7 @@ def test_a_motion_that_stops_short_skips_the_view_and_the_scan_goes_on():
     assert seconds["capture"] > 0.0
 
 
+@pytest.mark.slow
 def test_a_scan_with_too_few_reachable_views_fails_with_the_reason():
     scene = SyntheticScene(seed=3)
     scene.add_mesh(box_chair_mesh(), T_WORLD_CHAIR)
@@ -227,6 +229,7 @@ def test_the_right_fit_is_a_peak_of_the_visible_overlap_and_an_offset_one_is_not
         assert not is_visible_peak(transform_points(offset @ motion, reference[::2]), frames)
 
 
+@pytest.mark.slow
 def test_a_turn_showing_sides_the_reference_never_saw_is_accepted_by_what_the_views_saw(
     turned_chair,
 ):
@@ -243,6 +246,7 @@ def test_a_turn_showing_sides_the_reference_never_saw_is_accepted_by_what_the_vi
     assert abs(math.degrees(wrap_angle(yaw_of(fit.T_world_new_old) - yaw_of(motion)))) < 3.0
 
 
+@pytest.mark.slow
 def test_when_the_best_fitting_yaw_is_wrong_the_views_pick_another():
     """The search past the best-fitting hypothesis (the best other yaws and the global
     registration, judged by the visible overlap): an armchair turned -120 degrees whose

@@ -65,6 +65,7 @@ def test_protocol_gaps_name_a_missing_method_and_an_unbindable_one():
     assert gap.startswith("say takes (*, text: 'str') -> 'None', not (sentence: 'str')")
 
 
+@pytest.mark.slow
 def test_the_default_and_the_scripted_skills_satisfy_the_protocol():
     from bearchair.skills.default_skills import DefaultSkills
 

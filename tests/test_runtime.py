@@ -89,6 +89,7 @@ EXIT_BOUND_S = 5.0
 """How long a signalled child may take to exit and be reaped."""
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(180)
 def test_the_imagination_pool_stops_with_its_workers_and_resource_tracker():
     """In a fresh interpreter: start the pool, stop the runtime; nothing is left."""
@@ -200,6 +201,7 @@ def test_run_on_robots_over_the_standins_exits_cleanly_ten_times_in_ten(tmp_path
     assert len(statuses) == RUNS
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(240)
 def test_the_trial_server_and_its_forks_stop_with_the_runtime():
     """In a fresh interpreter: one forked trial, then the runtime stopped; the trial

@@ -80,6 +80,7 @@ def _chair_file(tmp_path: Path) -> Path:
     return path
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(300)
 @pytest.mark.parametrize("signum", STOP_SIGNALS, ids=lambda s: signal.Signals(s).name)
 def test_each_stop_signal_ends_imagine_and_takes_its_pool_along(tmp_path, signum):
@@ -95,6 +96,7 @@ def test_each_stop_signal_ends_imagine_and_takes_its_pool_along(tmp_path, signum
     assert err.read_text().strip().splitlines()[-1] == f"bearchair: interrupted by {name}"
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(300)
 def test_a_second_ctrl_c_on_imagine_leaves_no_pool_worker_behind(tmp_path):
     err = tmp_path / "stderr.txt"
@@ -126,6 +128,7 @@ def test_sighup_while_the_imagination_runs_stops_the_mission_and_its_pool(tmp_pa
     assert survivors(process.pid) == []
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(300)
 def test_a_second_ctrl_c_during_a_run_still_writes_the_summary(tmp_path):
     out = tmp_path / "run"
@@ -155,6 +158,7 @@ class _SlowWorld:
         pass
 
 
+@pytest.mark.slow
 def test_ctrl_c_while_the_world_is_built_leaves_a_record_inspect_replays(
     tmp_path, monkeypatch, capsys
 ):
@@ -189,6 +193,7 @@ with interrupts.handling_signals():
 """
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(180)
 def test_a_second_signal_kills_and_reaps_the_pool_before_it_exits(tmp_path):
     err = tmp_path / "stderr.txt"
@@ -252,6 +257,7 @@ sys.exit(cli.main(["run", "--mute", "--out", sys.argv[1]]))
 """
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(180)
 def test_a_second_signal_during_a_slow_stop_still_writes_the_summary(tmp_path):
     out = tmp_path / "run"

@@ -80,6 +80,7 @@ def test_paper_protocol_is_six_trials_per_chair_and_72_for_12():
     assert len({t.seed for t in trials}) == 72
 
 
+@pytest.mark.slow
 def test_trial_seeds_are_deterministic_across_processes_and_depend_on_the_campaign_seed():
     chairs = entries(["a.obj", "b.obj"])
     assert expand_protocol(chairs, "paper", 7) == expand_protocol(chairs, "paper", 7)
@@ -216,6 +217,7 @@ def test_ray_backend_without_ray_says_how_to_install(tmp_path, capsys, monkeypat
 # --- records, resume, crashes, hangs ---------------------------------------------------
 
 
+@pytest.mark.slow
 def test_records_are_committed_and_a_rerun_skips_finished_trials(tmp_path, fake_worker):
     specs = expand_protocol(entries(["a.obj", "b.obj"], tmp_path), "paper", 1)
     backend = LocalBackend(workers=2, timeout_s=30, command=fake_worker)
@@ -243,6 +245,7 @@ def test_records_are_committed_and_a_rerun_skips_finished_trials(tmp_path, fake_
         assert run_campaign(other, store, backend, tmp_path / "runs", 30).ran == 6
 
 
+@pytest.mark.slow
 def test_a_crashing_and_a_hanging_trial_are_failures_and_the_harness_goes_on(tmp_path, fake_worker):
     specs = expand_protocol(entries(["crash.obj", "hang.obj"], tmp_path), "paper", 0)
     backend = LocalBackend(workers=2, timeout_s=3.0, command=fake_worker)
@@ -265,6 +268,7 @@ def test_a_crashing_and_a_hanging_trial_are_failures_and_the_harness_goes_on(tmp
     assert any(cause.startswith("harness: timed out") for cause in causes)
 
 
+@pytest.mark.slow
 def test_interrupted_then_resumed_gives_the_same_table_as_uninterrupted(tmp_path, fake_worker):
     specs = expand_protocol(entries(["a.obj", "b.obj", "c.obj"], tmp_path), "paper", 5)
     backend = LocalBackend(workers=2, timeout_s=30, command=fake_worker)
@@ -291,6 +295,7 @@ def test_interrupted_then_resumed_gives_the_same_table_as_uninterrupted(tmp_path
     assert table_without_timing(records) == table_without_timing(straight)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("stop_signal", [signal.SIGINT, signal.SIGTERM])
 def test_ctrl_c_on_the_cli_keeps_finished_trials_and_says_how_to_resume(
     tmp_path, fake_worker, stop_signal
@@ -451,6 +456,7 @@ def test_records_from_a_summary_and_from_an_error():
     assert failed.outcome == "failure" and failed.error.endswith("SIGSEGV")
 
 
+@pytest.mark.slow
 def test_report_folder_has_a_picture_per_chair_and_per_trial(tmp_path, fake_worker, monkeypatch):
     scene = tmp_path / "scene.png"
     from PIL import Image
@@ -505,6 +511,7 @@ def test_progress_lines_and_eta():
     assert format_duration(3725) == "1h02m" and format_duration(42) == "42s"
 
 
+@pytest.mark.slow
 def test_ray_backend_runs_the_same_trials_with_the_same_records(tmp_path, fake_worker, monkeypatch):
     fake_ray = FakeRay()
     monkeypatch.setitem(sys.modules, "ray", fake_ray)
@@ -644,6 +651,7 @@ def test_each_trials_imagination_gets_the_cores_the_other_trials_leave(
     assert trials_cli.imagination_workers(args) == expected
 
 
+@pytest.mark.slow
 def test_the_imagination_workers_reach_the_trials_payload_and_the_skills(tmp_path):
     from bearchair.skills.default_skills import DefaultSkills
 

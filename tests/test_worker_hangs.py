@@ -64,6 +64,7 @@ def _run(tmp_path: Path, monkeypatch, *, own_session: bool, hang: bool, timeout_
                 os.kill(int(pid_file.read_text()), signal.SIGKILL)
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(120)
 @pytest.mark.parametrize("own_session", [False, True], ids=["in-its-group", "own-session"])
 def test_a_grandchild_holding_stdout_does_not_hold_the_result(tmp_path, monkeypatch, own_session):
@@ -77,6 +78,7 @@ def test_a_grandchild_holding_stdout_does_not_hold_the_result(tmp_path, monkeypa
         assert wait_for(lambda: not _alive(grandchild), 5.0)
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(120)
 @pytest.mark.parametrize("own_session", [False, True], ids=["in-its-group", "own-session"])
 def test_a_hung_worker_with_a_grandchild_on_its_stdout_ends_at_its_timeout(
