@@ -32,7 +32,7 @@ from bearchair.skills.planning.seat import (
 )
 from bearchair.testing.chairgen import GeneratedChair, generate_chair
 from bearchair.testing.chairgen_families import box
-from tests.test_perception_views import frames_of
+from tests.helpers.scans import frames_of
 
 T_WORLD_CHAIR = yaw_transform(0.6, np.array([0.58, 0.08, 0.0]))
 """Where the chair stands in the chair area: turned so that the arm sees it from behind
