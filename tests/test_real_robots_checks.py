@@ -434,7 +434,12 @@ def test_check_hardware_prints_the_mirroring_and_the_intrinsics_it_read_back(
     with NaoqiStandin() as naoqi:
         raw = json.loads(_cell_text(naoqi.url))
         if calibrated:
-            raw["camera_intrinsics"] = {"fx_px": 561.2, "fy_px": 560.8, "cx_px": 322.0, "cy_px": 241.5}
+            raw["camera_intrinsics"] = {
+                "fx_px": 561.2,
+                "fy_px": 560.8,
+                "cx_px": 322.0,
+                "cy_px": 241.5,
+            }
         cell = tmp_path / "cell.json"
         cell.write_text(json.dumps(raw))
         status = main(["check-hardware", "--robots", str(cell)])
@@ -572,8 +577,13 @@ def test_a_device_fault_stops_the_robots_before_the_tree():
     robot = fake_robot()
     robot.emergency_stop = lambda: order.append("robots")  # type: ignore[method-assign]
     runner = MissionRunner(
-        Moving("Moving"), ScriptedSkills(), robot, seed=1, arena=DEFAULT_ARENA,
-        tick_period_s=0.001, on_tick=fault,
+        Moving("Moving"),
+        ScriptedSkills(),
+        robot,
+        seed=1,
+        arena=DEFAULT_ARENA,
+        tick_period_s=0.001,
+        on_tick=fault,
     )
     runner.run()
     assert order[:2] == ["robots", "tree"], order
