@@ -467,8 +467,10 @@ def test_the_openni_standin_starts_every_stream_mirrored_as_the_ps1080_driver_do
     assert depth.get_mirroring_enabled() and colour.get_mirroring_enabled()
     depth.start()
     colour.start()
-    rgb = np.frombuffer(colour.read_frame().get_buffer_as_uint8(), np.uint8).reshape(240, 320, 3)
-    mm = np.frombuffer(depth.read_frame().get_buffer_as_uint16(), np.uint16).reshape(240, 320)
+    # Copied while each frame is alive: the driver reuses a released frame's buffer.
+    colour_frame, depth_frame = colour.read_frame(), depth.read_frame()
+    rgb = np.array(colour_frame.get_buffer_as_uint8(), np.uint8).reshape(240, 320, 3)
+    mm = np.array(depth_frame.get_buffer_as_uint16(), np.uint16).reshape(240, 320)
     # Left and right swapped, as the driver sends them until told otherwise.
     assert rgb[:, -10:].min() == 255 and rgb[:, :10].max() == 0
     assert mm[:, -10:].max() == 1000 and mm[:, :10].min() == 2000
