@@ -195,3 +195,32 @@ def test_a_stop_signal_ends_check_hardware_within_a_second(tmp_path, signum, sta
     assert took_s < 1.0, f"{signal.Signals(signum).name} took {took_s:.2f} s"
     assert process.returncode == status, err
     assert "Traceback" not in err
+
+
+def test_a_camera_that_announces_a_frame_and_never_sends_it_is_named_within_its_timeout(
+    tmp_path, monkeypatch
+):
+    """The driver says a frame is ready and ``read_frame`` then blocks: the camera's own
+    wait cannot see that, check-hardware's bound on the capture must."""
+    from bearchair.hardware.real import robots
+    from bearchair.hardware.real.standins import FakeOpenNI2, NaoqiStandin
+
+    class Announcing(FakeOpenNI2):
+        def wait_for_any_stream(self, streams, timeout=None):
+            return streams[0]
+
+    monkeypatch.setattr(robots, "FakeOpenNI2", functools.partial(Announcing, silent=True))
+    _run_in_process(tmp_path / "none.json", TIMEOUT_S)  # imports done
+    with NaoqiStandin() as naoqi:
+        cell = _cell(tmp_path, naoqi.url)
+        result: list[tuple[int, str]] = []
+        worker = threading.Thread(
+            target=lambda: result.append(_run_in_process(cell, TIMEOUT_S)), daemon=True
+        )
+        worker.start()
+        worker.join(2 * TIMEOUT_S + 3.0)
+        assert not worker.is_alive(), "check-hardware still waits for the camera: it hangs"
+    status, out = result[0]
+    assert status == 1
+    assert "[FAIL] camera: the wrist camera: no answer in 0.5 s" in out
+    assert out.strip().splitlines()[-1] == "check-hardware: FAILED: camera"

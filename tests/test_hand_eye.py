@@ -506,6 +506,8 @@ def test_calibrate_moves_slowly_through_the_views_and_recovers_the_mount(
     assert main(["calibrate-hand-eye", "--from", str(out), "--square-mm", "29.1"]) == 1
     rescaled = capsys.readouterr().out
     assert "NOT GOOD ENOUGH: the depth camera measures the board +3.1 % from" in rescaled
+    # ... and names the other cause, the intrinsics, not the board alone.
+    assert "calibrate camera_intrinsics" in rescaled
     # ... which the residuals alone would not have shown (the views are equally far).
     assert "agrees within 0." in rescaled
 

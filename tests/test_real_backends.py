@@ -498,3 +498,71 @@ def test_a_silent_camera_read_ends_in_its_timeout_naming_it():
     camera = CarmineCamera(FakeOpenNI2(silent=True), timeout_s=0.2)
     error = _ends_within(camera.read, 3.0)
     assert isinstance(error, BackendUnavailable) and "the Carmine sent no depth frame" in str(error)
+
+
+def test_an_ordinary_stop_ends_the_walk_with_stopmove_alone(naoqi, nao):
+    """A walk that ends (or fails) is stopped with ``stopMove``: nothing is killed, so the
+    walk's leg tasks end on both feet and the other motions go on."""
+    naoqi.body.stop_runout_s = 0.3 * naoqi.time_scale  # 0.3 s on both feet after stopMove
+    nao.activate()
+    nao.set_velocity(0.1, 0.0, 0.0)
+    nao.stop()
+    assert naoqi.called("stopMove") and not naoqi.called("killTasksUsingResources")
+    assert naoqi.fell == ""
+    nao.set_velocity(0.1, 0.0, 0.0)  # not latched: the NAO walks again
+    nao.stop()
+
+
+def test_the_naoqi_standin_counts_killing_the_legs_mid_walk_as_a_fall(naoqi):
+    from bearchair.hardware.real.nao import connect
+
+    session = connect(naoqi.url)
+    motion = session.service("ALMotion")
+    motion.wakeUp()
+    motion.killTasksUsingResources(["LLeg"])  # standing still: nothing falls
+    assert naoqi.fell == ""
+    motion.move(0.1, 0.0, 0.0)
+    motion.killTasksUsingResources(["HeadYaw"])  # not a leg: the walk goes on
+    assert naoqi.fell == "" and naoqi.motion.walking()
+    motion.killTasksUsingResources(["LLeg"])
+    assert "mid-walk" in naoqi.fell
+    session.close()
+
+
+def test_the_naoqi_standins_slow_link_answers_every_call_late_and_together():
+    pytest.importorskip("qi")
+    from bearchair.hardware.real.nao import connect
+    from bearchair.hardware.real.standins import NaoqiStandin
+
+    with NaoqiStandin(call_latency_s=0.3) as naoqi:
+        session = connect(naoqi.url)
+        motion = session.service("ALMotion")
+        started = time.monotonic()
+        futures = [motion.robotIsWakeUp(_async=True) for _ in range(3)]
+        answers = [future.value() for future in futures]
+        took_s = time.monotonic() - started
+        session.close()
+    assert answers == [False, False, False]
+    # Each answered 0.3 s late, the three side by side (not one after the other).
+    assert 0.3 <= took_s < 0.85, took_s
+
+
+def test_the_nao_stop_returns_within_its_bounds_on_a_link_that_stopped_answering():
+    """A half-open Wi-Fi link: every NAOqi call goes unanswered for seconds. The stop's
+    calls are sent without waiting and each is waited for at most STOP_CALL_TIMEOUT_S,
+    so the stop returns (and the other devices' stops are not held) in about a second."""
+    pytest.importorskip("qi")
+    from bearchair.hardware.real.nao import STOP_CALL_TIMEOUT_S, NaoHumanoid, connect
+    from bearchair.hardware.real.standins import NaoqiStandin
+
+    with NaoqiStandin(time_scale=4.0) as naoqi:
+        session = connect(naoqi.url)
+        nao = NaoHumanoid(session)
+        nao.activate()
+        nao.set_velocity(0.1, 0.0, 0.0)
+        naoqi.call_latency_s = 5.0  # from here on nothing is answered for 5 s
+        started = time.monotonic()
+        nao.emergency_stop()
+        took_s = time.monotonic() - started
+        session.close()
+    assert took_s < 4 * STOP_CALL_TIMEOUT_S + 0.5, f"the stop took {took_s:.2f} s"
