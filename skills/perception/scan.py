@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import threading
 
+import numpy as np
+
 from bearchair.core.errors import Cancelled
 from bearchair.hardware.interfaces import ScanningArm
 from bearchair.skills.perception.clearance import MIN_SCAN_VIEWS, capture_scan
 from bearchair.skills.perception.errors import PerceptionError
 from bearchair.skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
-from bearchair.skills.perception.views import SCAN_CONFIGURATIONS
+from bearchair.skills.perception.views import CHAIR_VOLUME, SCAN_CONFIGURATIONS
 from bearchair.skills.results import ChairScan
 
 
@@ -28,7 +30,8 @@ def scan_chair(
     """Captures RGB-D at each of :data:`SCAN_CONFIGURATIONS` and reconstructs the chair.
 
     The arm goes HOME and looks at the chair area from there; where the object runs past
-    that view's side edges it turns its base to look further (side looks, fused too); views whose motion would
+    that view's side edges it turns its base to look further (side looks: the extent, and
+    fused too where the object reaches beyond the chair volume); views whose motion would
     pass within 3 cm of the chair it sees are visited through HOME, replaced by a view
     higher up, or skipped (``bearchair.skills.perception.clearance``); then through the views in
     order, and back HOME.
@@ -67,7 +70,14 @@ def scan_chair(
         # The crop holds what the looks saw of the object, however far it reaches.
         box = (tuple(capture.extent.lower), tuple(capture.extent.upper))
         config = ReconstructionConfig(**{**config.__dict__, "object_box": box})
-    fused = [*capture.looks, *frames]
+    # The side looks are fused only for an object larger than the chair volume the views
+    # were made for: there they see its ends, which no view does. On a chair inside that
+    # volume the views see it all, and an oblique look from HOME turned carves its TSDF
+    # (measured: a first-source chair lost a third of its points and the seat under p).
+    beyond = np.any(capture.extent.lower[:2] < CHAIR_VOLUME[0][:2]) or np.any(
+        capture.extent.upper[:2] > CHAIR_VOLUME[1][:2]
+    )
+    fused = [*capture.looks, *frames] if beyond and capture.extent.source == "seen" else frames
     scan = reconstruct_chair(fused, config)
     seconds = {**timing, **scan.seconds}
     return scan._replace(seconds=seconds, notes=tuple(notes), frames=tuple(fused))
