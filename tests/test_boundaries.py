@@ -82,6 +82,7 @@ def _chair_cloud(n: int = 3000) -> np.ndarray:
     return np.asarray(points) + np.array([0.6, 0.0, 0.0])
 
 
+@pytest.mark.slow
 def test_a_fit_exactly_at_the_minimum_fitness_and_maximum_rmse_is_accepted() -> None:
     cloud = _chair_cloud()
     fit = register_chair(cloud, cloud, RegistrationConfig())
@@ -276,6 +277,7 @@ def _judged(monkeypatch, reference, new, frames, config) -> tuple[float, float]:
     return seen[0], refined[0][2]
 
 
+@pytest.mark.slow
 def test_with_frames_a_fit_exactly_at_the_visible_overlap_and_rmse_bounds_is_accepted(
     monkeypatch, seen_chair
 ) -> None:

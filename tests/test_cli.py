@@ -41,6 +41,7 @@ def test_tree_svg_is_written(tmp_path, capsys):
         assert stage in svg
 
 
+@pytest.mark.slow
 def test_py_trees_render_can_build_the_tree_offline(tmp_path):
     # The design card: the tree renders through py-trees-render with no hardware.
     render = shutil.which(

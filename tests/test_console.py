@@ -31,6 +31,7 @@ def _run_python(code: str) -> subprocess.CompletedProcess[str]:
     )
 
 
+@pytest.mark.slow
 def test_pybullet_prints_no_banner_at_import_or_connect():
     done = _run_python(
         "from bearchair.core.streams import import_pybullet_quietly\n"
@@ -44,6 +45,7 @@ def test_pybullet_prints_no_banner_at_import_or_connect():
     assert done.stderr == ""
 
 
+@pytest.mark.slow
 def test_the_console_script_prints_no_pybullet_banner():
     done = subprocess.run(
         [sys.executable, "-m", "bearchair.executive.cli", "tree", "--format", "ascii"],
@@ -162,6 +164,7 @@ def test_step_bars_draw_on_a_terminal_only():
     assert seen == [("x", 1, 2)]
 
 
+@pytest.mark.slow
 def test_the_scan_and_the_imagination_report_their_steps():
     from bearchair.core.geometry import yaw_transform
     from bearchair.core.meshes import box_chair_mesh

@@ -34,6 +34,7 @@ def test_shell_commands_are_read_from_sh_blocks_only():
     assert shell_commands(page) == ["bearchair a", "bearchair b"]
 
 
+@pytest.mark.slow
 def test_the_site_builds_with_no_warning(tmp_path):
     pytest.importorskip("mkdocs")
     pytest.importorskip("material")

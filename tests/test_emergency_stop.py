@@ -167,6 +167,7 @@ def _ticking(world: SimWorld) -> Iterator[None]:
         ticker.join(5.0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["sim", "real-over-standins", "real-over-slow-standins"])
 @pytest.mark.parametrize("stage", list(STAGE_MOTIONS))
 def test_emergency_stop_stills_every_actuator_within_bound(stage, backend):

@@ -465,6 +465,7 @@ def test_calibrate_asks_first_and_moves_nothing_without_a_yes(cell, board_arm, m
     assert _moves(board_arm["panda"]) == []
 
 
+@pytest.mark.slow
 def test_calibrate_moves_slowly_through_the_views_and_recovers_the_mount(
     cell, board_arm, tmp_path, monkeypatch, capsys
 ):

@@ -282,6 +282,7 @@ def test_solid_boxes_keep_the_gap_between_armrests_open() -> None:
     assert _volume_m3(exact) <= _volume_m3(boxes) <= _volume_m3(exact) + 2 * pitch * footprint_m2
 
 
+@pytest.mark.slow
 def test_armchair_is_sat_on_between_its_armrests() -> None:
     # Over seeds: on about one seed in 20 (seeds 0 and 12 of 0-39) the window vote takes
     # the diagonal rotation, whose sitters the armrests turned to 29-31 deg, partly up on
@@ -315,6 +316,7 @@ def test_a_one_metre_cube_is_not_a_chair() -> None:
     assert "no correct sitting" in result.reason
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family", ["stool", "bench"])
 def test_a_seat_without_a_backrest_is_sat_on_by_upright_sitters(family: str) -> None:
     from bearchair.testing.chairgen import generate_chair
@@ -365,6 +367,7 @@ def test_the_righting_torque_balances_on_a_stool_but_not_on_a_post() -> None:
     assert not upright_drop_sits(trimesh.util.concatenate([post, base]))
 
 
+@pytest.mark.slow
 def test_same_seed_same_result_and_worker_count_does_not_matter(
     box_chair: trimesh.Trimesh,
 ) -> None:

@@ -308,6 +308,7 @@ def test_a_chair_inside_the_home_view_needs_no_side_looks():
     assert cut_sides(frame) == (False, False)
 
 
+@pytest.mark.slow
 def test_a_sofa_wider_than_the_home_view_is_looked_at_sideways_and_scanned_whole(clearance):
     from bearchair.skills.perception.clearance import cut_sides
 
@@ -339,6 +340,7 @@ def test_a_sofa_wider_than_the_home_view_is_looked_at_sideways_and_scanned_whole
         assert np.any(np.abs(near_end[:, 2] - seat_height) < 0.03), end
 
 
+@pytest.mark.slow
 def test_the_side_looks_bound_the_whole_sofa_so_the_views_are_checked_against_it(clearance):
     from bearchair.skills.perception.clearance import side_looks
 

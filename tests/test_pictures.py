@@ -205,6 +205,7 @@ def test_imagine_image_and_the_report_draw_with_the_same_renderer(tmp_path, monk
     assert math.isclose(calls[1][1].yaw, math.radians(30.0))
 
 
+@pytest.mark.slow
 def test_the_imagined_pose_picture_is_two_metric_views(tmp_path):
     pytest.importorskip("matplotlib")
     import math

@@ -103,6 +103,7 @@ def test_the_scale_check_says_what_it_sees(scale, said):
         assert "millimetres" not in str(raised.value)
 
 
+@pytest.mark.slow
 def test_over_the_calibration_meshes_upright_is_never_warned_and_turned_mostly_is(
     shared_chairs, shared_manifest
 ):

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from bearchair.core.geometry import SittingPose, make_transform, rot_z
 from bearchair.core.meshes import box_chair_mesh
@@ -21,6 +22,7 @@ from bearchair.skills.planning.stance import goal_on_ray
 SITTING_POSE = SittingPose(np.array([0.0, 0.0, 0.29]), 0.0)
 
 
+@pytest.mark.slow
 def test_a_question_asked_twice_is_planned_once_and_answered_alike() -> None:
     chair_mesh = box_chair_mesh()
     se2_goal = goal_on_ray(SITTING_POSE, 0.33)

@@ -117,6 +117,7 @@ def test_odometry_counts_from_the_first_reading(naoqi, nao):
     )
 
 
+@pytest.mark.slow
 def test_walking_is_a_latched_move_that_the_heartbeat_ends(naoqi, nao):
     from bearchair.hardware.real.nao import HEARTBEAT_PERIOD_S
 

@@ -382,6 +382,7 @@ def _cell_text(nao_url: str) -> str:
     ("runout_s", "queue_s", "failed"),
     [(0.0, 0.0, ""), (1.0, 0.0, "run-out"), (0.0, 1.5, "commands: queue")],
 )
+@pytest.mark.slow
 def test_check_hardware_walk_measures_the_run_out_and_refuses_an_unsafe_one(
     tmp_path, capsys, monkeypatch, runout_s, queue_s, failed
 ):

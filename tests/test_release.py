@@ -77,6 +77,7 @@ def test_the_planned_release_is_where_the_goal_holds_the_bear(chair):
     assert T[0, 2] < 0.0  # its top leaning back, away from the NAO
 
 
+@pytest.mark.slow
 def test_no_placement_where_the_bear_stays_fails_before_the_release(chair, monkeypatch):
     falls = imagine_release(chair, _bear_at(0.19, SEAT_HEIGHT_M + 0.01), 0.0, NAO_POSE)
     tried = []

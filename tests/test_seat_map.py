@@ -82,6 +82,7 @@ def scanned(family: str, seed: int) -> tuple[GeneratedChair, trimesh.Trimesh]:
         ("slatted", 0),
     ],
 )
+@pytest.mark.slow
 def test_the_scan_has_the_seat_under_the_sitting_point(family, seed):
     chair, mesh = scanned(family, seed)
     pose = sitting_pose(chair)
@@ -95,6 +96,7 @@ def test_the_scan_has_the_seat_under_the_sitting_point(family, seed):
     assert seat_map(mesh, pose).seat_height_m == pytest.approx(true_map.seat_height_m, abs=0.01)
 
 
+@pytest.mark.slow
 def test_a_thin_seat_survives_the_scan():
     # A 6 mm slab (a plywood or sling seat) on four legs, with a back: seen from above and
     # below by the views, thinner than the TSDF's voxel and truncation.
@@ -120,6 +122,7 @@ def test_a_thin_seat_survives_the_scan():
     assert seat_map(scan, pose).seat_height_m == pytest.approx(top, abs=0.01)
 
 
+@pytest.mark.slow
 def test_the_one_view_support_surfaces_are_deterministic():
     _, first = scanned("basket", 1)
     second = reconstruct_chair(frames("basket", 1), ReconstructionConfig()).chair_mesh
@@ -166,6 +169,7 @@ def test_the_seat_maps_numbers_come_from_the_bear():
     assert math.degrees(SUPPORT_TILT_RAD) == pytest.approx(16.4, abs=0.1)
 
 
+@pytest.mark.slow
 def test_a_seat_hidden_in_front_of_a_tub_back_is_taken_where_the_scan_sees_it():
     # The tub's back, wrapping round the seat, hides the 5 cm of seat in front of it from
     # the views behind the chair, and p sits there: the bear moves to where the scan sees

@@ -202,6 +202,7 @@ def _turn(world: SimWorld, sentence: str) -> tuple[float, float, bool]:
 SENTENCE = "Please rotate the chair about the vertical axis {} for {} degrees"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1])
 def test_helper_obeys_within_ten_degrees(seed):
     with SimWorld(SimConfig(seed=seed, helper="obeys", camera_noise=False)) as world:

@@ -228,6 +228,7 @@ def test_goal_posture_meets_every_constraint(chair, plan):
     assert abs(sum(q_goal[:3])) < 1.2
 
 
+@pytest.mark.slow
 def test_trajectory_is_stable_and_within_velocity_limits(chair, plan):
     q_all = _planar(plan.positions_rad)
     times = plan.times_s
@@ -455,6 +456,7 @@ def test_bear_one_metre_away_is_out_of_reach(chair):
     assert "1.00 m forward" in str(info.value)
 
 
+@pytest.mark.slow
 def test_from_where_it_stopped_p_slides_into_reach_on_a_deep_seat() -> None:
     deep_chair = box_chair_mesh(seat_height_m=SEAT_HEIGHT_M, seat_depth_m=0.40)
     stopped_short = SE2Pose(0.37, 0.0, math.pi)
@@ -491,6 +493,7 @@ def test_nao_facing_away_and_standing_inside_the_chair_fail_cleanly(chair):
     assert info.value.constraint == STANCE
 
 
+@pytest.mark.slow
 def test_repeated_solves_reuse_the_built_problems(chair):
     problems = seating_problems()
     plan_seating(chair, SITTING_POSE, SE2Pose(0.30, 0.01, math.pi - 0.05))
@@ -535,6 +538,7 @@ def test_cancel_stops_execution(plan):
     assert [c[0] for c in humanoid.calls] == ["play"]
 
 
+@pytest.mark.slow
 def test_over_a_seat_higher_than_the_carried_bear_the_nao_raises_it_first(chair) -> None:
     high_chair = box_chair_mesh(seat_height_m=0.33, overall_height_m=0.6)
     sitting = SittingPose(np.array([0.02, 0.0, 0.35]), 0.0)
