@@ -463,7 +463,8 @@ def test_a_ray_turned_about_p_is_searched_when_the_imagined_one_fails() -> None:
 
 
 def test_p_off_the_middle_between_armrests_is_centred_for_the_hands() -> None:
-    from bearchair.skills.planning.stance import centred_between_rails, planner_seat_top
+    from bearchair.skills.planning.chair_along_ray import centred_between_rails
+    from bearchair.skills.planning.stance import planner_seat_top
 
     # Armrest panels 0.15 m over the seat (above the hands), inner faces 0.13 m either
     # side of the middle: the band of the hands (0.11 m, plus 1 cm) fits between them.

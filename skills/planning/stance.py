@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import NamedTuple, cast
+from typing import NamedTuple
 
 import numpy as np
 import trimesh
@@ -47,19 +47,21 @@ import trimesh
 from bearchair.core.arena import Arena, Box2D
 from bearchair.core.geometry import SittingPose, wrap_angle
 from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning.chair_along_ray import (
+    blocked_above_reason,
+    centred_between_rails,
+    chair_along_ray,
+    closed_above,
+    out_of_reach_reason,
+    surface_points,
+)
 from bearchair.skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from bearchair.skills.planning.preplan import SeatingCheck, SeatingValidator, wholebody_validator
 from bearchair.skills.planning.seat import STEP_M, SeatRay, seat_ray
 from bearchair.skills.planning.wholebody.chair_profile import (
-    BAND_HALF_WIDTH_M,
-    BEAR_LANE_HALF_WIDTH_M,
-    RAIL_CLEARANCE_M,
     ChairProfileError,
     fit_chair_profile,
-    stands_above_seat,
 )
-from bearchair.skills.planning.wholebody.held_bear import BEAR_DEPTH_M
-from bearchair.skills.planning.wholebody.optimisation import BEAR_CHAIR_MARGIN_M
 from bearchair.skills.planning.wholebody.reach_model import ReachModel, reach_model
 from bearchair.skills.results import SeatReachability
 
@@ -81,11 +83,6 @@ deg) and the seating judge's 45 deg."""
 PREPLANS_PER_TURN = 2
 """Pre-plans each turned ray may ask for: the reach model's first pairs are right when
 the seat is reachable from there at all."""
-MAX_CENTRING_M = BEAR_LANE_HALF_WIDTH_M - 0.01
-"""How far (metres) p may move across the sitting ray to centre the NAO's band between
-armrests: the bear's lane, less a centimetre, still covers the imagined p. A sitter lands
-where its drop put it, often a few centimetres off the middle between armrests, and the
-NAO's hands need the middle."""
 
 
 class StanceChoice(NamedTuple):
@@ -130,21 +127,6 @@ def goal_on_ray(sitting_pose: SittingPose, distance_m: float) -> SE2Pose:
     return SE2Pose(float(x), float(y), wrap_angle(sitting_pose.yaw + math.pi))
 
 
-class ChairAlongRay(NamedTuple):
-    """The chair in the band the NAO's body sweeps, along the sitting ray (metres, from p₀
-    along u, positive toward the NAO).
-
-    Attributes:
-        front_m: f₀, the farthest the chair reaches at or below the seat top (plus 1 cm):
-            the seat block's front as the whole-body planner sees it.
-        above_seat_m: the farthest anything above the seat (a backrest, armrests)
-            reaches; -inf when nothing stands on the seat in the band.
-    """
-
-    front_m: float
-    above_seat_m: float
-
-
 def planner_seat_top(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, ray: SeatRay) -> float:
     """The seat top (metres) as the whole-body planner's chair profile takes it (the highest
     horizontal surface near p in the NAO's band, side rails included), so that the search
@@ -157,89 +139,6 @@ def planner_seat_top(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, ray
         return fit_chair_profile(chair_mesh, T_nao_world, p_nao).seat_top_z
     except ChairProfileError:
         return float(np.max(ray.seat_heights_m))
-
-
-def surface_points(chair_mesh: trimesh.Trimesh) -> np.ndarray:
-    """(N, 3) points of the chair's surface the search looks at: 20000 samples (seed 0)
-    and the vertices, world frame, metres."""
-    # Without sample_color, trimesh returns exactly (points, face indices).
-    points, _ = cast(
-        tuple[np.ndarray, np.ndarray], trimesh.sample.sample_surface(chair_mesh, 20000, seed=0)
-    )
-    return np.vstack([points, chair_mesh.vertices])
-
-
-def chair_along_ray(
-    chair_mesh: trimesh.Trimesh,
-    sitting_pose: SittingPose,
-    seat_top_m: float,
-    points: np.ndarray | None = None,
-) -> ChairAlongRay:
-    """Where the chair lies along the sitting ray within ``BAND_HALF_WIDTH_M`` of it,
-    below and above the seat top (:mod:`.wholebody.chair_profile`'s two blocks);
-    ``points``: :func:`surface_points` when the caller has them."""
-    p = np.asarray(sitting_pose.position, dtype=float)
-    u = sitting_pose.direction()
-    points = surface_points(chair_mesh) if points is None else points
-    rel = points[:, :2] - p[:2]
-    along = rel @ u
-    across = rel @ np.array([-u[1], u[0]])
-    in_band = np.abs(across) <= BAND_HALF_WIDTH_M
-    below = in_band & (points[:, 2] <= seat_top_m + 0.01)
-    above = in_band & stands_above_seat(across, points[:, 2], seat_top_m)
-    return ChairAlongRay(
-        float(along[below].max()) if below.any() else 0.0,
-        float(along[above].max()) if above.any() else -math.inf,
-    )
-
-
-def centred_between_rails(
-    chair_mesh: trimesh.Trimesh,
-    sitting_pose: SittingPose,
-    seat_top_m: float,
-    points: np.ndarray | None = None,
-) -> SittingPose:
-    """p moved across the ray so that what stands on the seat beside it (armrests) leaves
-    the NAO's band, ``RAIL_CLEARANCE_M`` outside it on each side it stands; p unchanged
-    when nothing stands within that of the band ahead of the bear's back, or no move of
-    at most ``MAX_CENTRING_M`` clears both sides.
-
-    With a and b the nearest such points left and right of the ray (across it, metres;
-    a missing side counts as far away), band w and clearance c, the move is
-
-    .. math::
-
-        δ = \\operatorname{clip}\\Big(\\tfrac{a + b}{2},\\; b + w + c,\\; a - w - c\\Big),
-
-    the middle of the gap, kept within the moves that clear both sides. ``points``:
-    :func:`surface_points` when the caller has them.
-    """
-    p = np.asarray(sitting_pose.position, dtype=float)
-    u = sitting_pose.direction()
-    left_axis = np.array([-u[1], u[0]])
-    points = surface_points(chair_mesh) if points is None else points
-    rel = points[:, :2] - p[:2]
-    along, across = rel @ u, rel @ left_axis
-    reach = BAND_HALF_WIDTH_M + RAIL_CLEARANCE_M
-    ahead = along >= -(BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M)
-    standing = ahead & (np.abs(across) <= reach + MAX_CENTRING_M)
-    standing &= stands_above_seat(across, points[:, 2], seat_top_m)
-    left = across[standing & (across > 0.0)]
-    right = across[standing & (across <= 0.0)]
-    a = float(left.min()) if len(left) else math.inf
-    b = float(right.max()) if len(right) else -math.inf
-    if a > reach and b < -reach:
-        return sitting_pose
-    lowest, highest = b + reach, a - reach
-    if lowest > highest:
-        return sitting_pose  # the gap is narrower than the band: no move helps
-    middle = (a + b) / 2.0 if math.isfinite(a + b) else (lowest if math.isfinite(b) else highest)
-    move = float(np.clip(middle, lowest, highest))
-    if abs(move) > MAX_CENTRING_M:
-        return sitting_pose
-    moved = p.copy()
-    moved[:2] += move * left_axis
-    return SittingPose(moved, sitting_pose.yaw)
 
 
 def _first_clear(
@@ -365,18 +264,18 @@ def _choose_stance_on_ray(
     pairs, stances = _stance_pairs(planner_ray, front, walk_in, model)
     if not pairs:
         return none._replace(
-            reason=_out_of_reach_reason(planner_ray, front, stances, model),
+            reason=out_of_reach_reason(planner_ray, front, stances, model),
             depends_on_scene=scene and walk_in > chair_clear + 1e-9,
         )
     search = _RaySearch(
         chair_mesh, sitting_pose, checker, validator, scene, true_height, walk_in, none
     )
     last = _confirm_pairs(search, pairs, max_preplans)
-    if last.se2_goal is None and _closed_above(chair, ray) and not last.depends_on_scene:
+    if last.se2_goal is None and closed_above(chair, ray) and not last.depends_on_scene:
         # The planar planner may still find its way past what stands on the seat (its
         # seat top is the highest horizontal surface near p), so that only names the
         # refusal when the pre-plan finds none.
-        return last._replace(reason=f"{_blocked_above_reason(chair, ray)} ({last.reason})")
+        return last._replace(reason=f"{blocked_above_reason(chair, ray)} ({last.reason})")
     return last
 
 
@@ -513,55 +412,6 @@ def _model_pairs(
             if not math.isnan(d_max) and stance - slide <= d_max:
                 pairs.append((float(slide), float(height), float(stance)))
     return pairs
-
-
-def _closed_above(chair: ChairAlongRay, ray: SeatRay) -> bool:
-    """Whether something standing on the seat in the band (armrests, a backrest) leaves
-    no sitting point on the ray room for the bear's back in front of it."""
-    return not np.any(ray.slides_m >= chair.above_seat_m + BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M)
-
-
-def _blocked_above_reason(chair: ChairAlongRay, ray: SeatRay) -> str:
-    overhang = chair.above_seat_m + BEAR_DEPTH_M / 2.0 - float(ray.slides_m[-1])
-    return (
-        f"the seat is closed in the NAO's way: something on it within "
-        f"{BAND_HALF_WIDTH_M:.3f} m of the sitting ray (armrests, a backrest) leaves no room "
-        f"for the bear ({BEAR_DEPTH_M:.3f} m deep) on the seat's front "
-        f"({overhang:.3f} m short); the NAO's hands hold the bear "
-        f"{BAND_HALF_WIDTH_M:.3f} m either side of it"
-    )
-
-
-def _out_of_reach_reason(
-    ray: SeatRay, front_m: float, stances_m: np.ndarray, model: ReachModel
-) -> str:
-    """Why the reach model places the bear nowhere on this seat from any stance."""
-    height = float(ray.seat_heights_m[0])
-    highest, lowest = model.max_seat_height_m(), model.min_seat_height_m()
-    if height > highest:
-        return (
-            f"seat too high for the NAO: seat {height:.3f} m, the NAO places a bear at most "
-            f"{highest:.3f} m high"
-        )
-    if height < lowest:
-        return (
-            f"seat too low for the NAO: seat {height:.3f} m, the NAO places a bear on seats "
-            f"at least {lowest:.3f} m high"
-        )
-    # The stance that comes closest: the nearest sitting point against the reach there.
-    best = (math.inf, math.nan, math.nan)
-    for stance in stances_m:
-        d_max = model.max_forward(height, float(stance - front_m))
-        needed = float(stance - ray.slides_m[-1])
-        if not math.isnan(d_max) and needed - d_max < best[0]:
-            best = (needed - d_max, needed, d_max)
-    if math.isnan(best[1]):
-        return f"seat out of the NAO's reach: no posture places a bear on a {height:.3f} m seat"
-    return (
-        f"seat out of the NAO's reach: the nearest supported sitting point is {best[1]:.3f} m "
-        f"ahead of the NAO at best, which reaches {best[2]:.3f} m there on a {height:.3f} m "
-        f"seat"
-    )
 
 
 def open_floor_arena(chair_mesh: trimesh.Trimesh) -> Arena:
