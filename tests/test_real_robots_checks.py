@@ -25,6 +25,7 @@ from bearchair.executive.cli import main
 from bearchair.hardware.real.camera import CARMINE_INTRINSICS, CarmineCamera
 from bearchair.hardware.real.panda import COLLISION_TORQUE_NM, PandaArm, into_walls
 from bearchair.hardware.real.standins import FakeOpenNI2, FakePanda, sdk_openni2, sdk_panda
+from tests.helpers.cells import standin_cell_file
 
 
 def _arm(panda: FakePanda, **options) -> PandaArm:
@@ -311,27 +312,9 @@ def test_naoqis_moveto_blocks_and_a_second_motion_on_held_joints_is_postponed(na
 # --- the command line -----------------------------------------------------------------------
 
 
-def _cell(tmp_path, nao_url):
-    path = tmp_path / "cell.json"
-    path.write_text(
-        json.dumps(
-            {
-                "nao_url": nao_url,
-                "panda_host": "standin",
-                "T_world_base": np.eye(4).tolist(),
-                "T_flange_camera": np.eye(4).tolist(),
-                "nao_start_x_m": 1.9,
-                "nao_start_y_m": 0.0,
-                "nao_start_yaw_rad": 3.14159,
-            }
-        )
-    )
-    return path
-
-
 @pytest.mark.parametrize("option", [["--placement", "inaccessible"], ["--helper", "obeys"]])
 def test_simulation_options_with_robots_are_refused(tmp_path, capsys, option):
-    cell = _cell(tmp_path, "tcp://127.0.0.1:9")
+    cell = standin_cell_file(tmp_path, "tcp://127.0.0.1:9")
     status = main(["run", "--robots", str(cell), *option, "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err
     assert status == 2 and f"{option[0]} is for the simulated world" in err
@@ -359,7 +342,7 @@ def test_run_with_robots_passes_mute_on(tmp_path, capsys, monkeypatch):
         raise BackendUnavailable("no robots in this test")
 
     monkeypatch.setattr(robots, "connect_robots", connect_robots)
-    cell = _cell(tmp_path, "tcp://127.0.0.1:9")
+    cell = standin_cell_file(tmp_path, "tcp://127.0.0.1:9")
     status = main(["run", "--robots", str(cell), "--mute", "--out", str(tmp_path / "out")])
     assert status == 2 and asked == [True], capsys.readouterr().err
 
@@ -396,7 +379,13 @@ def test_check_hardware_walk_measures_the_run_out_and_refuses_an_unsafe_one(
     monkeypatch.setattr(walk_check, "MAX_RUNOUT_S", 0.8)  # heartbeat 0.45 s, a quick stop
     with NaoqiStandin(stop_runout_s=runout_s, move_queue_s=queue_s) as naoqi:
         code = main(
-            ["check-hardware", "--robots", str(_cell(tmp_path, naoqi.url)), "--move", "--walk"]
+            [
+                "check-hardware",
+                "--robots",
+                str(standin_cell_file(tmp_path, naoqi.url)),
+                "--move",
+                "--walk",
+            ]
         )
         out = capsys.readouterr().out
     assert "] nao walk run-out:" in out and "] nao walk commands:" in out
@@ -414,7 +403,14 @@ def test_a_run_on_robots_stops_when_the_monitor_sees_a_fault(tmp_path, capsys):
         naoqi.battery_percent = 9
         out = tmp_path / "run"
         status = main(
-            ["run", "--robots", str(_cell(tmp_path, naoqi.url)), "--yes", "--out", str(out)]
+            [
+                "run",
+                "--robots",
+                str(standin_cell_file(tmp_path, naoqi.url)),
+                "--yes",
+                "--out",
+                str(out),
+            ]
         )
         capsys.readouterr()
     summary = json.loads((out / "summary.json").read_text())
@@ -532,7 +528,7 @@ def test_check_hardware_checks_the_views_against_an_fr3s_own_limits(tmp_path, ca
 
     monkeypatch.setattr(robots, "FakePanda", fr3)
     with NaoqiStandin() as naoqi:
-        status = main(["check-hardware", "--robots", str(_cell(tmp_path, naoqi.url))])
+        status = main(["check-hardware", "--robots", str(standin_cell_file(tmp_path, naoqi.url))])
         out = capsys.readouterr().out
     # scan8's joint 6 (0.4258 rad) is clear on the FER, 0.15 rad inside the FR3's wall.
     assert "[  ok] panda limits: from the robot: joint 6 [0.5445," in out

@@ -10,13 +10,12 @@ import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 
-import numpy as np
 import pytest
 
 from bearchair.core.memo import BoundedMemo
 from bearchair.core.runtime import RUNTIME, Runtime, reap
+from tests.helpers.cells import standin_cell_file
 from tests.helpers.process_tree import REPO, descendants
 
 
@@ -139,24 +138,6 @@ def test_the_kill_path_reaps_multiprocessing_children_at_once():
 RUNS = 10
 
 
-def _cell(tmp_path: Path, nao_url: str) -> Path:
-    path = tmp_path / "cell.json"
-    path.write_text(
-        json.dumps(
-            {
-                "nao_url": nao_url,
-                "panda_host": "standin",
-                "T_world_base": np.eye(4).tolist(),
-                "T_flange_camera": np.eye(4).tolist(),
-                "nao_start_x_m": 1.9,
-                "nao_start_y_m": 0.0,
-                "nao_start_yaw_rad": 3.14159,
-            }
-        )
-    )
-    return path
-
-
 @pytest.mark.slow
 @pytest.mark.timeout(1200)
 def test_run_on_robots_over_the_standins_exits_cleanly_ten_times_in_ten(tmp_path):
@@ -170,7 +151,7 @@ def test_run_on_robots_over_the_standins_exits_cleanly_ten_times_in_ten(tmp_path
 
     statuses = []
     with NaoqiStandin(time_scale=20.0) as naoqi:
-        cell = _cell(tmp_path, naoqi.url)
+        cell = standin_cell_file(tmp_path, naoqi.url)
         for run in range(RUNS):
             out = tmp_path / f"run{run}"
             done = subprocess.run(
