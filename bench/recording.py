@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 
 from bearchair.executive.config import RunConfig
-from bearchair.executive.recording import RECORDING_FILE, rerun_available
+from bearchair.executive.recording.mission_recording import RECORDING_FILE, rerun_available
 from bearchair.executive.run import run_in_simulation
 
 TARGET_RATIO = 0.10

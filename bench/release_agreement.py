@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from bearchair.core.errors import RunRecordError
-from bearchair.executive.run_summary import RunSummary
+from bearchair.executive.records.run_summary import RunSummary
 
 
 class Release(NamedTuple):

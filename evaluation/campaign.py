@@ -21,7 +21,7 @@ from bearchair.evaluation.store import TrialStore, record_from_error, record_fro
 from bearchair.evaluation.trial_backends import Backend, Job
 from bearchair.evaluation.trial_record import TrialRecord
 from bearchair.evaluation.worker_process import WorkerOutcome
-from bearchair.executive.run_summary import RunSummary
+from bearchair.executive.records.run_summary import RunSummary
 from bearchair.skills.imagination import DEFAULT_WORKERS
 
 

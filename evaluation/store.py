@@ -26,7 +26,7 @@ from bearchair.core.provenance import software_versions
 from bearchair.core.userfiles import parse_json, printable
 from bearchair.evaluation.protocol import TrialSpec
 from bearchair.evaluation.trial_record import TrialRecord
-from bearchair.executive.run_summary import RunSummary
+from bearchair.executive.records.run_summary import RunSummary
 
 logger = logging.getLogger(__name__)
 
@@ -266,7 +266,7 @@ def record_from_summary(
     run_dir: str | None,
     attempts: int = 1,
 ) -> TrialRecord:
-    """A row from a finished mission's ``summary.json`` (``bearchair.executive.run_summary``)."""
+    """A row from a finished mission's ``summary.json`` (``bearchair.executive.records.run_summary``)."""
     judgement = summary.judgement
     instructions = len(summary.instructions)
     return TrialRecord(

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, fields
 from typing import Any
 
 from bearchair.core.errors import RunRecordError
-from bearchair.executive.run_summary import SittingPoseRecord
+from bearchair.executive.records.run_summary import SittingPoseRecord
 
 BOOLEAN_COLUMNS = frozenset(
     {"accessible_final", "accessible_after_assistance", "seated", "on_seat"}

@@ -60,7 +60,7 @@ class ChairKeeper:
 
 
 def _rerun_installed() -> bool:
-    from bearchair.executive.recording import rerun_available
+    from bearchair.executive.recording.mission_recording import rerun_available
 
     if rerun_available():
         return True

@@ -146,7 +146,7 @@ def check_run_inputs(config: Any) -> Any:
     factory = load_tree_factory(config.tree.factory)
     check_skill_plugins(config.skills.plugins)
     if config.run.gui:
-        from bearchair.executive.recording import has_display
+        from bearchair.executive.recording.mission_recording import has_display
 
         if not has_display():
             raise InputError(

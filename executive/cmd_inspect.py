@@ -28,7 +28,7 @@ def register(subparsers: Any) -> None:
 
 
 def _inspect(args: argparse.Namespace) -> int:
-    from bearchair.executive.inspect_run import RecordedRun
+    from bearchair.executive.records.replay import RecordedRun
 
     run = RecordedRun(args.record_dir)
     state = run.at(args.tick)

@@ -167,7 +167,7 @@ def _log_to(path: Path):
 def add_recording_arguments(
     parser: argparse.ArgumentParser, *, record_default: bool | None
 ) -> None:
-    """``--record/--no-record`` and ``--live`` (Rerun recordings, ``bearchair.executive.recording``);
+    """``--record/--no-record`` and ``--live`` (Rerun recordings, ``bearchair.executive.recording.mission_recording``);
     ``record_default`` None: left off, the flag is None (the configuration decides, off)."""
     default = {True: "on", False: "off", None: "the configuration's, off"}[record_default]
     parser.add_argument(
@@ -190,7 +190,11 @@ def add_recording_arguments(
 
 def check_recording_arguments(command: str, args: argparse.Namespace) -> None:
     """One line before any work when a recording was asked for and cannot be made."""
-    from bearchair.executive.recording import INSTALL_HINT, has_display, rerun_available
+    from bearchair.executive.recording.mission_recording import (
+        INSTALL_HINT,
+        has_display,
+        rerun_available,
+    )
 
     live = getattr(args, "live", None)
     if (args.record or live) and not rerun_available():

@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from bearchair.executive.recording import (
+from bearchair.executive.recording.mission_recording import (
     DEFAULT_WEB_PORT,
     INSTALL_HINT,
     RECORDING_FILE,

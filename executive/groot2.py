@@ -41,7 +41,7 @@ from bearchair.executive.groot2_server import (
     xml_with_uids,
     zmq_endpoint,
 )
-from bearchair.executive.record import tree_nodes
+from bearchair.executive.records.run_record import tree_nodes
 
 __all__ = ["Groot2Monitor", "Groot2Unavailable", "check_groot2_address", "check_groot2_port"]
 

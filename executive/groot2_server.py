@@ -99,7 +99,7 @@ BUILTIN_MODELS: dict[str, tuple[str, tuple[BuiltinPort, ...]]] = {
 def xml_with_uids(xml: str) -> str:
     """Our export as Groot2 expects a ``FULLTREE`` reply, as BT.CPP's publisher sends it:
     each tree node's ``_uid`` (1, 2, ... in depth-first order, the order
-    :func:`bearchair.executive.record.tree_nodes` lists them), the tree's ``_fullpath``,
+    :func:`bearchair.executive.records.run_record.tree_nodes` lists them), the tree's ``_fullpath``,
     and the models of the built-in nodes it uses, all models sorted by ID."""
     document = ET.fromstring(xml)
     tree = document.find("BehaviorTree")

@@ -21,9 +21,9 @@ from bearchair.core.userfiles import printable
 from bearchair.executive.config import RunConfig, front_yaw_from_manifest
 from bearchair.executive.interrupts import raise_if_received, signal_name
 from bearchair.executive.outputs import atomic_path, write_text_atomic
-from bearchair.executive.record import RecordWriteError, RunRecorder
-from bearchair.executive.recording import open_recording
-from bearchair.executive.run_summary import GroundTruth, RunInfo, RunSummary
+from bearchair.executive.recording.mission_recording import open_recording
+from bearchair.executive.records.run_record import RecordWriteError, RunRecorder
+from bearchair.executive.records.run_summary import GroundTruth, RunInfo, RunSummary
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.executive.tick_watchers import ScenePictures, StageSnapshots, both
 from bearchair.executive.tree_source import build_tree

@@ -21,9 +21,9 @@ from bearchair.executive.interrupts import (
     raise_if_received,
     signal_name,
 )
-from bearchair.executive.jsonable import to_jsonable
-from bearchair.executive.record import RecordWriteError, RunRecorder
-from bearchair.executive.run_summary import (
+from bearchair.executive.records.jsonable import to_jsonable
+from bearchair.executive.records.run_record import RecordWriteError, RunRecorder
+from bearchair.executive.records.run_summary import (
     JsonRecord,
     JudgementRecord,
     ReleaseRecord,
@@ -104,7 +104,7 @@ class MissionRunner:
         timeout_s: wall time after which the mission is stopped as failed.
         on_tick: called after each tick (progress display).
         post_tick: hooks called after each tick and once more when the run has ended
-            (the tree stopped): recordings and viewers (``bearchair.executive.recording``).
+            (the tree stopped): recordings and viewers (``bearchair.executive.recording.mission_recording``).
         on_second_signal: called with the outcome so far when a second stop signal
             exits the process at once, after the robots were stopped (it writes the
             summary that the orderly stop had no time to write).

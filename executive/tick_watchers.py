@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
 from bearchair.core.userfiles import printable
-from bearchair.executive.run_summary import RunSummary
+from bearchair.executive.records.run_summary import RunSummary
 from bearchair.executive.runner import MissionRunner
 
 if TYPE_CHECKING:

@@ -13,7 +13,7 @@ import threading
 from bearchair.skills import assistance, control, imagination, perception
 from bearchair.skills.imagination.drop_records import SimulationSettings
 from bearchair.skills.parameters import SkillParameters
-from bearchair.skills.perception.reconstruction import ReconstructionConfig
+from bearchair.skills.perception.reconstruction_config import ReconstructionConfig
 from bearchair.skills.planning import accessibility, stance, wholebody
 from bearchair.skills.planning.wholebody.optimisation import start_building_problems
 from bearchair.skills.planning.wholebody.release_choice import plan_seating_released

@@ -12,7 +12,7 @@ SCAN_VIEW_COUNT = 9
 """How many scan configurations there are (``perception.views.SCAN_CONFIGURATIONS``; a
 test keeps the two in step, so that checking a configuration imports no perception)."""
 MIN_SCAN_VIEWS = 5
-"""Fewest views a scan accepts (``perception.clearance.MIN_SCAN_VIEWS``, likewise)."""
+"""Fewest views a scan accepts (``perception.scan_capture.MIN_SCAN_VIEWS``, likewise)."""
 
 
 @dataclass(frozen=True)

@@ -199,3 +199,103 @@ def test_the_test_module_check_sees_every_form_of_import(tmp_path):
     assert [line.split(":")[1] for line in imports_of_test_modules(path)] == [
         "1", "2", "3", "4", "5", "7"
     ]  # fmt: skip
+
+
+MAX_MODULE_LINES = 500
+"""A module longer than this holds more than one concept: split it along them."""
+
+SHARED_BASENAMES: dict[str, str] = {
+    "__init__.py": "every package has one",
+    "accessibility.py": "a leaf (behaviours) and the skill it calls (skills/planning)",
+    "imagine.py": "a leaf and the skill it calls (skills/imagination)",
+    "scan.py": "a leaf and the skill it calls (skills/perception)",
+    "seat.py": "a leaf and the skill it calls (skills/planning)",
+    "walk.py": "a leaf and the skill it calls (skills/control)",
+    "camera.py": "the wrist camera's backend, simulated and real (hardware/sim, hardware/real)",
+    "nao.py": "the NAO's backend, simulated and real",
+    "panda.py": "the Panda's backend, simulated and real, and its SDK's stand-in",
+    "errors.py": "the exception tree (core) and the perception's own branch of it",
+}
+"""Basenames more than one module may have, each with the parallel rooms it stands for."""
+
+
+def project_modules() -> list[Path]:
+    """The project's module files, in the card's top-level folders."""
+    return sorted(p for room in MAY_IMPORT for p in (ROOT / room).rglob("*.py"))
+
+
+def test_no_module_is_longer_than_its_concept():
+    long = [
+        f"{path.relative_to(ROOT)}: {n} lines"
+        for path in project_modules()
+        if (n := len(path.read_text().splitlines())) > MAX_MODULE_LINES
+    ]
+    assert not long, f"modules over {MAX_MODULE_LINES} lines:\n" + "\n".join(long)
+
+
+def test_two_modules_share_a_basename_only_as_parallel_rooms():
+    by_name: dict[str, list[str]] = {}
+    for path in project_modules():
+        by_name.setdefault(path.name, []).append(str(path.relative_to(ROOT)))
+    shared = {name: paths for name, paths in by_name.items() if len(paths) > 1}
+    unexplained = {name: paths for name, paths in shared.items() if name not in SHARED_BASENAMES}
+    assert not unexplained, f"modules sharing a basename: {unexplained}"
+    stale = set(SHARED_BASENAMES) - set(shared)
+    assert not stale, f"no longer shared (drop them from SHARED_BASENAMES): {sorted(stale)}"
+
+
+def modules_imported_outside(paths: list[Path]) -> set[str]:
+    """Every ``bearchair...`` module the files in ``paths`` import (inside functions too),
+    with the modules named by ``from bearchair.x import y``."""
+    found: set[str] = set()
+    for path in paths:
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                found.update(alias.name for alias in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.module:
+                found.add(node.module)
+                found.update(f"{node.module}.{alias.name}" for alias in node.names)
+    return {name for name in found if name.startswith("bearchair")}
+
+
+def entry_point_modules() -> set[str]:
+    """The modules ``pyproject.toml`` names as a script or an entry point."""
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    targets = list(project.get("scripts", {}).values())
+    for group in project.get("entry-points", {}).values():
+        targets.extend(group.values())
+    return {target.split(":")[0] for target in targets}
+
+
+def test_every_module_is_used():
+    # A module nothing imports is dead code, unless it is started by name: an entry
+    # point, a ``python -m`` worker (it has ``if __name__``), the trial server's preload.
+    # Imports under ``if TYPE_CHECKING:`` count: a package's lazy names (imported on
+    # first use, by ``__getattr__``) are declared there.
+    from bearchair.evaluation.forked_workers import PRELOAD_MODULE
+
+    sys.path.insert(0, str(ROOT))
+    try:
+        graph = grimp.build_graph("bearchair", include_external_packages=False, cache_dir=None)
+    finally:
+        sys.path.remove(str(ROOT))
+
+    outside = modules_imported_outside(
+        sorted((ROOT / "tests").rglob("*.py"))
+        + sorted((ROOT / "bench").glob("*.py"))
+        + sorted((ROOT / "examples").rglob("*.py"))
+    )
+    started = entry_point_modules() | {PRELOAD_MODULE}
+    unused = []
+    for module in sorted(graph.modules):
+        path = ROOT / Path(*module.split("."))
+        if (path / "__init__.py").exists() or module in started or module in outside:
+            continue
+        if graph.find_modules_that_directly_import(module):
+            continue
+        if "__name__ == \"__main__\"" in (path.with_suffix(".py")).read_text():
+            continue
+        unused.append(module)
+    assert not unused, "modules nothing imports:\n" + "\n".join(unused)

@@ -22,7 +22,7 @@ import trimesh
 from bearchair.core.meshes import box_chair_mesh, check_chair_mesh
 from bearchair.evaluation.store import campaign_lock
 from bearchair.executive import cli
-from bearchair.executive.record import RunRecorder
+from bearchair.executive.records.run_record import RunRecorder
 from bearchair.trees.mission import create_tree
 from tests.helpers.cli_calls import refused
 

@@ -10,8 +10,8 @@ import pytest
 
 from bearchair.core.arena import DEFAULT_ARENA
 from bearchair.executive.cli import main
-from bearchair.executive.record import RunRecorder
-from bearchair.executive.run_summary import RunInfo
+from bearchair.executive.records.run_record import RunRecorder
+from bearchair.executive.records.run_summary import RunInfo
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.testing.scripted import ScriptedSkills
@@ -215,7 +215,7 @@ def test_pyproject_registers_the_trials_command_of_evaluation():
 
     pyproject = Path(__file__).resolve().parents[1] / "pyproject.toml"
     declared = tomllib.loads(pyproject.read_text())["project"]["entry-points"][COMMANDS_GROUP]
-    assert declared == {"trials": "bearchair.evaluation.cli:register"}
+    assert declared == {"trials": "bearchair.evaluation.cmd_trials:register"}
     subparsers = argparse.ArgumentParser().add_subparsers()
     metadata.EntryPoint("trials", declared["trials"], COMMANDS_GROUP).load()(subparsers)
     assert list(subparsers.choices) == ["trials"]

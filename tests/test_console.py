@@ -16,11 +16,11 @@ import pytest
 
 from bearchair.behaviours.tracking import tracked_humanoid_pose
 from bearchair.core.se2 import SE2Pose
-from bearchair.evaluation.cli import left_out_text
+from bearchair.evaluation.cmd_trials import left_out_text
 from bearchair.evaluation.protocol import SkippedChair, discover_chairs
 from bearchair.evaluation.trial_record import TrialRecord
+from bearchair.executive.records.run_summary import RunSummary
 from bearchair.executive.run import format_summary
-from bearchair.executive.run_summary import RunSummary
 from bearchair.executive.runner import StageClock, StageTiming
 from bearchair.executive.tick_watchers import StageProgress, stage_seconds_text
 

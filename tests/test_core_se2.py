@@ -82,7 +82,7 @@ def test_a_pose_in_a_record_has_its_units_in_the_keys():
 def test_the_blackboard_and_the_accessibility_result_record_a_goal_alike():
     # Both are in the same ticks.jsonl line: the goal on its own and inside the result.
     from bearchair.core.geometry import SittingPose
-    from bearchair.executive.jsonable import to_jsonable
+    from bearchair.executive.records.jsonable import to_jsonable
     from bearchair.skills.results import AccessibilityResult
 
     goal = SE2Pose(0.7, 0.1, -2.0)

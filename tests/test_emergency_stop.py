@@ -137,7 +137,7 @@ def _robot(world: SimWorld, backend: str) -> Iterator[Robot]:
         yield world.robot
         return
     pytest.importorskip("qi")
-    from bearchair.hardware.real.sim_standins import SimulatedNaoBody, robot_over_standins
+    from bearchair.hardware.real.standins.simulated_bodies import SimulatedNaoBody, robot_over_standins
     from bearchair.hardware.real.standins import NaoqiStandin
 
     with NaoqiStandin(body=SimulatedNaoBody(world)) as standin:

@@ -28,9 +28,9 @@ from bearchair.core.runtime import RUNTIME
 from bearchair.evaluation.store import TrialStore, campaign_lock
 from bearchair.executive import cli
 from bearchair.executive import run as executive_run
-from bearchair.executive.inspect_run import RecordedRun
-from bearchair.executive.record import RunRecorder
-from bearchair.executive.run_summary import RunInfo
+from bearchair.executive.records.replay import RecordedRun
+from bearchair.executive.records.run_record import RunRecorder
+from bearchair.executive.records.run_summary import RunInfo
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.testing.scripted import ScriptedSkills
 from bearchair.trees.mission import create_tree

@@ -22,8 +22,8 @@ import pytest
 from bearchair.core.errors import OutputError
 from bearchair.evaluation.store import TrialStore, campaign_lock
 from bearchair.executive import cli, operator, outputs
-from bearchair.executive.record import RecordWriteError, RunRecorder
-from bearchair.executive.run_summary import RunSummary
+from bearchair.executive.records.run_record import RecordWriteError, RunRecorder
+from bearchair.executive.records.run_summary import RunSummary
 from bearchair.trees.mission import create_tree
 from tests.helpers.campaigns import FAKE_WORKER, write_chairs
 from tests.helpers.cli_calls import refused
@@ -396,11 +396,8 @@ def test_is_terminal_of_a_closed_stream_is_false():
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [2**31, 2**32 - 1])
 def test_a_seed_above_open3ds_range_works(seed):
-    from bearchair.skills.perception.reconstruction import (
-        ReconstructionConfig,
-        fit_floor,
-        open3d_seed,
-    )
+    from bearchair.skills.perception.reconstruction import fit_floor, open3d_seed
+    from bearchair.skills.perception.reconstruction_config import ReconstructionConfig
 
     assert 0 <= open3d_seed(seed) < 2**31 and open3d_seed(seed) == open3d_seed(seed)
     rng = np.random.default_rng(0)

@@ -10,7 +10,7 @@ import os
 import pytest
 
 from bearchair.executive import cli
-from bearchair.executive.record import RunRecorder
+from bearchair.executive.records.run_record import RunRecorder
 from bearchair.trees.mission import create_tree
 from tests.helpers.cli_calls import refused
 from tests.helpers.missions import one_tick_record
@@ -19,7 +19,7 @@ from tests.helpers.missions import one_tick_record
 
 
 def test_inspect_writes_its_crash_log_outside_the_record(tmp_path, capsys, monkeypatch):
-    from bearchair.executive import inspect_run
+    from bearchair.executive.records import replay
 
     run = tmp_path / "run"
     one_tick_record(run)
@@ -29,7 +29,7 @@ def test_inspect_writes_its_crash_log_outside_the_record(tmp_path, capsys, monke
     def broken(self, tick):
         raise RuntimeError("a bug")
 
-    monkeypatch.setattr(inspect_run.RecordedRun, "tree_text", broken)
+    monkeypatch.setattr(replay.RecordedRun, "tree_text", broken)
     assert cli.main(["inspect", str(run)]) == 3
     (line,) = capsys.readouterr().err.strip().splitlines()
     assert "internal error" in line and str(run) not in line.split("the traceback is in ")[1]

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from bearchair.core.arena import DEFAULT_ARENA
-from bearchair.executive.run_summary import RunInfo
+from bearchair.executive.records.run_summary import RunInfo
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.hardware.real.panda import wall_limits
 from bearchair.hardware.sim.world import SimConfig, SimWorld
@@ -20,7 +20,7 @@ pytest.importorskip("qi")
 
 
 def test_flange_kinematics_of_the_fake_panda_match_the_simulated_panda():
-    from bearchair.hardware.real.sim_standins import SimulatedPanda
+    from bearchair.hardware.real.standins.simulated_bodies import SimulatedPanda
     from bearchair.hardware.real.standins import panda_flange_pose
     from bearchair.hardware.sim.bullet import T_world_link, link_index_by_name
 
@@ -39,7 +39,7 @@ def test_flange_kinematics_of_the_fake_panda_match_the_simulated_panda():
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 def test_the_mission_runs_over_the_sdk_standins():
-    from bearchair.hardware.real.sim_standins import SimulatedNaoBody, robot_over_standins
+    from bearchair.hardware.real.standins.simulated_bodies import SimulatedNaoBody, robot_over_standins
     from bearchair.hardware.real.standins import NaoqiStandin
 
     with (

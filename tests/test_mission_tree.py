@@ -12,9 +12,9 @@ from py_trees.common import Status
 
 from bearchair.core.arena import DEFAULT_ARENA
 from bearchair.core.errors import RunRecordError
-from bearchair.executive.inspect_run import RecordedRun
-from bearchair.executive.record import RunRecorder
-from bearchair.executive.run_summary import RunInfo
+from bearchair.executive.records.replay import RecordedRun
+from bearchair.executive.records.run_record import RunRecorder
+from bearchair.executive.records.run_summary import RunInfo
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.executive.tree_render import render_text
 from bearchair.hardware.fakes import fake_robot

@@ -16,10 +16,8 @@ from bearchair.core.meshes import box_chair_mesh
 from bearchair.skills.perception import PerceptionError, ReconstructionConfig, reconstruct_chair
 from bearchair.skills.perception.clearance import (
     HIDDEN_MARGIN_M,
-    MIN_SCAN_VIEWS,
     ArmClearance,
     ChairExtent,
-    capture_planned,
     chair_extent,
     plan_views,
 )
@@ -31,6 +29,7 @@ from bearchair.skills.perception.registration import (
     visible_fitness,
 )
 from bearchair.skills.perception.scan import scan_chair
+from bearchair.skills.perception.scan_capture import MIN_SCAN_VIEWS, capture_planned
 from bearchair.skills.perception.views import (
     CHAIR_VOLUME,
     HOME_CONFIGURATION,
@@ -342,7 +341,7 @@ def test_a_sofa_wider_than_the_home_view_is_looked_at_sideways_and_scanned_whole
 
 @pytest.mark.slow
 def test_the_side_looks_bound_the_whole_sofa_so_the_views_are_checked_against_it(clearance):
-    from bearchair.skills.perception.clearance import side_looks
+    from bearchair.skills.perception.scan_capture import side_looks
 
     mesh, _ = _wide_sofa()
     T = yaw_transform(0.0, np.array([0.75, 0.0, 0.0]))

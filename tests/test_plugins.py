@@ -319,7 +319,7 @@ def test_the_trial_worker_runs_the_payload_tree(tmp_path, monkeypatch, capsys):
 
     from bearchair.evaluation import worker
     from bearchair.executive import run as executive_run
-    from bearchair.executive.run_summary import RunSummary
+    from bearchair.executive.records.run_summary import RunSummary
     from bearchair_example.trees import create_tree_without_assistance
 
     ran = {}

@@ -14,8 +14,8 @@ import py_trees
 from bearchair.core import provenance
 from bearchair.evaluation.protocol import ChairEntry, expand_protocol
 from bearchair.evaluation.store import TrialStore, record_from_error, record_from_summary
-from bearchair.executive.record import RunRecorder
-from bearchair.executive.run_summary import RunSummary
+from bearchair.executive.records.run_record import RunRecorder
+from bearchair.executive.records.run_summary import RunSummary
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -23,8 +23,8 @@ from bearchair.core.meshes import box_chair_mesh
 from bearchair.core.se2 import SE2Pose
 from bearchair.executive import cli
 from bearchair.executive.cmd_config import mission_from_args
-from bearchair.executive.record import RunRecorder, load_ticks
-from bearchair.executive.run_summary import RunInfo, RunSummary
+from bearchair.executive.records.run_record import RunRecorder, load_ticks
+from bearchair.executive.records.run_summary import RunInfo, RunSummary
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.hardware.interfaces import SeatingJudgement
@@ -34,8 +34,12 @@ from bearchair.trees.mission import create_tree
 
 pytest.importorskip("rerun", reason="rerun-sdk (the [viewer] extra) is not installed")
 
-from bearchair.executive.recording import RECORDING_FILE, STATUS_COLOURS, MissionRecording
-from bearchair.executive.recording_read import read_entity
+from bearchair.executive.recording.mission_recording import (
+    RECORDING_FILE,
+    STATUS_COLOURS,
+    MissionRecording,
+)
+from bearchair.executive.recording.read_back import read_entity
 from bearchair.executive.skill_calls import SkillCalls
 
 T_WORLD_CHAIR = yaw_transform(0.6, np.array([0.58, 0.08, 0.0]))
@@ -451,7 +455,7 @@ def _rgb(packed: int) -> tuple[int, int, int]:
 
 
 def test_the_recording_opens_with_the_mission_layout(recorded):
-    from bearchair.executive.recording_layout import CAMERA_VIEW_TABS, blueprint_views
+    from bearchair.executive.recording.layout import CAMERA_VIEW_TABS, blueprint_views
 
     views = blueprint_views(recorded[0] / RECORDING_FILE)
     assert ("3D", "scene", "world") in views
@@ -520,7 +524,7 @@ def test_a_played_motion_poses_the_nao_knot_by_knot(tmp_path):
     import rerun as rr
     from scipy.spatial.transform import Rotation
 
-    from bearchair.executive.recording_robots import MissionRobots
+    from bearchair.executive.recording.urdf_robots import MissionRobots
 
     robots = MissionRobots()
     stream = rr.RecordingStream("test")
@@ -556,7 +560,7 @@ def test_forward_kinematics_matches_pybullet():
     import pybullet
 
     from bearchair.core.nao_carrying import CARRYING_POSTURE_RAD
-    from bearchair.executive.recording_robots import MissionRobots
+    from bearchair.executive.recording.urdf_robots import MissionRobots
     from bearchair.hardware.sim.bullet import (
         LockedBullet,
         T_world_link,
@@ -589,7 +593,7 @@ def test_the_arm_is_sampled_off_the_tick_thread_when_it_moves():
     import threading
     import time
 
-    from bearchair.executive.recording_robots import JointSampler
+    from bearchair.executive.recording.urdf_robots import JointSampler
 
     angles = [np.zeros(7)]
     readers: set[str] = set()

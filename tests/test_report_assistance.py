@@ -9,7 +9,7 @@ from pathlib import Path
 from bearchair.evaluation.protocol import TrialSpec
 from bearchair.evaluation.report import compute_table, format_table, markdown_report
 from bearchair.evaluation.store import record_from_summary
-from bearchair.executive.run_summary import RunSummary
+from bearchair.executive.records.run_summary import RunSummary
 
 
 def _summary(outcome: str, instructions: int, accessible: bool) -> dict:

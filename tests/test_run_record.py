@@ -7,7 +7,7 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import Status
 
-from bearchair.executive.record import RunRecorder, load_ticks
+from bearchair.executive.records.run_record import RunRecorder, load_ticks
 
 
 def record(tmp_path, root, ticks: int, between=None) -> list[dict]:

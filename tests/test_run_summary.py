@@ -1,4 +1,4 @@
-"""The run summary as typed records (executive/run_summary.py): written as it is read,
+"""The run summary as typed records (executive/records/run_summary.py): written as it is read,
 records of the previous version still read, a value of the wrong type refused by name,
 and each typed view the same JSON as the result it records."""
 
@@ -14,9 +14,9 @@ import pytest
 from bearchair.core.arena import DEFAULT_ARENA
 from bearchair.core.errors import RunRecordError
 from bearchair.core.geometry import SittingPose
-from bearchair.executive.jsonable import to_jsonable
-from bearchair.executive.record import RunRecorder
-from bearchair.executive.run_summary import (
+from bearchair.executive.records.jsonable import to_jsonable
+from bearchair.executive.records.run_record import RunRecorder
+from bearchair.executive.records.run_summary import (
     SCHEMA_VERSION,
     JudgementRecord,
     ReleaseRecord,

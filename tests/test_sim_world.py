@@ -532,7 +532,7 @@ def _wide_sofa_file(tmp_path: Path) -> Path:
 
 
 def test_a_sofa_larger_than_the_chair_area_is_set_down_clear_of_the_arm(tmp_path):
-    from bearchair.hardware.sim.world import SET_DOWN_CLEARANCE_M, SET_DOWN_STEP_M
+    from bearchair.hardware.sim.chair_set_down import SET_DOWN_CLEARANCE_M, SET_DOWN_STEP_M
 
     path = _wide_sofa_file(tmp_path)
     arm_front = max(box.x_max for box in DEFAULT_ARENA.obstacles)

@@ -177,7 +177,7 @@ def test_the_options_change_the_tree():
 
 def test_skill_parameters_mirror_the_perception_constants():
     from bearchair.skills.parameters import MIN_SCAN_VIEWS, SCAN_VIEW_COUNT
-    from bearchair.skills.perception import clearance, views
+    from bearchair.skills.perception import scan_capture, views
 
     assert len(views.SCAN_CONFIGURATIONS) == SCAN_VIEW_COUNT
-    assert MIN_SCAN_VIEWS == clearance.MIN_SCAN_VIEWS
+    assert MIN_SCAN_VIEWS == scan_capture.MIN_SCAN_VIEWS

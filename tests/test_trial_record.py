@@ -9,7 +9,7 @@ import sqlite3
 from bearchair.evaluation.protocol import ChairEntry, expand_protocol
 from bearchair.evaluation.store import COLUMNS, TrialStore, record_from_error, record_from_summary
 from bearchair.evaluation.trial_record import TrialRecord
-from bearchair.executive.run_summary import RunSummary, SittingPoseRecord
+from bearchair.executive.records.run_summary import RunSummary, SittingPoseRecord
 
 
 def test_the_record_has_a_field_per_column_of_the_table():

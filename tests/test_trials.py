@@ -31,7 +31,7 @@ from bearchair.evaluation.store import TrialStore, record_from_error, record_fro
 from bearchair.evaluation.trial_backends import LocalBackend
 from bearchair.evaluation.trial_record import TrialRecord
 from bearchair.executive import cli
-from bearchair.executive.run_summary import RunSummary
+from bearchair.executive.records.run_summary import RunSummary
 from tests.helpers.campaigns import (
     FAKE_WORKER,
     FakeRay,
@@ -644,7 +644,7 @@ def test_each_trials_imagination_gets_the_cores_the_other_trials_leave(
 ):
     import argparse
 
-    from bearchair.evaluation import cli as trials_cli
+    from bearchair.evaluation import cmd_trials as trials_cli
 
     monkeypatch.setattr(trials_cli.os, "cpu_count", lambda: cores)
     args = argparse.Namespace(backend=backend, workers=workers)

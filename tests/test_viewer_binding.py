@@ -26,7 +26,7 @@ from bearchair.trees.mission import create_tree
 
 pytest.importorskip("rerun", reason="rerun-sdk (the [viewer] extra) is not installed")
 
-from bearchair.executive.recording import RECORDING_FILE, MissionRecording
+from bearchair.executive.recording.mission_recording import RECORDING_FILE, MissionRecording
 
 
 def _listening(pids: list[int]) -> dict[int, set[str]]:

@@ -34,6 +34,14 @@ from bearchair.hardware.sim.bear import SimBear
 from bearchair.hardware.sim.bullet import LockedBullet
 from bearchair.hardware.sim.camera import SceneFrame, render_view
 from bearchair.hardware.sim.chair import SimChair
+from bearchair.hardware.sim.chair_set_down import (
+    SET_DOWN_CLEARANCE_M,
+    SET_DOWN_DRAWS,
+    chair_surface_points,
+    clearance_to,
+    link_boxes,
+    slid_clear_of_arm,
+)
 from bearchair.hardware.sim.clock import SimClock
 from bearchair.hardware.sim.contacts import ChairTouchMonitor
 from bearchair.hardware.sim.helper import SimHelper, SimSpeaker
@@ -51,15 +59,6 @@ TAPE_WIDTH_M = 0.03
 planner keeps the humanoid inside it, but the chair may stand across it."""
 PLACEMENT_TOLERANCE_DEG = 30.0
 SETTLE_S = 0.5
-SET_DOWN_CLEARANCE_M = 0.05
-"""A chair is set down at least this far (metres) outside the bounding boxes of the
-Panda's links as it stands and of the NAO's and the bear's at its start, as a person sets a chair down in a cell: in front of the
-arm, not into it. 5 cm is the clearance the scan's views were chosen with to the floor
-(``bench/perception_views.py``), the arm's own margin."""
-SET_DOWN_STEP_M = 0.01
-"""The chair is slid away from the arm's base in steps of this (metres) until clear."""
-SET_DOWN_DRAWS = 20
-"""Placements drawn at most before keeping one that only clears the arm (with a warning)."""
 PERSPECTIVE_PITCH_RAD = math.radians(45.0)
 """How far the report's perspective camera looks down. With the 46.8 degree vertical
 field of view its top row is 21.6 degrees below the horizon, so from the eye's height
@@ -398,64 +397,23 @@ class SimWorld:
         self.placement_yaw_rad = kept[1]
 
     def _slid_clear_of_arm(self, T_world_chair: np.ndarray) -> np.ndarray:
-        """``T_world_chair`` pulled straight out in front of the arm (+x) until the whole
-        chair stands :data:`SET_DOWN_CLEARANCE_M` in front of the arm's footprint (the
-        arena's obstacle around the arm's base) and outside every link's bounding box of
-        the Panda grown by as much."""
-        arena = self.config.arena
-        base_x, base_y = arena.arm_base_xy
-        fronts = [
-            box.x_max
-            for box in arena.obstacles
-            if box.x_min <= base_x <= box.x_max and box.y_min <= base_y <= box.y_max
-        ]
-        front = max(fronts, default=base_x) + SET_DOWN_CLEARANCE_M
-        T = T_world_chair.copy()
-        surface = self._chair_surface_points() @ T[:3, :3].T
-        lowest = float(surface[:, 0].min())  # the chair's x extent about its centre
-        if T[0, 3] + lowest < front:
-            T[0, 3] = front - lowest
-        boxes = self._link_boxes(self.panda.body)
-        for _ in range(math.ceil(float(arena.x_max - T[0, 3]) / SET_DOWN_STEP_M)):
-            if not _any_inside(surface + T[:3, 3], boxes):
-                break
-            T[0, 3] += SET_DOWN_STEP_M
+        """The chair set at ``T_world_chair`` pulled clear of the arm (:func:`slid_clear_of_arm`)."""
+        arm_boxes = link_boxes(self._bullet, self.panda.body)
+        T = slid_clear_of_arm(
+            T_world_chair, self._chair_surface_points(), self.config.arena, arm_boxes
+        )
         self.chair.set_T_world_chair(T)
         return T
 
     def _chair_clearance(self, *bodies: int) -> float:
-        """0 when the chair at its current pose reaches into a link's bounding box of
-        ``bodies`` grown by :data:`SET_DOWN_CLEARANCE_M`, else that clearance."""
-        T = self.chair.T_world_chair()
-        surface = self._chair_surface_points() @ T[:3, :3].T + T[:3, 3]
-        boxes = np.concatenate([self._link_boxes(body) for body in bodies])
-        return 0.0 if _any_inside(surface, boxes) else SET_DOWN_CLEARANCE_M
+        """The chair's clearance to ``bodies`` at its current pose (:func:`clearance_to`)."""
+        boxes = np.concatenate([link_boxes(self._bullet, body) for body in bodies])
+        return clearance_to(self._chair_surface_points(), self.chair.T_world_chair(), boxes)
 
     def _chair_surface_points(self) -> np.ndarray:
-        """Points on the chair's surface (chair frame) no farther apart than the set-down
-        clearance: its faces subdivided, so that no part of the chair passes through a
-        grown box between two points. (pybullet's closest points between a concave
-        triangle mesh and the arm crashed, or returned garbage, on some meshes.)"""
         if self._surface_cache is None:
-            mesh = self.chair.mesh_local
-            subdivided = trimesh.remesh.subdivide_to_size(
-                mesh.vertices, mesh.faces, max_edge=SET_DOWN_CLEARANCE_M, max_iter=20
-            )
-            self._surface_cache = np.asarray(subdivided[0], float)
+            self._surface_cache = chair_surface_points(self.chair.mesh_local)
         return self._surface_cache
-
-    def _link_boxes(self, body: int) -> np.ndarray:
-        """(N, 2, 3): every link's world bounding box of ``body``, grown by the clearance."""
-        boxes = []
-        for link in range(-1, self._bullet.getNumJoints(body)):
-            lower, upper = self._bullet.getAABB(body, link)
-            boxes.append(
-                (
-                    np.asarray(lower) - SET_DOWN_CLEARANCE_M,
-                    np.asarray(upper) + SET_DOWN_CLEARANCE_M,
-                )
-            )
-        return np.asarray(boxes, float)
 
     def _ignore_floor(self, *bodies: int) -> None:
         """No collision between the floor and the links of kinematic or fixed robots.
@@ -522,14 +480,6 @@ class SimWorld:
                 )
             )
         return bodies
-
-
-def _any_inside(points: np.ndarray, boxes: np.ndarray) -> bool:
-    """Whether any of ``points`` (N, 3) lies in any of ``boxes`` (M, 2, 3)."""
-    for lower, upper in boxes:
-        if np.any(np.all((points >= lower) & (points <= upper), axis=1)):
-            return True
-    return False
 
 
 _PALM = make_transform(np.eye(3), np.asarray(PALM_IN_WRIST_M))

@@ -7,7 +7,8 @@ functions taking a :class:`bearchair.hardware.interfaces.ScanningArm` move it an
 from bearchair.skills.perception.chair_turn import measure_chair_rotation
 from bearchair.skills.perception.errors import PerceptionError, RegistrationError
 from bearchair.skills.perception.motion import wait_until_chair_still
-from bearchair.skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
+from bearchair.skills.perception.reconstruction import reconstruct_chair
+from bearchair.skills.perception.reconstruction_config import ReconstructionConfig
 from bearchair.skills.perception.registration import RegistrationConfig, register_chair
 from bearchair.skills.perception.scan import ScanCancelled, scan_chair
 from bearchair.skills.perception.tags import TagSightings, estimate_tag_pose, locate_humanoid

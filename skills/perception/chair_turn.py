@@ -11,10 +11,11 @@ import numpy as np
 
 from bearchair.core.geometry import transform_points, yaw_of
 from bearchair.hardware.interfaces import RGBDFrame, ScanningArm
-from bearchair.skills.perception.clearance import capture_views
 from bearchair.skills.perception.errors import PerceptionError, RegistrationError
-from bearchair.skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
+from bearchair.skills.perception.reconstruction import reconstruct_chair
+from bearchair.skills.perception.reconstruction_config import ReconstructionConfig
 from bearchair.skills.perception.registration import RegistrationConfig, register_chair
+from bearchair.skills.perception.scan_capture import capture_views
 from bearchair.skills.perception.views import SCAN_CONFIGURATIONS, TRACKING_VIEWS
 from bearchair.skills.results import ChairRotation
 

@@ -7,7 +7,7 @@ import threading
 import numpy as np
 
 from bearchair.hardware.interfaces import Clock, RGBDFrame, ScanningArm
-from bearchair.skills.perception.camera import clean_depth, depth_to_world, validate_frame
+from bearchair.skills.perception.pinhole import clean_depth, depth_to_world, validate_frame
 from bearchair.skills.perception.views import CHAIR_VOLUME, STILL_CHECK_CONFIGURATION
 
 

@@ -8,9 +8,10 @@ import numpy as np
 
 from bearchair.core.errors import Cancelled
 from bearchair.hardware.interfaces import ScanningArm
-from bearchair.skills.perception.clearance import MIN_SCAN_VIEWS, capture_scan
 from bearchair.skills.perception.errors import PerceptionError
-from bearchair.skills.perception.reconstruction import ReconstructionConfig, reconstruct_chair
+from bearchair.skills.perception.reconstruction import reconstruct_chair
+from bearchair.skills.perception.reconstruction_config import ReconstructionConfig
+from bearchair.skills.perception.scan_capture import MIN_SCAN_VIEWS, capture_scan
 from bearchair.skills.perception.views import CHAIR_VOLUME, SCAN_CONFIGURATIONS
 from bearchair.skills.results import ChairScan
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 from bearchair.core.arena import DEFAULT_ARENA
 from bearchair.executive import run as executive_run
-from bearchair.executive.record import RunRecorder
-from bearchair.executive.run_summary import RunInfo, RunSummary
+from bearchair.executive.records.run_record import RunRecorder
+from bearchair.executive.records.run_summary import RunInfo, RunSummary
 from bearchair.executive.runner import MissionRunner, summarise
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.testing.scripted import ScriptedSkills

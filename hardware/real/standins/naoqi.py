@@ -19,7 +19,7 @@ is modelled, each with its line in the table's ``quotes``:
   that much later, from its own thread, so slow calls overlap as NAOqi's do.
 
 The body behind the services is :class:`KinematicNao` (wall-clock motions) unless one is
-given (:class:`bearchair.hardware.real.sim_standins.SimulatedNaoBody`).
+given (:class:`bearchair.hardware.real.standins.simulated_bodies.SimulatedNaoBody`).
 """
 
 from __future__ import annotations

@@ -7,17 +7,17 @@ tree's tick count) and ``robot`` (seconds on the robot's clock):
 
 * ``tree``: the tree as a graph, each node coloured by its status with its feedback
   message, whenever a status or a message changes (``status`` and ``feedback`` are
-  also logged as plain strings per node, in the order of :func:`record.tree_nodes`);
+  also logged as plain strings per node, in the order of :func:`bearchair.executive.records.run_record.tree_nodes`);
   ``tree/log`` has a line per status change;
 * ``blackboard/<key>``: each blackboard value as JSON text whenever it changes;
-* the scene: the skills' typed results drawn by :mod:`bearchair.executive.recording_scene`
+* the scene: the skills' typed results drawn by :mod:`bearchair.executive.recording.scene_loggers`
   when they appear on the blackboard, and the skill calls the blackboard does not
   keep (the tag's detections, the rotations asked for, the NAO's motions), seen by
   :class:`bearchair.executive.skill_calls.SkillCalls`;
-* the robots from their URDFs (:mod:`bearchair.executive.recording_robots`), in the
-  layout of :mod:`bearchair.executive.recording_layout`.
+* the robots from their URDFs (:mod:`bearchair.executive.recording.urdf_robots`), in the
+  layout of :mod:`bearchair.executive.recording.layout`.
 
-A recording is read back with :func:`bearchair.executive.recording_read.read_entity`.
+A recording is read back with :func:`bearchair.executive.recording.read_back.read_entity`.
 
 Skills hold no viewer code. Rerun (``rerun-sdk``) is the optional extra ``[viewer]``;
 without it this module imports, and asking for a recording raises
@@ -46,9 +46,9 @@ from py_trees.common import Status
 
 from bearchair.behaviours import keys
 from bearchair.core.errors import BackendUnavailable
-from bearchair.executive.jsonable import to_jsonable
-from bearchair.executive.record import tree_nodes
-from bearchair.executive.run_summary import RecordingCost, RunSummary
+from bearchair.executive.records.jsonable import to_jsonable
+from bearchair.executive.records.run_record import tree_nodes
+from bearchair.executive.records.run_summary import RecordingCost, RunSummary
 from bearchair.executive.skill_calls import SkillCalls
 from bearchair.executive.tree_labels import node_label
 from bearchair.executive.viewer_links import (
@@ -66,7 +66,7 @@ if TYPE_CHECKING:
     import numpy as np
 
     from bearchair.core.se2 import SE2Pose
-    from bearchair.executive.recording_robots import JointSampler
+    from bearchair.executive.recording.urdf_robots import JointSampler
     from bearchair.executive.runner import MissionRunner
     from bearchair.skills.mission_skills import MissionSkills
     from bearchair.skills.results import SeatingPlan
@@ -149,11 +149,11 @@ class MissionRecording:
         bind: str = LOOPBACK,
     ) -> None:
         rr = _rerun()
-        from bearchair.executive import recording_scene
-        from bearchair.executive.recording_robots import MissionRobots
+        from bearchair.executive.recording import scene_loggers
+        from bearchair.executive.recording.urdf_robots import MissionRobots
 
         self._rr = rr
-        self._scene = recording_scene
+        self._scene = scene_loggers
         self.path = None if path is None else Path(path)
         self.viewer_url: str | None = None
         self.viewer_hint: str | None = None
@@ -218,7 +218,7 @@ class MissionRecording:
         return rr.GrpcSink(live)
 
     def _log_static(self) -> None:
-        from bearchair.executive.recording_layout import mission_blueprint, tree_layout
+        from bearchair.executive.recording.layout import mission_blueprint, tree_layout
 
         rr = self._rr
         self._stream.send_blueprint(mission_blueprint())
@@ -271,7 +271,7 @@ class MissionRecording:
     def _arm_states(self, runner: MissionRunner) -> list[tuple[float, np.ndarray]]:
         """The arm's joint states read since the last tick (its sampler starts at the first)."""
         if self._arm_sampler is None:
-            from bearchair.executive.recording_robots import JointSampler
+            from bearchair.executive.recording.urdf_robots import JointSampler
 
             self._arm_sampler = JointSampler(runner.robot.arm.joint_positions, runner.robot.clock)
         return self._arm_sampler.drain()

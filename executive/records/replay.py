@@ -11,15 +11,15 @@ from py_trees.common import Status
 
 from bearchair.core.errors import RunRecordError
 from bearchair.core.userfiles import load_user_json, printable
-from bearchair.executive.record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, read_ticks
-from bearchair.executive.run_summary import RunSummary
+from bearchair.executive.records.run_record import SUMMARY_FILE, TICKS_FILE, TREE_FILE, read_ticks
+from bearchair.executive.records.run_summary import RunSummary
 from bearchair.executive.tree_render import render_text
 
 __all__ = ["RecordedRun", "RunRecordError"]
 
 
 class RecordedRun:
-    """A run directory written by :class:`bearchair.executive.record.RunRecorder`.
+    """A run directory written by :class:`bearchair.executive.records.run_record.RunRecorder`.
 
     A damaged record is read as far as it can be: unreadable lines of ``ticks.jsonl``
     are skipped and an unreadable ``summary.json`` is ignored, each with a note
@@ -84,7 +84,7 @@ class RecordedRun:
         Raises:
             PluginError: ``spec`` names no tree, or its factory fails.
         """
-        from bearchair.executive.record import tree_shape
+        from bearchair.executive.records.run_record import tree_shape
         from bearchair.executive.tree_source import build_tree, load_tree_factory
 
         built = tree_shape(build_tree(load_tree_factory(spec), self._tree_options(), spec))

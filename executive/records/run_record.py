@@ -10,7 +10,7 @@ A run directory holds:
 * ``tree.json``: the tree's shape (each node's ``path``, ``name``, ``type``, ``depth``,
   and for composites with a memory, ``memory``).
 * ``summary.json``: the outcome (see
-  :class:`bearchair.executive.run_summary.RunSummary`).
+  :class:`bearchair.executive.records.run_summary.RunSummary`).
 """
 
 from __future__ import annotations
@@ -27,9 +27,9 @@ import py_trees
 from bearchair.core.errors import OutputError, RunRecordError
 from bearchair.core.provenance import software_versions
 from bearchair.core.userfiles import open_regular_file, parse_json, printable
-from bearchair.executive.jsonable import to_jsonable
 from bearchair.executive.outputs import describe_os_error, open_new_file, write_text_atomic
-from bearchair.executive.run_summary import RunSummary
+from bearchair.executive.records.jsonable import to_jsonable
+from bearchair.executive.records.run_summary import RunSummary
 
 TICKS_FILE = "ticks.jsonl"
 TREE_FILE = "tree.json"

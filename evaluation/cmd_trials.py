@@ -122,7 +122,7 @@ def resume_command(args: argparse.Namespace) -> str:
 
 def _recording_available() -> bool:
     """Recordings are on by default; without rerun-sdk the campaign runs without them."""
-    from bearchair.executive.recording import INSTALL_HINT, rerun_available
+    from bearchair.executive.recording.mission_recording import INSTALL_HINT, rerun_available
 
     if rerun_available():
         return True

@@ -1,7 +1,7 @@
 """Small loggers that turn the skills' typed results into Rerun archetypes.
 
 One function per result type, each ``log_x(stream, value)``: the recording
-(:mod:`bearchair.executive.recording`) calls them from the tick loop's post-tick hook when a
+(:mod:`bearchair.executive.recording.mission_recording`) calls them from the tick loop's post-tick hook when a
 blackboard value changes, or when a watched skill call returns. Nothing here computes
 anything the mission uses: it only draws what the skills already said.
 
@@ -20,7 +20,7 @@ world/sitting_pose                    g = (p, γ) as an arrow from p along γ
 world/accessibility/se2_goal, path    the SE(2) goal and the planned path
 world/nao                             the humanoid's tracked pose (the NAO frame, on the floor)
 world/<robot>, transforms/<robot>     the Panda and the NAO from their URDFs, and their
-                                      joint states (:mod:`...recording_robots`)
+                                      joint states (:mod:`.urdf_robots`)
 world/walk/path, tag_detections       the humanoid's tracked path and the tag's detections
 world/bear                            the bear when judged
 assistance/asked, assistance/measured the rotations asked for and measured by ICP
@@ -67,7 +67,7 @@ BEAR_HALF_SIZES_M = (0.06, 0.08, 0.12)
 
 
 def log_world_frame(stream: rr.RecordingStream) -> None:
-    """The world is z up (the robots' models: :mod:`bearchair.executive.recording_robots`)."""
+    """The world is z up (the robots' models: :mod:`bearchair.executive.recording.urdf_robots`)."""
     stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
 
 
