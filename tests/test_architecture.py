@@ -295,7 +295,7 @@ def test_every_module_is_used():
             continue
         if graph.find_modules_that_directly_import(module):
             continue
-        if "__name__ == \"__main__\"" in (path.with_suffix(".py")).read_text():
+        if '__name__ == "__main__"' in (path.with_suffix(".py")).read_text():
             continue
         unused.append(module)
     assert not unused, "modules nothing imports:\n" + "\n".join(unused)

@@ -146,9 +146,9 @@ def _run_in_process(cell, timeout_s: float) -> tuple[int, str]:
 
 def test_a_silent_camera_is_named_within_its_timeout(tmp_path, monkeypatch):
     from bearchair.hardware.real import robots
-    from bearchair.hardware.real.standins import FakeOpenNI2, NaoqiStandin
+    from bearchair.hardware.real.standins import NaoqiStandin, OpenNI2Standin
 
-    monkeypatch.setattr(robots, "FakeOpenNI2", functools.partial(FakeOpenNI2, silent=True))
+    monkeypatch.setattr(robots, "OpenNI2Standin", functools.partial(OpenNI2Standin, silent=True))
     _run_in_process(tmp_path / "none.json", TIMEOUT_S)  # imports done
     with NaoqiStandin() as naoqi:
         started = time.monotonic()
@@ -203,13 +203,13 @@ def test_a_camera_that_announces_a_frame_and_never_sends_it_is_named_within_its_
     """The driver says a frame is ready and ``read_frame`` then blocks: the camera's own
     wait cannot see that, check-hardware's bound on the capture must."""
     from bearchair.hardware.real import robots
-    from bearchair.hardware.real.standins import FakeOpenNI2, NaoqiStandin
+    from bearchair.hardware.real.standins import NaoqiStandin, OpenNI2Standin
 
-    class Announcing(FakeOpenNI2):
+    class Announcing(OpenNI2Standin):
         def wait_for_any_stream(self, streams, timeout=None):
             return streams[0]
 
-    monkeypatch.setattr(robots, "FakeOpenNI2", functools.partial(Announcing, silent=True))
+    monkeypatch.setattr(robots, "OpenNI2Standin", functools.partial(Announcing, silent=True))
     _run_in_process(tmp_path / "none.json", TIMEOUT_S)  # imports done
     with NaoqiStandin() as naoqi:
         cell = _cell(tmp_path, naoqi.url)

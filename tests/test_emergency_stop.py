@@ -137,8 +137,11 @@ def _robot(world: SimWorld, backend: str) -> Iterator[Robot]:
         yield world.robot
         return
     pytest.importorskip("qi")
-    from bearchair.hardware.real.standins.simulated_bodies import SimulatedNaoBody, robot_over_standins
     from bearchair.hardware.real.standins import NaoqiStandin
+    from bearchair.hardware.real.standins.simulated_bodies import (
+        SimulatedNaoBody,
+        robot_over_standins,
+    )
 
     with NaoqiStandin(body=SimulatedNaoBody(world)) as standin:
         robot, session = robot_over_standins(world, standin)

@@ -426,18 +426,18 @@ def board_arm(monkeypatch):
     from bearchair.hardware.real import robots
     from bearchair.hardware.real.camera import CarmineCamera
     from bearchair.hardware.real.panda import PandaArm
-    from bearchair.hardware.real.standins import FakeOpenNI2, FakePanda
+    from bearchair.hardware.real.standins import OpenNI2Standin, PandaStandin
 
     made = {}
 
     def connect_panda(config):
-        panda = FakePanda("standin")
+        panda = PandaStandin("standin")
         panda.time_scale = 200.0
         scene = _BoardScene(panda, T_base_board=_floor_board(yaw_rad=2.0, offset_m=(-0.03, 0.02)))
         # The scene renders through the nominal intrinsics: the camera is given them, as a
         # cell file with camera_intrinsics would.
         camera = CarmineCamera(
-            FakeOpenNI2(render=scene, stamp_us=scene.stamp_us), intrinsics=CARMINE_INTRINSICS
+            OpenNI2Standin(render=scene, stamp_us=scene.stamp_us), intrinsics=CARMINE_INTRINSICS
         )
         arm = PandaArm(panda, camera, config.T_world_base, config.T_flange_camera, 0.2)
         made.update(panda=panda, scene=scene, arm=arm)

@@ -20,8 +20,8 @@ pytest.importorskip("qi")
 
 
 def test_flange_kinematics_of_the_fake_panda_match_the_simulated_panda():
-    from bearchair.hardware.real.standins.simulated_bodies import SimulatedPanda
     from bearchair.hardware.real.standins import panda_flange_pose
+    from bearchair.hardware.real.standins.simulated_bodies import SimulatedPanda
     from bearchair.hardware.sim.bullet import T_world_link, link_index_by_name
 
     with SimWorld(SimConfig(seed=0, camera_noise=False)) as world:
@@ -39,8 +39,11 @@ def test_flange_kinematics_of_the_fake_panda_match_the_simulated_panda():
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 def test_the_mission_runs_over_the_sdk_standins():
-    from bearchair.hardware.real.standins.simulated_bodies import SimulatedNaoBody, robot_over_standins
     from bearchair.hardware.real.standins import NaoqiStandin
+    from bearchair.hardware.real.standins.simulated_bodies import (
+        SimulatedNaoBody,
+        robot_over_standins,
+    )
 
     with (
         SimWorld(SimConfig(seed=1)) as world,

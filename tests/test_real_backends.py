@@ -25,8 +25,8 @@ from bearchair.hardware.real.camera import CarmineCamera
 from bearchair.hardware.real.panda import JOINT_LIMITS_LOWER_RAD, ArmFault, PandaArm, into_walls
 from bearchair.hardware.real.standins import (
     FRANKA_HAND_F_T_EE,
-    FakeOpenNI2,
-    FakePanda,
+    OpenNI2Standin,
+    PandaStandin,
     panda_flange_pose,
     sdk_openni2,
     sdk_panda,
@@ -260,11 +260,11 @@ def test_unreachable_nao_fails_fast_with_its_url():
 # --- Panda --------------------------------------------------------------------------------
 
 
-def _arm(panda: FakePanda | None = None, camera=None, **options) -> PandaArm:
+def _arm(panda: PandaStandin | None = None, camera=None, **options) -> PandaArm:
     """The backend over the fakes, each behind the installed SDK's own classes."""
-    camera = camera or CarmineCamera(sdk_openni2(FakeOpenNI2()))
+    camera = camera or CarmineCamera(sdk_openni2(OpenNI2Standin()))
     return PandaArm(
-        sdk_panda(panda or FakePanda("standin")), camera, np.eye(4), np.eye(4), **options
+        sdk_panda(panda or PandaStandin("standin")), camera, np.eye(4), np.eye(4), **options
     )
 
 
@@ -273,7 +273,7 @@ def test_fake_panda_matches_the_installed_sdk():
     for name in ("get_state", "get_pose", "get_robot", "recover", "raise_error", "stop_controller"):
         assert hasattr(panda_py.Panda, name)
     doc = panda_py.Panda.move_to_joint_position.__doc__
-    for parameter in inspect.signature(FakePanda.move_to_joint_position).parameters:
+    for parameter in inspect.signature(PandaStandin.move_to_joint_position).parameters:
         if parameter not in ("self", "positions"):
             assert f"{parameter}:" in doc, parameter
     assert "speed_factor: typing.SupportsFloat | typing.SupportsIndex = 0.2" in doc
@@ -285,7 +285,7 @@ def test_fake_panda_matches_the_installed_sdk():
 
 
 def test_camera_pose_uses_the_flange_not_o_t_ee():
-    panda = FakePanda("standin")
+    panda = PandaStandin("standin")
     arm = _arm(panda)
     assert isinstance(arm, ScanningArm)
     frame = arm.capture()
@@ -305,7 +305,7 @@ def test_scan_view_inside_the_joint_wall_is_moved_to_its_edge():
 
 
 def test_arm_moves_and_reports_libfranka_faults_without_recovering():
-    panda = FakePanda("standin")
+    panda = PandaStandin("standin")
     arm = _arm(panda)
     target = np.asarray(SCAN_CONFIGURATIONS[0])
     arm.move_to(target)
@@ -317,7 +317,7 @@ def test_arm_moves_and_reports_libfranka_faults_without_recovering():
 
 
 def test_arm_timeout_is_honoured_and_stops_the_arm():
-    panda = FakePanda("standin")
+    panda = PandaStandin("standin")
     panda.time_scale = 0.05  # a slow arm: the move would take many seconds
     arm = _arm(panda)
     started = time.monotonic()
@@ -328,7 +328,7 @@ def test_arm_timeout_is_honoured_and_stops_the_arm():
 
 
 def test_emergency_stop_preempts_a_running_arm_move():
-    panda = FakePanda("standin")
+    panda = PandaStandin("standin")
     panda.time_scale = 0.2
     arm = _arm(panda)
     errors: list[BaseException] = []
@@ -357,7 +357,7 @@ def test_emergency_stop_preempts_a_running_arm_move():
 
 
 def test_carmine_sets_640x480_depth_in_mm_registered_and_synchronised():
-    openni = FakeOpenNI2()
+    openni = OpenNI2Standin()
     camera = CarmineCamera(sdk_openni2(openni))
     rgb, depth_m = camera.read()
     assert rgb.shape == (480, 640, 3) and depth_m.shape == (480, 640)
@@ -369,13 +369,13 @@ def test_carmine_sets_640x480_depth_in_mm_registered_and_synchronised():
 
 def test_carmine_library_folder_and_missing_device_are_one_line_errors():
     with pytest.raises(BackendUnavailable, match="openni_library_dir"):
-        CarmineCamera(FakeOpenNI2(library_dir="/usr/lib/x86_64-linux-gnu"))
+        CarmineCamera(OpenNI2Standin(library_dir="/usr/lib/x86_64-linux-gnu"))
     CarmineCamera(
-        FakeOpenNI2(library_dir="/usr/lib/x86_64-linux-gnu"),
+        OpenNI2Standin(library_dir="/usr/lib/x86_64-linux-gnu"),
         library_dir="/usr/lib/x86_64-linux-gnu",
     )
     with pytest.raises(BackendUnavailable, match="no OpenNI2 camera found"):
-        CarmineCamera(FakeOpenNI2(devices=0))
+        CarmineCamera(OpenNI2Standin(devices=0))
 
 
 def test_fake_openni_matches_the_installed_binding():
@@ -410,9 +410,9 @@ def test_fake_openni_matches_the_installed_binding():
 
 def test_realsense_aligns_depth_to_colour_in_metres():
     from bearchair.hardware.real.camera import RealSenseCamera
-    from bearchair.hardware.real.standins import FakeRealSense
+    from bearchair.hardware.real.standins import RealSenseStandin
 
-    rs = FakeRealSense(depth_scale_m=0.0001)  # a D405-like 0.1 mm unit
+    rs = RealSenseStandin(depth_scale_m=0.0001)  # a D405-like 0.1 mm unit
     camera = RealSenseCamera(sdk_realsense(rs))
     rgb, depth_m = camera.read()
     assert rgb.shape == (480, 640, 3) and depth_m.dtype == np.float32
@@ -422,7 +422,7 @@ def test_realsense_aligns_depth_to_colour_in_metres():
     assert (rs.stream.depth, 640, 480, rs.format.z16, 30) in rs.enabled
     assert camera.intrinsics.fx == 615.0 and "0.1 mm" in camera.mode()["depth"]
     with pytest.raises(BackendUnavailable, match="no RealSense camera"):
-        RealSenseCamera(FakeRealSense(devices=0))
+        RealSenseCamera(RealSenseStandin(devices=0))
 
 
 def test_fake_realsense_matches_the_installed_sdk():
@@ -496,7 +496,7 @@ def test_connecting_to_a_silent_panda_ends_in_its_timeout_naming_it():
 
 
 def test_a_silent_camera_read_ends_in_its_timeout_naming_it():
-    camera = CarmineCamera(FakeOpenNI2(silent=True), timeout_s=0.2)
+    camera = CarmineCamera(OpenNI2Standin(silent=True), timeout_s=0.2)
     error = _ends_within(camera.read, 3.0)
     assert isinstance(error, BackendUnavailable) and "the Carmine sent no depth frame" in str(error)
 

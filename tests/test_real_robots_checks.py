@@ -24,12 +24,12 @@ from bearchair.core.se2 import SE2Pose
 from bearchair.executive.cli import main
 from bearchair.hardware.real.camera import CARMINE_INTRINSICS, CarmineCamera
 from bearchair.hardware.real.panda import COLLISION_TORQUE_NM, PandaArm, into_walls
-from bearchair.hardware.real.standins import FakeOpenNI2, FakePanda, sdk_openni2, sdk_panda
+from bearchair.hardware.real.standins import OpenNI2Standin, PandaStandin, sdk_openni2, sdk_panda
 from tests.helpers.cells import standin_cell_file
 
 
-def _arm(panda: FakePanda, **options) -> PandaArm:
-    camera = CarmineCamera(sdk_openni2(FakeOpenNI2()))
+def _arm(panda: PandaStandin, **options) -> PandaArm:
+    camera = CarmineCamera(sdk_openni2(OpenNI2Standin()))
     return PandaArm(sdk_panda(panda), camera, np.eye(4), np.eye(4), **options)
 
 
@@ -37,11 +37,11 @@ def _arm(panda: FakePanda, **options) -> PandaArm:
 
 
 def test_the_carmine_turns_mirroring_off_reads_it_back_and_refuses_a_mirrored_stream():
-    openni = FakeOpenNI2()
+    openni = OpenNI2Standin()
     camera = CarmineCamera(sdk_openni2(openni))
     assert camera.mode()["mirroring"] == "off"
     with pytest.raises(BackendUnavailable, match="stays mirrored"):
-        CarmineCamera(sdk_openni2(FakeOpenNI2(mirroring_stuck=True)))
+        CarmineCamera(sdk_openni2(OpenNI2Standin(mirroring_stuck=True)))
 
 
 def test_carmine_frames_are_not_mirrored():
@@ -50,19 +50,19 @@ def test_carmine_frames_are_not_mirrored():
         rgb[:, : width // 4] = 255  # a white band on the left
         return rgb, np.full((height, width), 1000, np.uint16)
 
-    rgb, _ = CarmineCamera(sdk_openni2(FakeOpenNI2(render=render))).read()
+    rgb, _ = CarmineCamera(sdk_openni2(OpenNI2Standin(render=render))).read()
     assert rgb[:, :10].min() == 255 and rgb[:, -10:].max() == 0
 
 
 def test_carmine_intrinsics_come_from_the_stream_or_the_cell_file():
     from bearchair.hardware.real.standins.openni import COLOUR_FOV_RAD
 
-    camera = CarmineCamera(sdk_openni2(FakeOpenNI2()))
+    camera = CarmineCamera(sdk_openni2(OpenNI2Standin()))
     expected = 320.0 / math.tan(COLOUR_FOV_RAD[0] / 2.0)
     assert camera.intrinsics.fx == pytest.approx(expected) and camera.intrinsics.fx != 570.3
     assert "field of view" in camera.mode()["intrinsics"]
     calibrated = CARMINE_INTRINSICS._replace(fx=561.2, fy=560.8, cx=322.0, cy=241.5)
-    camera = CarmineCamera(sdk_openni2(FakeOpenNI2()), intrinsics=calibrated)
+    camera = CarmineCamera(sdk_openni2(OpenNI2Standin()), intrinsics=calibrated)
     assert camera.intrinsics == calibrated and "cell file" in camera.mode()["intrinsics"]
 
 
@@ -88,7 +88,7 @@ def test_the_cell_file_takes_checked_camera_intrinsics():
 
 def test_dropping_the_realsense_alignment_is_seen():
     from bearchair.hardware.real.camera import RealSenseCamera
-    from bearchair.hardware.real.standins import FakeRealSense, sdk_realsense
+    from bearchair.hardware.real.standins import RealSenseStandin, sdk_realsense
 
     def render(width, height):
         rgb = np.zeros((height, width, 3), np.uint8)
@@ -97,7 +97,7 @@ def test_dropping_the_realsense_alignment_is_seen():
         depth[:, width // 2 :] = 1200  # the depth edge is the colour edge
         return rgb, depth
 
-    camera = RealSenseCamera(sdk_realsense(FakeRealSense(render=render)))
+    camera = RealSenseCamera(sdk_realsense(RealSenseStandin(render=render)))
     rgb, depth_m = camera.read()
     edge = int(np.argmax(rgb[0, :, 0] > 0))
     assert depth_m[0, edge - 1] == pytest.approx(0.8) and depth_m[0, edge] == pytest.approx(1.2)
@@ -114,7 +114,7 @@ class _FastClock:
 
 
 def test_a_slow_move_gets_the_time_its_planned_duration_needs():
-    panda = FakePanda("standin")
+    panda = PandaStandin("standin")
     panda.time_scale = 20.0
     arm = _arm(panda, speed_factor=0.1, clock=_FastClock())
     target = np.asarray(panda.q) + np.array([2.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
@@ -124,10 +124,10 @@ def test_a_slow_move_gets_the_time_its_planned_duration_needs():
 
 
 def test_activation_sets_collision_thresholds_and_the_camera_payload():
-    panda = FakePanda("standin")
+    panda = PandaStandin("standin")
     T_flange_camera = np.eye(4)
     T_flange_camera[:3, 3] = [0.065, 0.0, 0.02]
-    arm = PandaArm(sdk_panda(panda), CarmineCamera(FakeOpenNI2()), np.eye(4), T_flange_camera)
+    arm = PandaArm(sdk_panda(panda), CarmineCamera(OpenNI2Standin()), np.eye(4), T_flange_camera)
     arm.activate()
     assert panda.collision_thresholds is not None
     assert panda.collision_thresholds[0] == list(COLLISION_TORQUE_NM)
@@ -138,7 +138,7 @@ def test_activation_sets_collision_thresholds_and_the_camera_payload():
 
 
 def test_the_fr3s_limits_come_from_the_robot():
-    panda = FakePanda("standin")
+    panda = PandaStandin("standin")
     panda.model = "fr3"
     arm = _arm(panda)
     assert arm.joint_limits[0][5] == pytest.approx(0.5445)
@@ -149,7 +149,7 @@ def test_the_fr3s_limits_come_from_the_robot():
 
 
 def test_ctrl_c_during_a_move_stops_the_arm():
-    panda = FakePanda("standin")
+    panda = PandaStandin("standin")
     panda.time_scale = 0.2  # a move of many seconds
     arm = _arm(panda)
     timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
@@ -160,7 +160,7 @@ def test_ctrl_c_during_a_move_stops_the_arm():
 
 
 def test_a_backend_line_reading_what_only_the_fake_has_fails():
-    arm = _arm(FakePanda("standin"))
+    arm = _arm(PandaStandin("standin"))
     with pytest.raises(AttributeError, match="the SDK lacks it"):
         arm._robot.stop_motion()  # the fake's own hook, not panda-py's
     with pytest.raises(TypeError, match="the SDK takes"):
@@ -219,7 +219,7 @@ def test_monitoring_stops_the_robots_and_names_the_reason(naoqi, fault, reason):
 
     nao = _nao(naoqi)
     nao.activate()
-    panda = FakePanda("standin")
+    panda = PandaStandin("standin")
     robot = Robot(arm=_arm(panda), humanoid=nao, speaker=None, clock=None)  # type: ignore[arg-type]
     monitor = RobotMonitor(robot, period_s=0.05).start()
     time.sleep(0.2)
@@ -243,7 +243,7 @@ def test_the_panda_in_reflex_stops_a_run(naoqi):
     from bearchair.hardware.interfaces import Robot
     from bearchair.hardware.real.monitor import RobotMonitor
 
-    panda = FakePanda("standin")
+    panda = PandaStandin("standin")
     robot = Robot(arm=_arm(panda), humanoid=_nao(naoqi), speaker=None, clock=None)  # type: ignore[arg-type]
     monitor = RobotMonitor(robot, period_s=0.05).start()
     panda.inject_reflex("cartesian_reflex")
@@ -458,7 +458,7 @@ def test_the_openni_standin_starts_every_stream_mirrored_as_the_ps1080_driver_do
         depth[:, : width // 4] = 1000  # nearer on the left
         return rgb, depth
 
-    openni = FakeOpenNI2(render=render)
+    openni = OpenNI2Standin(render=render)
     device = openni.Device.open_any()
     depth, colour = device.create_depth_stream(), device.create_color_stream()
     assert depth.get_mirroring_enabled() and colour.get_mirroring_enabled()
@@ -474,7 +474,7 @@ def test_the_openni_standin_starts_every_stream_mirrored_as_the_ps1080_driver_do
 
 
 def test_the_realsense_standins_unaligned_depth_sits_beside_its_colour():
-    from bearchair.hardware.real.standins import FakeRealSense
+    from bearchair.hardware.real.standins import RealSenseStandin
     from bearchair.hardware.real.standins.realsense import DEPTH_TO_COLOUR_SHIFT_PX
 
     def render(width, height):
@@ -484,7 +484,7 @@ def test_the_realsense_standins_unaligned_depth_sits_beside_its_colour():
         depth[:, width // 2 :] = 1200  # the depth edge is the colour edge
         return rgb, depth
 
-    rs = FakeRealSense(render=render)
+    rs = RealSenseStandin(render=render)
     config = rs.config()
     config.enable_stream(rs.stream.depth, 640, 480, rs.format.z16, 30)
     config.enable_stream(rs.stream.color, 640, 480, rs.format.rgb8, 30)
@@ -522,11 +522,11 @@ def test_check_hardware_checks_the_views_against_an_fr3s_own_limits(tmp_path, ca
     from bearchair.hardware.real.standins import NaoqiStandin
 
     def fr3(host):
-        panda = FakePanda(host)
+        panda = PandaStandin(host)
         panda.model = "fr3"
         return panda
 
-    monkeypatch.setattr(robots, "FakePanda", fr3)
+    monkeypatch.setattr(robots, "PandaStandin", fr3)
     with NaoqiStandin() as naoqi:
         status = main(["check-hardware", "--robots", str(standin_cell_file(tmp_path, naoqi.url))])
         out = capsys.readouterr().out
@@ -541,7 +541,7 @@ def test_the_cameras_reads_take_the_bound_the_panda_is_connected_with(monkeypatc
     from bearchair.executive.cell_config import parse_cell_config
     from bearchair.hardware.real import robots
 
-    monkeypatch.setattr(robots, "FakeOpenNI2", lambda: FakeOpenNI2(silent=True))
+    monkeypatch.setattr(robots, "OpenNI2Standin", lambda: OpenNI2Standin(silent=True))
     arm = robots.connect_panda(parse_cell_config(json.loads(_cell_text("tcp://127.0.0.1:9"))), 0.3)
     started = time.monotonic()
     with pytest.raises(Unavailable, match=r"the Carmine sent no depth frame in 0\.3 s"):

@@ -53,7 +53,7 @@ class CarmineCamera:
     """RGB-D frames from a Carmine through OpenNI2, depth registered to colour.
 
     Args:
-        openni2: the ``openni.openni2`` module (tests pass a fake with its signatures).
+        openni2: the ``openni.openni2`` module (tests pass a stand-in with its signatures).
         library_dir: folder of ``libOpenNI2.so``; None for the binding's search path.
         intrinsics: the calibrated pinhole model of the registered 640x480 images (the
             cell file's ``camera_intrinsics``); None: from the colour stream's field of view.
@@ -215,7 +215,7 @@ class RealSenseCamera:
     frames before they go back to the SDK's pool.
 
     Args:
-        rs: the ``pyrealsense2`` module (tests pass a fake with its signatures).
+        rs: the ``pyrealsense2`` module (tests pass a stand-in with its signatures).
         serial: the camera's serial number; None for the first one found.
         timeout_s: how long one frameset may take.
 

@@ -15,8 +15,8 @@ from bearchair.hardware.real.nao import NaoHumanoid, NaoSpeaker, WallClock, conn
 from bearchair.hardware.real.panda import CONNECT_TIMEOUT_S, PandaArm
 from bearchair.hardware.real.standins import (
     STANDIN_HOST,
-    FakeOpenNI2,
-    FakePanda,
+    OpenNI2Standin,
+    PandaStandin,
     sdk_openni2,
     sdk_panda,
 )
@@ -29,12 +29,12 @@ def connect_panda(config: Any, timeout_s: float = CONNECT_TIMEOUT_S) -> PandaArm
         from bearchair.hardware.real.camera import CarmineCamera
 
         camera = CarmineCamera(
-            sdk_openni2(FakeOpenNI2()),
+            sdk_openni2(OpenNI2Standin()),
             library_dir=config.openni_library_dir,
             intrinsics=config.camera_intrinsics,
             timeout_s=min(timeout_s, READ_TIMEOUT_S),
         )
-        panda = FakePanda(STANDIN_HOST)
+        panda = PandaStandin(STANDIN_HOST)
         panda.time_scale = 100.0  # a dry run: the stand-in arm moves 100 times faster
         return PandaArm(
             sdk_panda(panda),

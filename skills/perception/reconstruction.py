@@ -40,9 +40,9 @@ from scipy.spatial import (
 
 from bearchair.core.nao_carrying import BEAR_COM_AHEAD_M, BEAR_COM_HEIGHT_M, BEAR_TORSO_DEPTH_M
 from bearchair.hardware.interfaces import RGBDFrame
-from bearchair.skills.perception.pinhole import clean_depth, depth_to_world, validate_frame
 from bearchair.skills.perception.determinism import one_open3d_thread
 from bearchair.skills.perception.errors import PerceptionError
+from bearchair.skills.perception.pinhole import clean_depth, depth_to_world, validate_frame
 from bearchair.skills.perception.reconstruction_config import ReconstructionConfig
 from bearchair.skills.perception.views import MAX_CHAIR_REACH_M
 from bearchair.skills.results import ChairScan

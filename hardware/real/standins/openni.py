@@ -1,6 +1,6 @@
 """The ``openni.openni2`` stand-in, with the PS1080 driver's defaults.
 
-What the driver does and the fake models: streams open at 320x240; every stream starts
+What the driver does and the stand-in models: streams open at 320x240; every stream starts
 *mirrored* (the device's Mirror property defaults to on in OpenNI2's PS1080
 ``XnDeviceBase.cpp``, and streams inherit it), and a mirrored stream's frames are
 flipped left to right; a frame's buffer is reused once the frame is released;
@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 COLOUR_FOV_RAD = (2.0 * math.atan(320.0 / 525.0), 2.0 * math.atan(240.0 / 525.0))
-"""(horizontal, vertical) field of view of the fake colour stream: a 525 px focal length
+"""(horizontal, vertical) field of view of the stand-in colour stream: a 525 px focal length
 at 640x480, as PrimeSense colour cameras report (not the depth camera's 570 px)."""
 
 
@@ -52,7 +52,7 @@ class _Frame:
 
 
 class _Stream:
-    def __init__(self, source: FakeOpenNI2, kind: str) -> None:
+    def __init__(self, source: OpenNI2Standin, kind: str) -> None:
         self._source, self._kind = source, kind
         pixel = source.PIXEL_FORMAT_DEPTH_1_MM if kind == "depth" else source.PIXEL_FORMAT_RGB888
         self._mode = _VideoMode(320, 240, 30, pixel)  # the PS1080 driver's default
@@ -98,7 +98,7 @@ class _Stream:
         return _Frame(np.ascontiguousarray(data), w, h, stamp_us)
 
 
-class FakeOpenNI2:
+class OpenNI2Standin:
     """The ``openni.openni2`` module as :class:`bearchair.hardware.real.camera.CarmineCamera` uses it.
 
     Args:
@@ -133,32 +133,32 @@ class FakeOpenNI2:
         self.silent = silent
         self.registration = self.IMAGE_REGISTRATION_OFF
         self.sync = False
-        fake = self
+        standin = self
 
         class Device:
             @classmethod
             def open_any(cls) -> Device:
-                if fake._devices == 0:
+                if standin._devices == 0:
                     raise RuntimeError("OniError: DeviceOpen using default: no devices found")
                 return cls()
 
             def create_depth_stream(self) -> _Stream:
-                return _Stream(fake, "depth")
+                return _Stream(standin, "depth")
 
             def create_color_stream(self) -> _Stream:
-                return _Stream(fake, "colour")
+                return _Stream(standin, "colour")
 
             def is_image_registration_mode_supported(self, mode: int) -> bool:
-                return mode == fake.IMAGE_REGISTRATION_DEPTH_TO_COLOR
+                return mode == standin.IMAGE_REGISTRATION_DEPTH_TO_COLOR
 
             def set_image_registration_mode(self, mode: int) -> None:
-                fake.registration = mode
+                standin.registration = mode
 
             def get_image_registration_mode(self) -> int:
-                return fake.registration
+                return standin.registration
 
             def set_depth_color_sync_enabled(self, enable: bool) -> None:
-                fake.sync = bool(enable)
+                standin.sync = bool(enable)
 
         self.Device = Device
 

@@ -101,7 +101,7 @@ class ControlException(RuntimeError):
 
 
 class _LibfrankaRobot:
-    def __init__(self, panda: FakePanda) -> None:
+    def __init__(self, panda: PandaStandin) -> None:
         self._panda = panda
 
     def stop(self) -> None:
@@ -135,7 +135,7 @@ class _LibfrankaRobot:
         self._panda.load = (float(load_mass), list(F_x_Cload), list(load_inertia))
 
 
-class FakePanda:
+class PandaStandin:
     """``panda_py.Panda`` as this project uses it (see the module docstring).
 
     Attributes:

@@ -63,12 +63,12 @@ class _RealSenseIntrinsics:
 class _RealSenseProfile:
     """What ``pipeline.start`` returns: the device (its depth scale) and stream profiles."""
 
-    def __init__(self, fake: FakeRealSense) -> None:
-        self._fake = fake
+    def __init__(self, standin: RealSenseStandin) -> None:
+        self._standin = standin
 
     def get_device(self) -> Any:
-        fake = self._fake
-        sensor = type("depth_sensor", (), {"get_depth_scale": lambda s: fake.depth_scale_m})
+        standin = self._standin
+        sensor = type("depth_sensor", (), {"get_depth_scale": lambda s: standin.depth_scale_m})
         return type("device", (), {"first_depth_sensor": lambda s: sensor()})()
 
     def get_stream(self, stream_type: Any) -> Any:
@@ -78,7 +78,7 @@ class _RealSenseProfile:
         return type("stream_profile", (), {"as_video_stream_profile": lambda s: video()})()
 
 
-class FakeRealSense:
+class RealSenseStandin:
     """The ``pyrealsense2`` calls :class:`bearchair.hardware.real.camera.RealSenseCamera` makes.
 
     A D435-like camera: depth in units of :attr:`depth_scale_m`, colour intrinsics as
@@ -97,25 +97,25 @@ class FakeRealSense:
         self.enabled: list[tuple[Any, ...]] = []
         self.aligned_to: Any = None
         self.serial: str  # set by config.enable_device
-        fake = self
+        standin = self
 
         class config:
             def enable_device(self, serial: str) -> None:
-                fake.serial = serial
+                standin.serial = serial
 
             def enable_stream(self, stream_type, width, height, fmt, framerate) -> None:
-                fake.enabled.append((stream_type, width, height, fmt, framerate))
+                standin.enabled.append((stream_type, width, height, fmt, framerate))
 
         class pipeline:
             def start(self, cfg: Any) -> _RealSenseProfile:
-                if fake._devices == 0:
+                if standin._devices == 0:
                     raise RuntimeError("No device connected")
-                return _RealSenseProfile(fake)
+                return _RealSenseProfile(standin)
 
             def wait_for_frames(self, timeout_ms: int = 5000) -> _RealSenseFrameset:
-                w, h = fake.enabled[0][1], fake.enabled[0][2]
-                rgb, depth_mm = fake.render(w, h)
-                units = np.round(depth_mm.astype(np.float64) / 1000.0 / fake.depth_scale_m)
+                w, h = standin.enabled[0][1], standin.enabled[0][2]
+                rgb, depth_mm = standin.render(w, h)
+                units = np.round(depth_mm.astype(np.float64) / 1000.0 / standin.depth_scale_m)
                 raw = _shift(units.astype(np.uint16), DEPTH_TO_COLOUR_SHIFT_PX)
                 return _RealSenseFrameset(raw, rgb)
 
@@ -124,12 +124,12 @@ class FakeRealSense:
 
         class align:
             def __init__(self, align_to: Any) -> None:
-                fake.aligned_to = align_to
+                standin.aligned_to = align_to
 
             def process(self, frames: Any) -> Any:
-                if fake.aligned_to is not fake.stream.color:
+                if standin.aligned_to is not standin.stream.color:
                     return frames
-                frames = getattr(frames, "_impl", frames)  # the SDK double's fake
+                frames = getattr(frames, "_impl", frames)  # the SDK double's stand-in
                 depth = _shift(frames._depth, -DEPTH_TO_COLOUR_SHIFT_PX)
                 return _RealSenseFrameset(depth, frames._colour)
 

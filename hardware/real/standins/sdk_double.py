@@ -1,16 +1,16 @@
-"""A fake behind an installed SDK's own surface: what the SDK lacks, the double refuses.
+"""A stand-in behind an installed SDK's own surface: what the SDK lacks, the double refuses.
 
-:func:`sdk_double` wraps a fake object with the SDK class (or module) it stands for.
+:func:`sdk_double` wraps a stand-in object with the SDK class (or module) it stands for.
 Every attribute read is checked against the SDK: one the SDK does not have raises
-``AttributeError`` even when the fake has it (a backend line reading an attribute only
-the fake offers fails in the tests, as it would on the robot). Every call is bound to
+``AttributeError`` even when the stand-in has it (a backend line reading an attribute only
+the stand-in offers fails in the tests, as it would on the robot). Every call is bound to
 the SDK's signature first (``inspect.signature`` for Python code such as ``openni``;
 the signature lines pybind11 writes into the docstrings of ``panda_py`` and
 ``pyrealsense2``, every overload tried), so a call with arguments the SDK would refuse
 raises ``TypeError``. Results whose SDK type is known (a pybind11 ``-> module.Class``
 annotation, or ``returns``) come back wrapped the same way, as do instances made by
 calling an SDK class. This is ``unittest.mock.create_autospec``'s idea, kept to a
-working fake: autospec cannot read pybind11 signatures, and it answers with mocks.
+working stand-in: autospec cannot read pybind11 signatures, and it answers with mocks.
 """
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def sdk_signatures(function: Any) -> list[tuple[inspect.Signature, str]]:
 
 
 class _Double:
-    """The fake ``impl`` seen through ``spec`` (see the module docstring)."""
+    """The stand-in ``impl`` seen through ``spec`` (see the module docstring)."""
 
     def __init__(self, impl: Any, spec: Any, module: Any, returns: Mapping[str, Any]) -> None:
         object.__setattr__(self, "_impl", impl)
@@ -106,7 +106,7 @@ class _Double:
         return value
 
     def __setattr__(self, name: str, value: Any) -> None:
-        setattr(self._impl, name, value)  # a test's handle on the fake (time_scale, ...)
+        setattr(self._impl, name, value)  # a test's handle on the stand-in (time_scale, ...)
 
     def __bool__(self) -> bool:
         return bool(self._impl)
@@ -172,7 +172,7 @@ def sdk_double(
     """``impl`` behind the SDK class or module ``spec``.
 
     Args:
-        impl: the fake.
+        impl: the stand-in.
         spec: the installed SDK's class (``panda_py.Panda``) or module (``openni.openni2``).
         module: where return annotations are resolved (default: ``spec``'s module).
         returns: SDK classes of methods' results where the SDK does not annotate them

@@ -2,9 +2,9 @@
 
 :class:`SimulatedNaoBody` moves the simulated NAO for :class:`~hardware.real.standins.NaoqiStandin`
 (walking, joint trajectories, hands, speech heard by the simulated helper);
-:class:`SimulatedPanda` is a :class:`~hardware.real.standins.FakePanda` whose joints are
+:class:`SimulatedPanda` is a :class:`~hardware.real.standins.PandaStandin` whose joints are
 the simulated Panda's; :func:`simulated_carmine` renders the wrist camera for
-:class:`~hardware.real.standins.FakeOpenNI2`. :func:`robot_over_standins` puts the real
+:class:`~hardware.real.standins.OpenNI2Standin`. :func:`robot_over_standins` puts the real
 backends (:mod:`bearchair.hardware.real.nao`, :mod:`bearchair.hardware.real.panda`,
 :mod:`bearchair.hardware.real.camera`) on top, so the mission runs through qi networking, panda-py's
 call shapes and OpenNI's frames, with the simulation's clock, helper and judge.
@@ -23,10 +23,10 @@ from bearchair.core.se2 import SE2Pose
 from bearchair.hardware.interfaces import Robot
 from bearchair.hardware.real.standins import (
     FRANKA_HAND_F_T_EE,
-    FakeOpenNI2,
-    FakePanda,
     JointKeyframes,
     NaoqiStandin,
+    OpenNI2Standin,
+    PandaStandin,
     sdk_openni2,
     sdk_panda,
 )
@@ -98,7 +98,7 @@ class SimulatedNaoBody:
         self._world.speaker.say(sentence)
 
 
-class SimulatedPanda(FakePanda):
+class SimulatedPanda(PandaStandin):
     """panda-py's calls on the simulated Panda (base at the world origin)."""
 
     def __init__(self, world: Any) -> None:
@@ -137,7 +137,7 @@ def _t_hand_camera() -> np.ndarray:
     return T_HAND_CAMERA
 
 
-def simulated_carmine(world: Any) -> FakeOpenNI2:
+def simulated_carmine(world: Any) -> OpenNI2Standin:
     """OpenNI frames rendered by the simulated wrist camera (one render per robot instant)."""
     cache: dict[str, Any] = {}
     lock = threading.Lock()
@@ -151,7 +151,7 @@ def simulated_carmine(world: Any) -> FakeOpenNI2:
                 cache.update(stamp=now, rgb=frame.rgb, depth=np.clip(depth_mm, 0, 65535))
             return cache["rgb"], cache["depth"].astype(np.uint16)
 
-    return FakeOpenNI2(render=render, stamp_us=lambda: int(world.clock.now() * 1e6))
+    return OpenNI2Standin(render=render, stamp_us=lambda: int(world.clock.now() * 1e6))
 
 
 def robot_over_standins(world: Any, standin: NaoqiStandin) -> tuple[Robot, Any]:
