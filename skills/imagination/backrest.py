@@ -35,11 +35,10 @@ lands within :data:`MIRROR_TOLERANCE_M` of the surface,
     m(γ) = \\max_{o} \\; \\frac{1}{N} \\left|\\{x_i : d(R_{γ,o}\\, x_i, X) \\le τ\\}\\right|.
 
 The cue is taken only when the vote's plane does not mirror the chair better by more
-than :data:`MIRROR_MARGIN`. Measured on the 14 overrides of three calibration campaigns:
-the cue's plane mirrored 0.38-0.86 of the scan, the vote's 0.37-0.86; the one wrong
-override had the vote's plane at 0.86 against the cue's 0.37, and in the 13 right ones
-the vote's plane was never more than 0.01 better (a round seat, near-symmetric both
-ways). The two are mirrored only when they disagree (0.15-0.2 s on a scan)."""
+than :data:`MIRROR_MARGIN`: a vote whose plane mirrors the chair clearly better is the
+chair's real symmetry (the measurements behind the margin: docs/decisions.md, "the
+backrest cue's mirror check"). The two are mirrored only when they disagree (0.15-0.2 s
+on a scan)."""
 
 from __future__ import annotations
 

@@ -27,12 +27,8 @@ The paper's procedure ("Sitting Imagination"):
    (``SPLIT_SETTLE_REPEATS`` times at the first three positions, fresh jitter) and the
    vote is taken again over all drops. A hole that remains takes the pose from the
    sittings in its window, the agents on either side having turned toward it; a tie
-   that remains goes to the paper's lowest mean J + L. (Measured on the calibration
-   chairs' saved drops, 54 fronted meshes: where two or three adjacent rotations tie,
-   the rotation of lowest mean J + L was the front in all 13 cases, the lowest mean
-   sitting height in 12 and the most backrest contact points in fewer, while averaging
-   over the tied rotations put the pose 5-11 degrees off; so the tie-break stays the
-   paper's. The one chair the vote got 50 degrees wrong was a hole.)
+   that remains goes to the paper's lowest mean J + L, which picked the front in every
+   tie measured (docs/decisions.md, "the imagination's tie-break").
 
 6. Beyond the paper, a seat without a backrest (a stool, a bench): when no drop of
    steps 2-5 is a correct sitting, the sitter leaning back has found nothing to lean
