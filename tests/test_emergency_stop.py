@@ -244,11 +244,21 @@ def test_emergency_stop_measures_the_arm_braking_time():
             except RuntimeError as error:
                 errors.append(error)
 
-        thread = threading.Thread(target=move, daemon=True)
-        thread.start()
-        while np.max(np.abs(world.panda.joint_velocities())) < 1.0:
-            threading.Event().wait(0.002)
-        speed = float(np.max(np.abs(world.panda.joint_velocities())))
+        # The move's fast phase lasts a fraction of a second of wall time: a loaded machine
+        # can poll past it, so the move is tried again (never a wait without an end).
+        speed = 0.0
+        for _attempt in range(5):
+            thread = threading.Thread(target=move, daemon=True)
+            thread.start()
+            while thread.is_alive():
+                speed = float(np.max(np.abs(world.panda.joint_velocities())))
+                if speed >= 1.0:
+                    break
+                threading.Event().wait(0.002)
+            if speed >= 1.0:
+                break
+            thread.join()
+            world.panda.move_to(HOME_CONFIGURATION)
         world.robot.emergency_stop()
         thread.join(timeout=20.0)
         still_s = _still_after(world)
