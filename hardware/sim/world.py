@@ -411,6 +411,7 @@ class SimWorld:
         return clearance_to(self._chair_surface_points(), self.chair.T_world_chair(), boxes)
 
     def _chair_surface_points(self) -> np.ndarray:
+        """The chair's surface points (:func:`chair_surface_points`), computed once."""
         if self._surface_cache is None:
             self._surface_cache = chair_surface_points(self.chair.mesh_local)
         return self._surface_cache
