@@ -266,7 +266,8 @@ def record_from_summary(
     run_dir: str | None,
     attempts: int = 1,
 ) -> TrialRecord:
-    """A row from a finished mission's ``summary.json`` (``bearchair.executive.records.run_summary``)."""
+    """A row from a finished mission's ``summary.json``
+    (:mod:`bearchair.executive.records.run_summary`)."""
     judgement = summary.judgement
     instructions = len(summary.instructions)
     return TrialRecord(

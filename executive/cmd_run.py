@@ -167,7 +167,8 @@ def _log_to(path: Path):
 def add_recording_arguments(
     parser: argparse.ArgumentParser, *, record_default: bool | None
 ) -> None:
-    """``--record/--no-record`` and ``--live`` (Rerun recordings, ``bearchair.executive.recording.mission_recording``);
+    """``--record/--no-record`` and ``--live`` (Rerun recordings,
+    :mod:`bearchair.executive.recording.mission_recording`);
     ``record_default`` None: left off, the flag is None (the configuration decides, off)."""
     default = {True: "on", False: "off", None: "the configuration's, off"}[record_default]
     parser.add_argument(

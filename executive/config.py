@@ -36,7 +36,8 @@ class RunConfig:
         timeout_s: wall time after which the mission is stopped as failed.
         arena: the workspace layout.
         snapshots: in simulation, save a picture whenever a stage ends.
-        record: write a Rerun recording, ``out_dir/mission.rrd`` (``bearchair.executive.recording.mission_recording``).
+        record: write a Rerun recording, ``out_dir/mission.rrd``
+            (:mod:`bearchair.executive.recording.mission_recording`).
         live: stream to a Rerun viewer while running: ``"spawn"``, ``"web"`` or a URL.
         bind: the address a live viewer listens on (loopback unless opened, ``--bind``).
         imagination_workers: processes the imagination's drops run in (1: the run's own;

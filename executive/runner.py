@@ -104,7 +104,8 @@ class MissionRunner:
         timeout_s: wall time after which the mission is stopped as failed.
         on_tick: called after each tick (progress display).
         post_tick: hooks called after each tick and once more when the run has ended
-            (the tree stopped): recordings and viewers (``bearchair.executive.recording.mission_recording``).
+            (the tree stopped): recordings and viewers
+            (:mod:`bearchair.executive.recording.mission_recording`).
         on_second_signal: called with the outcome so far when a second stop signal
             exits the process at once, after the robots were stopped (it writes the
             summary that the orderly stop had no time to write).

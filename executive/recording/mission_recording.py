@@ -7,7 +7,8 @@ tree's tick count) and ``robot`` (seconds on the robot's clock):
 
 * ``tree``: the tree as a graph, each node coloured by its status with its feedback
   message, whenever a status or a message changes (``status`` and ``feedback`` are
-  also logged as plain strings per node, in the order of :func:`bearchair.executive.records.run_record.tree_nodes`);
+  also logged as plain strings per node, in the order of
+  :func:`bearchair.executive.records.run_record.tree_nodes`);
   ``tree/log`` has a line per status change;
 * ``blackboard/<key>``: each blackboard value as JSON text whenever it changes;
 * the scene: the skills' typed results drawn by :mod:`bearchair.executive.recording.scene_loggers`

@@ -1,9 +1,10 @@
 """Small loggers that turn the skills' typed results into Rerun archetypes.
 
 One function per result type, each ``log_x(stream, value)``: the recording
-(:mod:`bearchair.executive.recording.mission_recording`) calls them from the tick loop's post-tick hook when a
-blackboard value changes, or when a watched skill call returns. Nothing here computes
-anything the mission uses: it only draws what the skills already said.
+(:mod:`bearchair.executive.recording.mission_recording`) calls them from the tick loop's
+post-tick hook when a blackboard value changes, or when a watched skill call returns.
+Nothing here computes anything the mission uses: it only draws what the skills already
+said.
 
 Entity paths (the world frame is z up, metres):
 

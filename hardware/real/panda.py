@@ -159,7 +159,8 @@ class PandaArm:
     """:class:`bearchair.hardware.interfaces.ScanningArm` on a real Panda.
 
     Args:
-        robot: a ``panda_py.Panda`` (tests pass :class:`bearchair.hardware.real.standins.PandaStandin`).
+        robot: a ``panda_py.Panda`` (tests pass
+            :class:`bearchair.hardware.real.standins.PandaStandin`).
         camera: the wrist camera (``read() -> (rgb, depth_m)`` and ``intrinsics``).
         T_world_base: the arm base in the world frame.
         T_flange_camera: the hand-eye calibration (camera optical frame in the flange frame).

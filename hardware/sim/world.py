@@ -397,7 +397,8 @@ class SimWorld:
         self.placement_yaw_rad = kept[1]
 
     def _slid_clear_of_arm(self, T_world_chair: np.ndarray) -> np.ndarray:
-        """The chair set at ``T_world_chair`` pulled clear of the arm (:func:`slid_clear_of_arm`)."""
+        """The chair set at ``T_world_chair`` pulled clear of the arm
+        (:func:`slid_clear_of_arm`)."""
         arm_boxes = link_boxes(self._bullet, self.panda.body)
         T = slid_clear_of_arm(
             T_world_chair, self._chair_surface_points(), self.config.arena, arm_boxes

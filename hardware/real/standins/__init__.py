@@ -32,7 +32,8 @@ from bearchair.hardware.real.standins.sdk_double import sdk_double
 
 
 def sdk_panda(standin: PandaStandin) -> Any:
-    """``standin`` behind the installed ``panda_py.Panda`` (the stand-in itself without panda-py)."""
+    """``standin`` behind the installed ``panda_py.Panda`` (the stand-in itself without
+    panda-py)."""
     try:
         import panda_py
     except ImportError:
