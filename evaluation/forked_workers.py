@@ -28,6 +28,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
+from bearchair.core.held_signals import holding_stop_signals
 from bearchair.core.runtime import RUNTIME, reap
 from bearchair.evaluation.worker import main, run_guarded
 from bearchair.evaluation.worker_process import LOG_NAME, die_with_parent
@@ -155,5 +156,6 @@ class PreloadedLauncher:
             name="trial",
             daemon=False,
         )
-        process.start()
+        with holding_stop_signals():  # a half-started fork would belong to no one
+            process.start()
         return ForkedWorker(process, out_dir)

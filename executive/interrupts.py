@@ -14,6 +14,9 @@ A second signal while that is going on does not wait: it calls the registered
 emergency stops (the robots'), SIGKILLs and reaps the child processes (the runtime's
 ``kill``: the imagination's workers and the resource tracker), writes one line and
 leaves with ``os._exit``.
+
+A signal that comes while the main thread starts a worker process is held until it has
+started (:mod:`bearchair.core.held_signals`), so no child is left half-started.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ import threading
 from collections.abc import Callable, Iterator
 from typing import Any
 
+from bearchair.core.held_signals import hold
 from bearchair.core.runtime import RUNTIME
 
 HANDLED_SIGNALS = (
@@ -92,6 +96,8 @@ def _handle(signum: int, frame: Any) -> None:
     if os.getpid() != _owner_pid:
         return  # a forked child inherited the handler: its parent decides
     if _first_signal is None:
+        if hold(lambda: _handle(signum, None)):
+            return  # a worker process is starting: the signal comes once it has
         _first_signal = signum
         stop_requested.set()
         raise Interrupted(signum)

@@ -93,7 +93,8 @@ def test_each_stop_signal_ends_imagine_and_takes_its_pool_along(tmp_path, signum
     name = signal.Signals(signum).name
     assert status == 128 + signum, err.read_text()
     assert survivors(process.pid) == [], f"started {started}"
-    assert err.read_text().strip().splitlines()[-1] == f"bearchair: interrupted by {name}"
+    last_line = err.read_text().strip().splitlines()[-1]
+    assert last_line == f"bearchair: interrupted by {name}", err.read_text()
 
 
 @pytest.mark.slow

@@ -15,6 +15,7 @@ from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from multiprocessing.process import BaseProcess
 
+from bearchair.core.held_signals import holding_stop_signals
 from bearchair.core.progress import report as report_progress
 from bearchair.core.runtime import RUNTIME
 from bearchair.skills.imagination import DEFAULT_WORKERS
@@ -61,7 +62,8 @@ def _report_drops(outcomes: list[list[RawDrop]], total: int) -> None:
 def _run_in_pool(
     pool: ProcessPoolExecutor, tasks: list[TaskSpec], cancel: threading.Event | None
 ) -> tuple[list[list[RawDrop]], float, bool]:
-    futures: list[Future] = [pool.submit(run_task, task) for task in tasks]
+    with holding_stop_signals():  # a submit may start a worker (the pool's first tasks)
+        futures: list[Future] = [pool.submit(run_task, task) for task in tasks]
     pending = set(futures)
     total = sum(len(task.drops) for task in tasks)
     while pending:
@@ -88,8 +90,10 @@ def _pool(workers: int) -> ProcessPoolExecutor:
     """A persistent pool per worker count: process start-up is paid once per process.
 
     A new pool is sent one no-op per worker, so every worker process starts at once
-    (the pool starts one per task submitted) and the caller need not wait for them."""
-    with _pools_lock:
+    (the pool starts one per task submitted) and the caller need not wait for them.
+    A stop signal meanwhile is held until they have started: a half-started worker
+    belongs to no pool (:mod:`bearchair.core.held_signals`)."""
+    with _pools_lock, holding_stop_signals():
         pool = _pools.get(workers)
         if pool is None:
             pool = ProcessPoolExecutor(
