@@ -8,12 +8,12 @@ shows who touches what. The table below is generated from those registrations
 ======================== =========================================================== ======================================================== =======================================================================================================
 key                      value                                                       written by                                               read by
 ======================== =========================================================== ======================================================== =======================================================================================================
-/mission/seed            int: the run's seed                                         executive                                                ScanChair, ImagineSitting, CheckAccessibility, InstructHelper
+/mission/seed            int: the run's seed                                         executive                                                ScanChair, ImagineSitting, LookFromAbove, CheckAccessibility, InstructHelper
 /mission/arena           bearchair.core.arena.Arena: walls, obstacles, chair area    executive                                                CheckAccessibility, InstructHelper
-/chair/scan              bearchair.skills.results.ChairScan                          ScanChair
-/chair/mesh              trimesh.Trimesh: the chair now, world frame                 ScanChair, MeasureChairRotation                          ImagineSitting, CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, SeatBear
-/chair/points            (N, 3) ndarray: the chair now, world frame (ICP ref.)       ScanChair, MeasureChairRotation                          MeasureChairRotation
-/sitting/imagination     bearchair.skills.results.ImaginationResult                  ImagineSitting
+/chair/scan              bearchair.skills.results.ChairScan                          ScanChair, LookFromAbove                                 LookFromAbove
+/chair/mesh              trimesh.Trimesh: the chair now, world frame                 ScanChair, LookFromAbove, MeasureChairRotation           ImagineSitting, CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, SeatBear
+/chair/points            (N, 3) ndarray: the chair now, world frame (ICP ref.)       ScanChair, LookFromAbove, MeasureChairRotation           MeasureChairRotation
+/sitting/imagination     bearchair.skills.results.ImaginationResult                  ImagineSitting                                           LookFromAbove
 /sitting/pose            bearchair.core.geometry.SittingPose: g now, world frame     ImagineSitting, CheckAccessibility, MeasureChairRotation CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, SeatBear, ReleaseAndStand
 /humanoid/pose           bearchair.core.se2.SE2Pose: last tracked humanoid pose      CheckAccessibility
 /accessibility/reachable bearchair.skills.results.SeatReachability: the chair alone  CheckSeatReachable

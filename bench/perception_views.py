@@ -18,6 +18,7 @@ import numpy as np
 import pybullet
 from scipy.optimize import least_squares
 
+from bearchair.skills.perception.look_from_above import view_residual
 from bearchair.skills.perception.panda_kinematics import PandaKinematics
 from bearchair.skills.perception.views import CHAIR_VOLUME, look_at
 
@@ -48,12 +49,6 @@ def solve(
     lower = np.array([lo for lo, _ in LIMITS])
     upper = np.array([hi for _, hi in LIMITS])
 
-    def residual(joints: np.ndarray) -> np.ndarray:
-        T = kin.camera_pose(joints)
-        return np.concatenate(
-            (10.0 * (T[:3, 3] - eye), T[:3, 2] - wanted[:3, 2], 0.1 * (T[:3, 0] - wanted[:3, 0]))
-        )
-
     best = None
     for attempt in range(12):
         start = (
@@ -62,10 +57,11 @@ def solve(
             else rng.uniform(lower, upper)
         )
         fit = least_squares(
-            residual,
+            view_residual,
             np.clip(start, lower + 1e-3, upper - 1e-3),
             bounds=(lower, upper),
             diff_step=1e-4,
+            args=(kin, wanted),
         )
         report = check(kin, fit.x, eye, target)
         if report["ok"] and (best is None or report["score"] < best[1]["score"]):

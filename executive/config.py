@@ -42,7 +42,7 @@ class RunConfig:
         bind: the address a live viewer listens on (loopback unless opened, ``--bind``).
         imagination_workers: processes the imagination's drops run in (1: the run's own;
             the result is the same for any number).
-        tree_options: how the tree is composed (assistance, rotations, re-scan).
+        tree_options: how the tree is composed (assistance, rotations, re-scan, looks).
         tree_spec: which tree (``--tree``: a name, ``module:factory`` or an XML file),
             recorded with the run; the factory itself is passed to the run.
         skill_parameters: the scan's and the imagination's tuned parameters.

@@ -45,7 +45,7 @@ from bearchair.executive.config import RunConfig
 from bearchair.executive.viewer_links import LOOPBACK, bind_address
 from bearchair.skills.imagination import DEFAULT_WORKERS
 from bearchair.skills.parameters import MIN_SCAN_VIEWS, SCAN_VIEW_COUNT, SkillParameters
-from bearchair.trees.options import TreeOptions
+from bearchair.trees.options import MAX_LOOKS, TreeOptions
 
 
 class _Section(BaseModel):
@@ -71,8 +71,17 @@ class TreeSection(_Section):
         description="scan and imagine a turned chair anew when ICP cannot measure the turn",
     )
 
+    max_looks: int = Field(
+        default=MAX_LOOKS,
+        ge=0,
+        le=12,
+        description="looks from above when the imagination finds no sitting on the scan",
+    )
+
     def options(self) -> TreeOptions:
-        return TreeOptions(self.assistance, self.max_rotations, self.rescan_fallback)
+        return TreeOptions(
+            self.assistance, self.max_rotations, self.rescan_fallback, self.max_looks
+        )
 
 
 class RunSection(_Section):

@@ -52,6 +52,16 @@ class MissionSkills(Protocol):
         self, arm: ScanningArm, *, seed: int, cancel: threading.Event | None = None
     ) -> ChairScan: ...
 
+    def look_from_above(
+        self,
+        arm: ScanningArm,
+        scan: ChairScan,
+        *,
+        seed: int,
+        target: np.ndarray | None = None,
+        cancel: threading.Event | None = None,
+    ) -> ChairScan: ...
+
     def imagine_sitting(
         self, chair_mesh: trimesh.Trimesh, *, seed: int, cancel: threading.Event | None = None
     ) -> ImaginationResult: ...

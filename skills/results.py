@@ -8,7 +8,7 @@ seconds; frames are named in the attribute docs.
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 import trimesh
@@ -16,6 +16,9 @@ import trimesh
 from bearchair.core.geometry import SittingPose
 from bearchair.core.se2 import SE2Pose
 from bearchair.hardware.interfaces import RGBDFrame
+
+if TYPE_CHECKING:
+    from bearchair.skills.perception.reconstruction_config import ReconstructionConfig
 
 
 class ChairScan(NamedTuple):
@@ -29,6 +32,8 @@ class ChairScan(NamedTuple):
         frames: the RGB-D views fused, each with its camera pose (for looking at the scan
             afterwards; empty when the scan did not keep them).
         notes: scan views skipped or replaced to keep the arm clear of the chair.
+        config: the reconstruction's parameters (None: not kept), so that a later view
+            is fused as the scan's were.
     """
 
     chair_mesh: trimesh.Trimesh
@@ -37,6 +42,7 @@ class ChairScan(NamedTuple):
     seconds: dict[str, float]
     frames: tuple[RGBDFrame, ...] = ()
     notes: tuple[str, ...] = ()
+    config: ReconstructionConfig | None = None
 
     def to_json(self) -> dict[str, Any]:
         return {

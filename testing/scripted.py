@@ -50,6 +50,13 @@ def default_results() -> dict[str, Any]:
         "scan_chair": skill_results.ChairScan(
             chair_mesh, np.asarray(chair_mesh.vertices), 9, {"total": 0.1}
         ),
+        "look_from_above": skill_results.ChairScan(
+            chair_mesh,
+            np.asarray(chair_mesh.vertices),
+            10,
+            {"total": 0.1},
+            notes=("one more view",),
+        ),
         "imagine_sitting": skill_results.ImaginationResult(
             True, SITTING_POSE, 3, 24, (), {"total": 0.1}
         ),
@@ -141,6 +148,17 @@ class ScriptedSkills:
         self, arm: ScanningArm, *, seed: int, cancel: threading.Event | None = None
     ) -> skill_results.ChairScan:
         return self._answer("scan_chair", arm, seed=seed, cancel=cancel)
+
+    def look_from_above(
+        self,
+        arm: ScanningArm,
+        scan: skill_results.ChairScan,
+        *,
+        seed: int,
+        target: np.ndarray | None = None,
+        cancel: threading.Event | None = None,
+    ) -> skill_results.ChairScan:
+        return self._answer("look_from_above", arm, scan, seed=seed, target=target, cancel=cancel)
 
     def imagine_sitting(
         self, chair_mesh: trimesh.Trimesh, *, seed: int, cancel: threading.Event | None = None

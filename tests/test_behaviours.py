@@ -19,7 +19,7 @@ from bearchair.behaviours.assistance import (
     WaitUntilChairStill,
 )
 from bearchair.behaviours.imagine import ImagineSitting
-from bearchair.behaviours.scan import ScanChair
+from bearchair.behaviours.scan import LookFromAbove, ScanChair
 from bearchair.behaviours.seat import ReleaseAndStand, SeatBear
 from bearchair.behaviours.walk import WalkToChair
 from bearchair.core.arena import DEFAULT_ARENA
@@ -40,13 +40,12 @@ from bearchair.testing.scripted import ScriptedSkills, default_results
 DEFAULTS = default_results()
 
 # leaf class, the skill it calls, a result that makes it fail (None: cannot fail by result)
+NO_SITTING = ImaginationResult(False, None, 0, 56, (), {}, "no correct sitting")
+
 LEAVES = [
     (ScanChair, "scan_chair", None),
-    (
-        ImagineSitting,
-        "imagine_sitting",
-        ImaginationResult(False, None, 0, 56, (), {}, "no correct sitting"),
-    ),
+    (LookFromAbove, "look_from_above", None),
+    (ImagineSitting, "imagine_sitting", NO_SITTING),
     (
         CheckSeatReachable,
         "check_seat_reachable",
@@ -73,7 +72,9 @@ def fill_blackboard() -> None:
     values = {
         keys.SEED: 7,
         keys.ARENA: DEFAULT_ARENA,
+        keys.CHAIR_SCAN: DEFAULTS["scan_chair"],
         keys.CHAIR_MESH: DEFAULTS["scan_chair"].chair_mesh,
+        keys.IMAGINATION: NO_SITTING,
         keys.CHAIR_POINTS: DEFAULTS["scan_chair"].chair_points,
         keys.SITTING_POSE: DEFAULTS["imagine_sitting"].sitting_pose,
         keys.ACCESSIBILITY: DEFAULTS["check_accessibility"],
@@ -326,3 +327,39 @@ def test_check_seat_reachable_refuses_only_what_the_scan_shows(seat_seen):
     assert "seat out of the NAO's reach" in leaf.feedback_message
     if not seat_seen:
         assert "the scan shows no seat under the sitting point" in leaf.feedback_message
+
+
+def test_look_from_above_replaces_the_scan_the_later_leaves_read():
+    skills = ScriptedSkills()
+    leaf = make(LookFromAbove, skills)
+    assert tick_until_done(leaf)[-1] == Status.SUCCESS
+    (_arm, scan), kwargs = skills.calls["look_from_above"][0]
+    assert scan is DEFAULTS["scan_chair"] and kwargs["seed"] == 7
+    board = py_trees.blackboard.Client(name="reader")
+    for key in (keys.CHAIR_SCAN, keys.CHAIR_MESH, keys.CHAIR_POINTS):
+        board.register_key(key=key, access=py_trees.common.Access.READ)
+    looked = skills.results["look_from_above"]
+    assert board.get(keys.CHAIR_SCAN) is looked and board.get(keys.CHAIR_MESH) is looked.chair_mesh
+    assert "10 views" in leaf.feedback_message
+
+
+@pytest.mark.parametrize("imagination", ["found", "none"])
+def test_look_from_above_looks_only_after_an_imagination_found_no_sitting(imagination):
+    """After an imagination that found a sitting, or one that raised (no result), another
+    view would mend nothing: the leaf fails at once, without moving the arm, and says why
+    the leaf it backs up failed."""
+    skills = ScriptedSkills()
+    fill_blackboard()
+    if imagination == "found":
+        write_blackboard({keys.IMAGINATION: DEFAULTS["imagine_sitting"]})
+    else:
+        py_trees.blackboard.Blackboard.unset(keys.IMAGINATION)
+    backed_up = ImagineSitting(name="ImagineOnScan")
+    backed_up.feedback_message = "skill 'imagine_sitting' is not implemented"
+    leaf = LookFromAbove(backs_up=backed_up)
+    leaf.setup(skills=skills, robot=fake_robot())
+    assert tick_until_done(leaf)[-1] == Status.FAILURE
+    assert not skills.calls["look_from_above"]
+    assert leaf.feedback_message == (
+        "no look from above (ImagineOnScan: skill 'imagine_sitting' is not implemented)"
+    )

@@ -22,6 +22,8 @@ from bearchair.trees.mission import create_tree
 ACCESSIBLE = default_results()["check_accessibility"]
 BLOCKED = AccessibilityResult(False, None, ACCESSIBLE.sitting_pose, (), "s_goal outside the arena")
 REJECTED = RegistrationError("chair registration rejected: visible overlap 0.78 (need 0.88)")
+FOUND = default_results()["imagine_sitting"]
+NOT_FOUND = FOUND._replace(found=False, sitting_pose=None, reason="no correct sitting")
 
 READS = {"READ", "ACCESSED", "NO_KEY"}
 WRITES = {"WRITE", "INITIALISED"}
@@ -35,6 +37,8 @@ SCENARIOS = [
     {"check_accessibility": [BLOCKED, ACCESSIBLE], "measure_chair_rotation": REJECTED},
     # never accessible: GiveUp
     {"check_accessibility": BLOCKED},
+    # no sitting on the scan: looked at from above, then found
+    {"imagine_sitting": [NOT_FOUND, FOUND]},
 ]
 
 

@@ -28,7 +28,7 @@ def test_tree_unicode_shows_every_stage(capsys):
 def test_tree_blackboard_lists_keys_and_users(capsys):
     assert main(["tree", "--format", "ascii", "--blackboard"]) == 0
     out = capsys.readouterr().out
-    assert "/sitting/pose" in out and "ImagineSitting (W)" in out
+    assert "/sitting/pose" in out and "ImagineOnScan (W)" in out
 
 
 @pytest.mark.skipif(shutil.which("dot") is None, reason="Graphviz not installed")

@@ -120,15 +120,46 @@ def test_a_seat_out_of_reach_is_refused_before_anyone_is_asked_to_turn_it():
     assert not skills.calls["walk_path"]
 
 
+NO_SITTING = default_results()["imagine_sitting"]._replace(
+    found=False, sitting_pose=None, reason="no correct sitting in 80 drops"
+)
+
+
+def test_no_sitting_on_the_scan_looks_from_above_and_the_mission_goes_on():
+    skills = ScriptedSkills(
+        {"imagine_sitting": [NO_SITTING, NO_SITTING, default_results()["imagine_sitting"]]}
+    )
+    summary, _ = run_scripted_mission(skills)
+    assert summary.outcome == "success", summary.reason
+    # Two looks, each followed by the imagination on the chair reconstructed with it.
+    assert len(skills.calls["look_from_above"]) == 2
+    assert len(skills.calls["imagine_sitting"]) == 3
+    looked = skills.results["look_from_above"].chair_mesh
+    assert skills.calls["imagine_sitting"][-1][0][0] is looked
+    assert skills.calls["check_seat_reachable"][0][0][0] is looked
+
+
+def test_no_sitting_after_every_look_fails_the_stage_with_the_imagination_s_reason():
+    skills = ScriptedSkills({"imagine_sitting": NO_SITTING})
+    summary, _ = run_scripted_mission(skills)
+    assert summary.failed_stage == "ImagineSitting"
+    assert summary.reason == "ImagineAgain: no sitting pose: no correct sitting in 80 drops"
+    assert len(skills.calls["look_from_above"]) == 3  # MAX_LOOKS
+    assert not skills.calls["check_seat_reachable"]
+
+
 def test_missing_skill_fails_at_its_stage_and_names_it():
     error = SkillNotReady(
         "skill 'imagine_sitting' is not implemented: no module skills.imagination"
     )
-    summary, _ = run_scripted_mission(ScriptedSkills({"imagine_sitting": error}))
+    skills = ScriptedSkills({"imagine_sitting": error})
+    summary, _ = run_scripted_mission(skills)
     assert summary.outcome == "failure"
     assert summary.failed_stage == "ImagineSitting"
-    assert "imagine_sitting" in summary.reason
-    assert summary.reason.startswith("ImagineSitting:")
+    # No look from above mends a skill that is not there: the reason names it.
+    assert "ImagineOnScan: skill 'imagine_sitting' is not implemented" in summary.reason
+    assert summary.failures[0].startswith("ImagineOnScan: skill 'imagine_sitting'")
+    assert not skills.calls["look_from_above"]
 
 
 def test_a_skill_exception_never_crashes_the_executive():

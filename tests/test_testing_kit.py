@@ -132,7 +132,12 @@ def shape(node, depth=0):
 DOCUMENTED_TREE = [
     ("Put the bear on the chair", "Sequence", 0, True),
     ("ScanChair", "ScanChair", 1, None),
-    ("ImagineSitting", "ImagineSitting", 1, None),
+    ("ImagineSitting", "Selector", 1, True),
+    ("ImagineOnScan", "ImagineSitting", 2, None),
+    ("Up to 3 looks", "Retry", 2, None),
+    ("Look again and imagine", "Sequence", 3, True),
+    ("LookFromAbove", "LookFromAbove", 4, None),
+    ("ImagineAgain", "ImagineSitting", 4, None),
     ("CheckSeatReachable", "CheckSeatReachable", 1, None),
     ("MakeChairAccessible", "Selector", 1, True),
     ("CheckAccessibility", "CheckAccessibility", 2, None),
@@ -151,8 +156,7 @@ DOCUMENTED_TREE = [
     ("SeatBear", "SeatBear", 1, None),
     ("ReleaseAndStand", "ReleaseAndStand", 1, None),
 ]
-"""The mission tree of trees/mission.py's docstring, as ``create_tree()`` built it before
-it took options."""
+"""The mission tree of trees/mission.py's docstring."""
 
 
 def test_create_tree_with_no_argument_is_the_documented_tree():
@@ -165,14 +169,19 @@ def test_the_options_change_the_tree():
     assert "InstructHelper" not in names and "MakeChairAccessible" in names
     no_rescan = [node.name for node in create_tree(TreeOptions(rescan_fallback=False)).iterate()]
     assert "ScanTurnedChair" not in no_rescan and "MeasureChairRotation" in no_rescan
-    retry = next(
-        node
-        for node in create_tree(TreeOptions(max_rotations=5)).iterate()
+    retries = {
+        node.name: node.num_failures
+        for node in create_tree(TreeOptions(max_rotations=5, max_looks=2)).iterate()
         if isinstance(node, py_trees.decorators.Retry)
-    )
-    assert retry.num_failures == 5
+    }
+    assert retries == {"Up to 5 rotations": 5, "Up to 2 looks": 2}
+    no_looks = create_tree(TreeOptions(max_looks=0))
+    imagine = next(node for node in no_looks.children if node.name == "ImagineSitting")
+    assert type(imagine).__name__ == "ImagineSitting" and not imagine.children
     with pytest.raises(ValueError, match="max_rotations"):
         TreeOptions(max_rotations=0)
+    with pytest.raises(ValueError, match="max_looks"):
+        TreeOptions(max_looks=-1)
 
 
 def test_skill_parameters_mirror_the_perception_constants():

@@ -4,7 +4,12 @@
 
     [-] Put the bear on the chair                      Sequence (memory)
         --> ScanChair
-        --> ImagineSitting
+        [o] ImagineSitting                             Selector (memory)
+            --> ImagineOnScan
+            (-) Up to 3 looks                          Retry (3 failures)
+                [-] Look again and imagine             Sequence (memory)
+                    --> LookFromAbove                  one more view, where none looked from
+                    --> ImagineAgain
         --> CheckSeatReachable                         refuses a seat no stance reaches
         [o] MakeChairAccessible                        Selector (memory)
             --> CheckAccessibility
@@ -30,7 +35,8 @@ Nothing here touches hardware: skills and robots arrive at
 :class:`bearchair.trees.options.TreeOptions` varies it: without the assistance,
 ``MakeChairAccessible`` is the first accessibility check alone (an inaccessible chair
 fails the mission); without the re-scan fallback, ``LocateTurnedChair`` is ICP alone; the
-retry's count is ``max_rotations``. ``create_tree()`` is the tree above.
+retry's count is ``max_rotations``; with ``max_looks`` 0, ``ImagineSitting`` is the one
+leaf on the scan. ``create_tree()`` is the tree above.
 """
 
 from __future__ import annotations
@@ -46,7 +52,7 @@ from bearchair.behaviours.assistance import (
     WaitUntilChairStill,
 )
 from bearchair.behaviours.imagine import ImagineSitting
-from bearchair.behaviours.scan import ScanChair
+from bearchair.behaviours.scan import LookFromAbove, ScanChair
 from bearchair.behaviours.seat import ReleaseAndStand, SeatBear
 from bearchair.behaviours.walk import WalkToChair
 from bearchair.trees.options import TreeOptions
@@ -61,6 +67,30 @@ STAGES = (
     "ReleaseAndStand",
 )
 """The mission's stages: the names of the root's children, in order."""
+
+
+def create_imagination(max_looks: int) -> py_trees.behaviour.Behaviour:
+    """The ``ImagineSitting`` stage: the imagination on the scan, and where it finds no
+    sitting, up to ``max_looks`` looks at the chair from above, each followed by the
+    imagination on the chair reconstructed with it (0: the imagination alone)."""
+    if max_looks == 0:
+        return ImagineSitting()
+    on_scan = ImagineSitting(name="ImagineOnScan")
+    again = py_trees.composites.Sequence(
+        name="Look again and imagine",
+        memory=True,
+        children=[LookFromAbove(backs_up=on_scan), ImagineSitting(name="ImagineAgain")],
+    )
+    return py_trees.composites.Selector(
+        name="ImagineSitting",
+        memory=True,
+        children=[
+            on_scan,
+            py_trees.decorators.Retry(
+                name=f"Up to {max_looks} looks", child=again, num_failures=max_looks
+            ),
+        ],
+    )
 
 
 def create_locate_turned_chair(rescan_fallback: bool = True) -> py_trees.behaviour.Behaviour:
@@ -128,7 +158,7 @@ def create_tree(options: TreeOptions | None = None) -> py_trees.behaviour.Behavi
         memory=True,
         children=[
             ScanChair(),
-            ImagineSitting(),
+            create_imagination(options.max_looks),
             CheckSeatReachable(),
             create_accessibility(options),
             WalkToChair(),

@@ -3,7 +3,7 @@
 A tree factory is any callable ``(options: TreeOptions) -> py_trees.behaviour.Behaviour``
 (:data:`TreeFactory`): ``bearchair.trees.mission.create_tree`` is one, a plug-in's tree
 (the ``bearchair.trees`` entry points, or ``--tree module:factory``) is another. Options
-a factory does not understand it may ignore; the mission's own tree honours all three.
+a factory does not understand it may ignore; the mission's own tree honours them all.
 """
 
 from __future__ import annotations
@@ -16,6 +16,11 @@ import py_trees
 
 from bearchair.behaviours import keys
 
+MAX_LOOKS = 3
+"""Looks from above the imagination may ask for before its stage fails: each is an arm
+motion and a reconstruction (about 1 s in simulation, 10-20 s on the Panda at its scan
+speed) and an imagination (3-10 s), so three keep the stage within about a minute."""
+
 
 @dataclass(frozen=True)
 class TreeOptions:
@@ -27,19 +32,24 @@ class TreeOptions:
         max_rotations: rotations the helper may be asked for before giving up (>= 1).
         rescan_fallback: when ICP cannot measure the turn, scan and imagine the turned
             chair anew; False: an unmeasured turn fails that attempt.
+        max_looks: when the imagination finds no sitting on the scan, look at the chair
+            from above and imagine again, up to this many times (0: never).
 
     Raises:
-        ValueError: ``max_rotations`` is not a whole number of at least 1.
+        ValueError: ``max_rotations`` is not a whole number of at least 1, or
+            ``max_looks`` not one of at least 0.
     """
 
     assistance: bool = True
     max_rotations: int = keys.MAX_ROTATIONS
     rescan_fallback: bool = True
+    max_looks: int = MAX_LOOKS
 
     def __post_init__(self) -> None:
-        rotations = self.max_rotations
-        if isinstance(rotations, bool) or not isinstance(rotations, int) or rotations < 1:
-            raise ValueError(f"max_rotations: a whole number >= 1 is needed, got {rotations!r}")
+        for name, least in (("max_rotations", 1), ("max_looks", 0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < least:
+                raise ValueError(f"{name}: a whole number >= {least} is needed, got {value!r}")
 
 
 TreeFactory: TypeAlias = Callable[[TreeOptions], py_trees.behaviour.Behaviour]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 from typing import Any
@@ -107,8 +108,8 @@ class RecordedRun:
         try:
             config = load_user_json(self.run_dir / "config.json", "config", RunRecordError)
             section = config.get("tree") or config.get("tree_options") or {}
-            fields = ("assistance", "max_rotations", "rescan_fallback")
-            return TreeOptions(**{key: section[key] for key in fields if key in section})
+            names = [field.name for field in dataclasses.fields(TreeOptions)]
+            return TreeOptions(**{key: section[key] for key in names if key in section})
         except (RunRecordError, ValueError, TypeError, AttributeError):
             return TreeOptions()
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import NamedTuple, cast
+from typing import TYPE_CHECKING, NamedTuple, cast
 
 import numpy as np
 from scipy import ndimage
@@ -39,6 +39,9 @@ from bearchair.skills.perception.views import (
     HOME_CONFIGURATION,
     VIEW_CLEARANCE_M,
 )
+
+if TYPE_CHECKING:
+    from bearchair.skills.perception.panda_kinematics import PandaKinematics
 
 HIDDEN_MARGIN_M = 0.05
 """Growth (metres) of the box seen from HOME for what the high view cannot see: parts
@@ -228,6 +231,11 @@ class ArmClearance:
     def close(self) -> None:
         """Disconnects the pybullet client."""
         self._kinematics.close()
+
+    @property
+    def kinematics(self) -> PandaKinematics:
+        """The arm model the queries use (its joints are those of the last query)."""
+        return self._kinematics
 
     def set_box(self, lower: np.ndarray, upper: np.ndarray) -> None:
         """The obstacle (world box, metres) the following queries measure against."""

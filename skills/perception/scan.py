@@ -81,4 +81,4 @@ def scan_chair(
     fused = [*capture.looks, *frames] if beyond and capture.extent.source == "seen" else frames
     scan = reconstruct_chair(fused, config)
     seconds = {**timing, **scan.seconds}
-    return scan._replace(seconds=seconds, notes=tuple(notes), frames=tuple(fused))
+    return scan._replace(seconds=seconds, notes=tuple(notes), frames=tuple(fused), config=config)
