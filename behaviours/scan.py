@@ -1,5 +1,6 @@
-"""ScanChair: scan the chair with the arm's wrist camera and reconstruct it; LookFromAbove:
-one more view of it when the scan hid what the imagination needs."""
+"""ScanChair: scan the chair with the arm's wrist camera and reconstruct it; LookFromAbove
+and LookAtSeat: one more view of it when the scan hid what the imagination or the seat
+check needs."""
 
 from __future__ import annotations
 
@@ -97,3 +98,41 @@ class LookFromAbove(SkillBehaviour):
             f"{scan.notes[-1] if scan.notes else 'one more view'}: chair reconstructed from "
             f"{scan.views} views, {len(scan.chair_points)} points"
         )
+
+
+class LookAtSeat(SkillBehaviour):
+    """Makes sure the scan shows the seat under the sitting point: when it does not (the
+    nine views saw past a rim, between rails, or not at all behind a back), the arm looks
+    once from above it and the chair is reconstructed with that view. Succeeds either
+    way: the seat check that follows says what the scan still lacks.
+
+    Blackboard:
+        reads ``/mission/seed``, ``/chair/scan``, ``/sitting/pose``;
+        writes ``/chair/scan``, ``/chair/mesh``, ``/chair/points``.
+    """
+
+    activity = "looking for the seat under the sitting point"
+
+    def __init__(self, name: str = "LookAtSeat"):
+        super().__init__(
+            name,
+            reads=(keys.SEED, keys.CHAIR_SCAN, keys.SITTING_POSE),
+            writes=(keys.CHAIR_SCAN, keys.CHAIR_MESH, keys.CHAIR_POINTS),
+        )
+
+    def prepare(self) -> Callable[[], ChairScan]:
+        skills, robot = self.need()
+        scan: ChairScan = self.blackboard.get(keys.CHAIR_SCAN)
+        sitting_pose = self.blackboard.get(keys.SITTING_POSE)
+        seed = self.blackboard.get(keys.SEED)
+        return lambda: skills.look_at_seat(
+            robot.arm, scan, sitting_pose, seed=seed, cancel=self.cancel_event
+        )
+
+    def conclude(self, scan: ChairScan) -> Status:
+        before: ChairScan = self.blackboard.get(keys.CHAIR_SCAN)
+        if scan is before:
+            return self.succeed("the scan shows the seat under the sitting point")
+        put_scan(self.blackboard, scan)
+        note = scan.notes[-1] if scan.notes else "one more view"
+        return self.succeed(f"the scan showed no seat under the sitting point: {note}")

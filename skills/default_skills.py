@@ -30,6 +30,7 @@ class DefaultSkills:
 
     scan_chair = staticmethod(perception.scan_chair)
     look_from_above = staticmethod(perception.look_from_above)
+    look_at_seat = staticmethod(perception.look_at_seat)
     wait_until_chair_still = staticmethod(perception.wait_until_chair_still)
     measure_chair_rotation = staticmethod(perception.measure_chair_rotation)
     check_seat_reachable = staticmethod(stance.check_seat_reachable)

@@ -66,6 +66,16 @@ class MissionSkills(Protocol):
         self, chair_mesh: trimesh.Trimesh, *, seed: int, cancel: threading.Event | None = None
     ) -> ImaginationResult: ...
 
+    def look_at_seat(
+        self,
+        arm: ScanningArm,
+        scan: ChairScan,
+        sitting_pose: SittingPose,
+        *,
+        seed: int,
+        cancel: threading.Event | None = None,
+    ) -> ChairScan: ...
+
     def locate_humanoid(self, arm: ScanningArm) -> SE2Pose | None: ...
 
     def check_seat_reachable(

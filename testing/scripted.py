@@ -41,6 +41,14 @@ SITTING_POSE = SittingPose(np.array([0.6, 0.0, 0.28]), 0.0)
 SE2_GOAL = SE2Pose(0.9, 0.0, np.pi)
 
 
+def _seat_seen_already(
+    arm: ScanningArm, scan: skill_results.ChairScan, sitting_pose: SittingPose, **_: Any
+) -> skill_results.ChairScan:
+    """``look_at_seat``'s default: the scan shows the seat under p, so it comes back as it
+    went in."""
+    return scan
+
+
 def default_results() -> dict[str, Any]:
     """One plausible result per skill: a chair at (0.6, 0) facing +x, toward the humanoid."""
     chair_mesh = box_chair_mesh()
@@ -57,6 +65,7 @@ def default_results() -> dict[str, Any]:
             {"total": 0.1},
             notes=("one more view",),
         ),
+        "look_at_seat": _seat_seen_already,
         "imagine_sitting": skill_results.ImaginationResult(
             True, SITTING_POSE, 3, 24, (), {"total": 0.1}
         ),
@@ -164,6 +173,17 @@ class ScriptedSkills:
         self, chair_mesh: trimesh.Trimesh, *, seed: int, cancel: threading.Event | None = None
     ) -> skill_results.ImaginationResult:
         return self._answer("imagine_sitting", chair_mesh, seed=seed, cancel=cancel)
+
+    def look_at_seat(
+        self,
+        arm: ScanningArm,
+        scan: skill_results.ChairScan,
+        sitting_pose: SittingPose,
+        *,
+        seed: int,
+        cancel: threading.Event | None = None,
+    ) -> skill_results.ChairScan:
+        return self._answer("look_at_seat", arm, scan, sitting_pose, seed=seed, cancel=cancel)
 
     def locate_humanoid(self, arm: ScanningArm) -> SE2Pose | None:
         return self._answer("locate_humanoid", arm)

@@ -19,7 +19,7 @@ from bearchair.behaviours.assistance import (
     WaitUntilChairStill,
 )
 from bearchair.behaviours.imagine import ImagineSitting
-from bearchair.behaviours.scan import LookFromAbove, ScanChair
+from bearchair.behaviours.scan import LookAtSeat, LookFromAbove, ScanChair
 from bearchair.behaviours.seat import ReleaseAndStand, SeatBear
 from bearchair.behaviours.walk import WalkToChair
 from bearchair.core.arena import DEFAULT_ARENA
@@ -45,6 +45,7 @@ NO_SITTING = ImaginationResult(False, None, 0, 56, (), {}, "no correct sitting")
 LEAVES = [
     (ScanChair, "scan_chair", None),
     (LookFromAbove, "look_from_above", None),
+    (LookAtSeat, "look_at_seat", None),
     (ImagineSitting, "imagine_sitting", NO_SITTING),
     (
         CheckSeatReachable,
@@ -363,3 +364,20 @@ def test_look_from_above_looks_only_after_an_imagination_found_no_sitting(imagin
     assert leaf.feedback_message == (
         "no look from above (ImagineOnScan: skill 'imagine_sitting' is not implemented)"
     )
+
+
+@pytest.mark.parametrize("seen", [True, False])
+def test_look_at_seat_keeps_a_scan_that_shows_the_seat_and_takes_the_one_with_the_look(seen):
+    looked = DEFAULTS["look_from_above"]
+    script = (lambda arm, scan, sitting_pose, **_: scan) if seen else looked
+    skills = ScriptedSkills({"look_at_seat": script})
+    leaf = make(LookAtSeat, skills)
+    assert tick_until_done(leaf)[-1] == Status.SUCCESS
+    (_arm, scan, sitting_pose), kwargs = skills.calls["look_at_seat"][0]
+    assert scan is DEFAULTS["scan_chair"] and kwargs["seed"] == 7
+    assert sitting_pose is DEFAULTS["imagine_sitting"].sitting_pose
+    board = py_trees.blackboard.Client(name="reader")
+    board.register_key(key=keys.CHAIR_MESH, access=py_trees.common.Access.READ)
+    expected = DEFAULTS["scan_chair"] if seen else looked
+    assert board.get(keys.CHAIR_MESH) is expected.chair_mesh
+    assert ("no seat under the sitting point" in leaf.feedback_message) != seen

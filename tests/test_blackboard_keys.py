@@ -39,6 +39,8 @@ SCENARIOS = [
     {"check_accessibility": BLOCKED},
     # no sitting on the scan: looked at from above, then found
     {"imagine_sitting": [NOT_FOUND, FOUND]},
+    # no seat under the sitting point on the scan: looked at
+    {"look_at_seat": default_results()["look_from_above"]},
 ]
 
 

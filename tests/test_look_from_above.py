@@ -10,14 +10,21 @@ import math
 import numpy as np
 import pytest
 
+from bearchair.core.geometry import SittingPose
 from bearchair.hardware.sim.world import SimConfig, SimWorld
 from bearchair.skills.imagination import imagine_sitting
-from bearchair.skills.perception import PerceptionError, look_from_above, scan_chair
+from bearchair.skills.perception import (
+    PerceptionError,
+    look_at_seat,
+    look_from_above,
+    scan_chair,
+)
 from bearchair.skills.perception.clearance import ArmClearance
 from bearchair.skills.perception.look_from_above import (
     DISTANCES_M,
     eye_candidates,
     plan_look,
+    seat_seen_under,
     solve_view,
 )
 from bearchair.skills.perception.views import HOME_CONFIGURATION, VIEW_CLEARANCE_M
@@ -98,3 +105,39 @@ def test_a_seat_the_nine_views_hid_is_found_after_one_look(shared_chairs, shared
     assert found.found and found.sitting_pose is not None
     error = (found.sitting_pose.yaw - front + math.pi) % (2 * math.pi) - math.pi
     assert abs(math.degrees(error)) < 30.0
+
+
+def _seat_pose(world, scan) -> SittingPose:
+    """The sitting pose over the middle of the scanned seat (the up-facing faces 0.15-0.35 m
+    high: the box chair's seat top is at 0.24 m, its back's top at 0.535 m), facing the
+    chair's front."""
+    mesh = scan.chair_mesh
+    up = (mesh.face_normals[:, 2] > 0.9) & (np.abs(mesh.triangles_center[:, 2] - 0.25) < 0.1)
+    point = mesh.triangles_center[up].mean(axis=0) + np.array([0.0, 0.0, 0.08])
+    return SittingPose(point, world.placement_yaw_rad + world.front_yaw_rad)
+
+
+@pytest.mark.slow
+def test_a_seat_the_scan_lost_under_p_is_there_after_one_look_at_it():
+    """The box chair's scan (world seed 4) has its seat's rim but not its middle, under p;
+    one look from above p, and the seat ray finds the seat there."""
+    with SimWorld(SimConfig(seed=4)) as world:
+        scan = scan_chair(world.robot.arm, seed=4)
+        pose = _seat_pose(world, scan)
+        assert not seat_seen_under(scan, pose)
+        looked = look_at_seat(world.robot.arm, scan, pose, seed=4)
+        out_of_reach = SittingPose(np.array([2.5, 0.0, 0.3]), 0.0)
+        kept = look_at_seat(world.robot.arm, scan, out_of_reach, seed=4)
+    assert looked.views == scan.views + 1 and looked.notes[-1].startswith("one more view")
+    assert seat_seen_under(looked, pose)
+    assert kept.views == scan.views and kept.frames == scan.frames
+    assert kept.notes[-1].startswith("no view from above the chair reachable")
+
+
+@pytest.mark.slow
+def test_a_scan_that_shows_the_seat_under_p_is_kept_as_it_is():
+    with SimWorld(SimConfig(seed=5)) as world:
+        scan = scan_chair(world.robot.arm, seed=5)
+        pose = _seat_pose(world, scan)
+        assert seat_seen_under(scan, pose)
+        assert look_at_seat(world.robot.arm, scan, pose, seed=5) is scan

@@ -23,6 +23,7 @@ from bearchair.skills.perception.errors import RegistrationError
 from bearchair.skills.results import AccessibilityResult, SeatReachability
 from bearchair.testing.scripted import ScriptedSkills, default_results
 from bearchair.trees.mission import STAGES, create_tree
+from bearchair.trees.options import TreeOptions
 from tests.helpers.missions import run_scripted_mission
 
 DEFAULTS = default_results()
@@ -146,6 +147,24 @@ def test_no_sitting_after_every_look_fails_the_stage_with_the_imagination_s_reas
     assert summary.reason == "ImagineAgain: no sitting pose: no correct sitting in 80 drops"
     assert len(skills.calls["look_from_above"]) == 3  # MAX_LOOKS
     assert not skills.calls["check_seat_reachable"]
+
+
+def test_a_seat_the_scan_lacks_is_looked_at_before_the_seat_check():
+    looked = default_results()["look_from_above"]
+    skills = ScriptedSkills({"look_at_seat": looked})
+    summary, _ = run_scripted_mission(skills)
+    assert summary.outcome == "success", summary.reason
+    assert len(skills.calls["look_at_seat"]) == 1 and not skills.calls["look_from_above"]
+    # The seat check, the accessibility check and the seating see the chair with the look.
+    assert skills.calls["check_seat_reachable"][0][0][0] is looked.chair_mesh
+    assert skills.calls["check_accessibility"][0][0][0] is looked.chair_mesh
+
+
+def test_with_no_looks_the_stages_are_the_single_leaves_on_the_scan():
+    root = create_tree(TreeOptions(max_looks=0))
+    names = [node.name for node in root.iterate()]
+    assert "LookFromAbove" not in names and "LookAtSeat" not in names
+    assert [child.name for child in root.children] == list(STAGES)
 
 
 def test_missing_skill_fails_at_its_stage_and_names_it():

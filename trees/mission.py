@@ -10,7 +10,9 @@
                 [-] Look again and imagine             Sequence (memory)
                     --> LookFromAbove                  one more view, where none looked from
                     --> ImagineAgain
-        --> CheckSeatReachable                         refuses a seat no stance reaches
+        [-] CheckSeatReachable                         Sequence (memory)
+            --> LookAtSeat                             one more view, if no seat under p
+            --> CheckSeatReachable                     refuses a seat no stance reaches
         [o] MakeChairAccessible                        Selector (memory)
             --> CheckAccessibility
             (-) Up to 3 rotations                      Retry (3 failures)
@@ -35,8 +37,8 @@ Nothing here touches hardware: skills and robots arrive at
 :class:`bearchair.trees.options.TreeOptions` varies it: without the assistance,
 ``MakeChairAccessible`` is the first accessibility check alone (an inaccessible chair
 fails the mission); without the re-scan fallback, ``LocateTurnedChair`` is ICP alone; the
-retry's count is ``max_rotations``; with ``max_looks`` 0, ``ImagineSitting`` is the one
-leaf on the scan. ``create_tree()`` is the tree above.
+retry's count is ``max_rotations``; with ``max_looks`` 0, ``ImagineSitting`` and
+``CheckSeatReachable`` are the one leaf each, on the scan. ``create_tree()`` is the tree above.
 """
 
 from __future__ import annotations
@@ -52,7 +54,7 @@ from bearchair.behaviours.assistance import (
     WaitUntilChairStill,
 )
 from bearchair.behaviours.imagine import ImagineSitting
-from bearchair.behaviours.scan import LookFromAbove, ScanChair
+from bearchair.behaviours.scan import LookAtSeat, LookFromAbove, ScanChair
 from bearchair.behaviours.seat import ReleaseAndStand, SeatBear
 from bearchair.behaviours.walk import WalkToChair
 from bearchair.trees.options import TreeOptions
@@ -90,6 +92,17 @@ def create_imagination(max_looks: int) -> py_trees.behaviour.Behaviour:
                 name=f"Up to {max_looks} looks", child=again, num_failures=max_looks
             ),
         ],
+    )
+
+
+def create_seat_check(max_looks: int) -> py_trees.behaviour.Behaviour:
+    """The ``CheckSeatReachable`` stage: where the scan shows no seat under the sitting
+    point, one look from above it first (none with ``max_looks`` 0); then the check, its
+    leaf named as the stage so its refusals read as before."""
+    if max_looks == 0:
+        return CheckSeatReachable()
+    return py_trees.composites.Sequence(
+        name="CheckSeatReachable", memory=True, children=[LookAtSeat(), CheckSeatReachable()]
     )
 
 
@@ -159,7 +172,7 @@ def create_tree(options: TreeOptions | None = None) -> py_trees.behaviour.Behavi
         children=[
             ScanChair(),
             create_imagination(options.max_looks),
-            CheckSeatReachable(),
+            create_seat_check(options.max_looks),
             create_accessibility(options),
             WalkToChair(),
             SeatBear(),

@@ -6,7 +6,12 @@ functions taking a :class:`bearchair.hardware.interfaces.ScanningArm` move it an
 
 from bearchair.skills.perception.chair_turn import measure_chair_rotation
 from bearchair.skills.perception.errors import PerceptionError, RegistrationError
-from bearchair.skills.perception.look_from_above import LookCancelled, look_from_above
+from bearchair.skills.perception.look_from_above import (
+    LookCancelled,
+    NoViewFromAbove,
+    look_at_seat,
+    look_from_above,
+)
 from bearchair.skills.perception.motion import wait_until_chair_still
 from bearchair.skills.perception.reconstruction import reconstruct_chair
 from bearchair.skills.perception.reconstruction_config import ReconstructionConfig
@@ -16,6 +21,7 @@ from bearchair.skills.perception.tags import TagSightings, estimate_tag_pose, lo
 
 __all__ = [
     "LookCancelled",
+    "NoViewFromAbove",
     "PerceptionError",
     "ReconstructionConfig",
     "RegistrationConfig",
@@ -24,6 +30,7 @@ __all__ = [
     "TagSightings",
     "estimate_tag_pose",
     "locate_humanoid",
+    "look_at_seat",
     "look_from_above",
     "measure_chair_rotation",
     "reconstruct_chair",

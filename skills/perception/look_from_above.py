@@ -5,7 +5,9 @@ The nine scan views (:data:`bearchair.skills.perception.views.SCAN_CONFIGURATION
 at the chair area from the arm's side. A seat deep between a tall back and armrests, or
 the front of a back that faces away from the arm, can be hidden from every one of them;
 the imagination then finds no sitting on the scan, although the chair has one. So when
-the scan lacks what the mission needs, the arm looks once more, from above.
+the scan lacks what the mission needs, the arm looks once more, from above: over the
+chair's middle when the imagination found no sitting (:func:`look_from_above`), over the
+sitting point when the scan shows no seat under it (:func:`look_at_seat`).
 
 The view: eye candidates around the target at :data:`AZIMUTHS_DEG`, :data:`ELEVATIONS_DEG`
 over its horizontal and :data:`DISTANCES_M` from it, each looking at the target, tried in
@@ -31,6 +33,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from bearchair.core.errors import Cancelled
+from bearchair.core.geometry import SittingPose
 from bearchair.hardware.interfaces import ScanningArm
 from bearchair.skills.perception.clearance import ArmClearance, PlannedView
 from bearchair.skills.perception.errors import PerceptionError
@@ -39,6 +42,7 @@ from bearchair.skills.perception.reconstruction import reconstruct_chair
 from bearchair.skills.perception.reconstruction_config import ReconstructionConfig
 from bearchair.skills.perception.scan_capture import capture_planned
 from bearchair.skills.perception.views import HOME_CONFIGURATION, VIEW_CLEARANCE_M, look_at
+from bearchair.skills.planning.seat import seat_ray
 from bearchair.skills.results import ChairScan
 
 AZIMUTHS_DEG = (0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0)
@@ -74,6 +78,10 @@ PANDA_JOINT_LIMITS_RAD = (
 
 class LookCancelled(Cancelled, PerceptionError):
     """The look was interrupted through its cancel event."""
+
+
+class NoViewFromAbove(PerceptionError):
+    """No candidate view is reachable clear of the scanned chair."""
 
 
 def chair_middle(scan: ChairScan) -> np.ndarray:
@@ -158,7 +166,7 @@ def plan_look(target_m: np.ndarray, scan: ChairScan) -> tuple[PlannedView, np.nd
         The view to visit (from HOME) and its eye (metres, world).
 
     Raises:
-        PerceptionError: no candidate is reachable clear of the chair.
+        NoViewFromAbove: no candidate is reachable clear of the chair.
     """
     lower, upper = (np.asarray(b, float) for b in scan.chair_mesh.bounds)
     with ArmClearance() as clearance:
@@ -174,7 +182,7 @@ def plan_look(target_m: np.ndarray, scan: ChairScan) -> tuple[PlannedView, np.nd
             if path_m >= VIEW_CLEARANCE_M:
                 view = PlannedView(0, tuple(float(j) for j in joints), False, "kept", path_m)
                 return view, eye
-    raise PerceptionError(
+    raise NoViewFromAbove(
         f"no view from above the chair reachable clear of it: {len(candidates)} "
         f"eyes {DISTANCES_M[0]:.2f}-{DISTANCES_M[-1]:.2f} m from "
         f"({target_m[0]:.2f}, {target_m[1]:.2f}, {target_m[2]:.2f}) m tried"
@@ -226,3 +234,46 @@ def look_from_above(
         frames=(*scan.frames, *frames),
         config=config,
     )
+
+
+def seat_seen_under(scan: ChairScan, sitting_pose: SittingPose) -> bool:
+    """Whether the scan has the seat's top under the sitting point (or under the bear's
+    footprint just ahead of it: :func:`bearchair.skills.planning.seat.seat_ray`)."""
+    ray = seat_ray(scan.chair_mesh, sitting_pose)
+    return len(ray.slides_m) > 0 and ray.seat_seen
+
+
+def look_at_seat(
+    arm: ScanningArm,
+    scan: ChairScan,
+    sitting_pose: SittingPose,
+    *,
+    seed: int,
+    cancel: threading.Event | None = None,
+) -> ChairScan:
+    """The scan, with one look from above the sitting point when it shows no seat there.
+
+    Args:
+        arm: the scanning arm.
+        scan: the scan so far.
+        sitting_pose: the imagined g (world frame).
+        seed: seeds the floor RANSAC, as the scan's.
+        cancel: when set, the look stops before its motion.
+
+    Returns:
+        ``scan`` itself when it shows the seat under p; else the scan with the look (its
+        last note says so), or ``scan`` with a note when no view reaches (the seat check
+        then says what the scan lacks).
+
+    Raises:
+        LookCancelled: ``cancel`` was set.
+        PerceptionError: the motion stopped short or the reconstruction failed.
+    """
+    if seat_seen_under(scan, sitting_pose):
+        return scan
+    try:
+        return look_from_above(
+            arm, scan, seed=seed, target=np.asarray(sitting_pose.position, float), cancel=cancel
+        )
+    except NoViewFromAbove as error:
+        return scan._replace(notes=(*scan.notes, str(error)))
