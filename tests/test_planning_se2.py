@@ -297,6 +297,34 @@ def test_seat_of_slats_is_found_under_a_gap_and_ends_at_its_front_edge() -> None
     assert slide_m == pytest.approx(moved.position[0] - p.position[0])
 
 
+def _flat_seat(front_m: float, back_m: float = -0.15) -> trimesh.Trimesh:
+    """A flat seat slab, its top 0.24 m high, from x = ``back_m`` to ``front_m``."""
+    return trimesh.creation.box(
+        extents=(front_m - back_m, 0.3, 0.02),
+        transform=trimesh.transformations.translation_matrix(((front_m + back_m) / 2, 0, 0.23)),
+    )
+
+
+def test_p_nearer_the_front_edge_than_the_margin_goes_deeper_by_the_shortfall() -> None:
+    # p 3 cm behind the front edge: the bear, smaller than the imagined child and heavier
+    # ahead of its seat point, goes back until its margin to the edge holds.
+    p = SittingPose(np.array([0.09, 0.0, 0.29]), 0.0)
+    ray = seat_ray(_flat_seat(0.12), p)
+    shortfall = BEAR_EDGE_MARGIN_M - 0.03
+    assert len(ray.slides_m) == 1 and ray.seat_seen
+    assert -shortfall - 0.01 - 1e-9 <= ray.slides_m[0] <= -shortfall
+    moved, slide_m = slide_on_seat(_flat_seat(0.12), p, 0.03)
+    assert slide_m == pytest.approx(ray.slides_m[0]) and moved.position[0] < p.position[0]
+    assert 0.12 - moved.position[0] >= BEAR_EDGE_MARGIN_M
+
+
+def test_p_near_the_edge_of_a_seat_too_shallow_to_go_deeper_stays() -> None:
+    # The seat behind p ends 2 cm behind it: no room to go back, the child sat at p.
+    p = SittingPose(np.array([0.09, 0.0, 0.29]), 0.0)
+    ray = seat_ray(_flat_seat(0.12, back_m=0.07), p)
+    assert len(ray.slides_m) == 1 and ray.slides_m[0] == pytest.approx(0.0, abs=1e-9)
+
+
 def _seat_with_a_lower_front(step_down_m: float) -> trimesh.Trimesh:
     """A seat 0.24 m high from x = -0.15 to 0.05 and, from 0.05 to 0.15, a strip lower by
     ``step_down_m`` (a rounded or waterfall front)."""

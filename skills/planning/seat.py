@@ -259,6 +259,7 @@ def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
     has = ~np.isnan(measured).all(axis=1)
     row_heights[has] = np.nanmedian(measured[has], axis=1)
     ahead = along >= -1e-9
+    behind = (along[~ahead], on_seat[~ahead], row_heights[~ahead])
     along, on_seat, row_heights = along[ahead], on_seat[ahead], row_heights[ahead]
     unseen_m = 0.0
     if not on_seat[0]:
@@ -277,8 +278,12 @@ def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
             chair_mesh, sitting_pose, along[end - 1], along[end], h0, lowest_m
         )
         limit = min(MAX_SLIDE_M, edge_m - BEAR_EDGE_MARGIN_M)
-    # p stays where it was imagined when that is already within the margin: the
-    # imagination's p is where the child sat, so the seat holds the bear there.
+    if limit < 0.0 and unseen_m == 0.0:
+        deeper = _deeper_on_seat(*behind, -limit)
+        if deeper is not None:
+            return SeatRay(np.array([-deeper[0]]), np.array([deeper[1]]))
+    # p stays where it was imagined when it is within the margin and the seat behind it
+    # does not reach as far as the margin: the child sat there.
     supported = (along <= max(limit, 0.0) + 1e-9) & on_seat
     supported &= np.cumprod(supported).astype(bool)
     slides, slide_heights = along[supported], row_heights[supported]
@@ -290,6 +295,21 @@ def seat_ray(chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose) -> SeatRay:
         slides = np.append(slides, limit)
         slide_heights = np.append(slide_heights, slide_heights[-1])
     return SeatRay(slides, slide_heights, unseen_m=unseen_m)
+
+
+def _deeper_on_seat(
+    along_m: np.ndarray, on_seat: np.ndarray, row_heights_m: np.ndarray, deficit_m: float
+) -> tuple[float, float] | None:
+    """Where p goes when it lies nearer the seat's front edge than ``BEAR_EDGE_MARGIN_M``:
+    ``deficit_m`` deeper (away from the NAO), rounded up to the grid, when every row
+    between holds seat; (how deep, the seat's height there) or None. The child sat at p;
+    the bear is smaller and its centre of mass lies ahead of its seat point."""
+    depth_m = math.ceil(deficit_m / STEP_M - 1e-9) * STEP_M
+    rows = np.flatnonzero(along_m >= -depth_m - 1e-9)
+    if not len(rows) or not on_seat[rows].all():
+        return None
+    deepest = int(rows[0])
+    return float(-along_m[deepest]), float(row_heights_m[deepest])
 
 
 def _first_seen_torso(on_seat: np.ndarray, along_m: np.ndarray) -> int | None:
