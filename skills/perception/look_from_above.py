@@ -35,6 +35,7 @@ from scipy.optimize import least_squares
 from bearchair.core.errors import Cancelled
 from bearchair.core.geometry import SittingPose
 from bearchair.hardware.interfaces import ScanningArm
+from bearchair.hardware.real.panda import wall_limits
 from bearchair.skills.perception.clearance import ArmClearance, PlannedView
 from bearchair.skills.perception.errors import PerceptionError
 from bearchair.skills.perception.panda_kinematics import PandaKinematics
@@ -63,17 +64,6 @@ AXIS_TOLERANCE_DEG = 3.0
 SCAN_BOX_MARGIN_M = 0.05
 """The scanned chair's box is grown by this (metres) before the clearance check: the
 scan may have missed the thinnest parts (a rail, a back's top edge)."""
-
-PANDA_JOINT_LIMITS_RAD = (
-    (-2.8973, 2.8973),
-    (-1.7628, 1.7628),
-    (-2.8973, 2.8973),
-    (-3.0718, -0.0698),
-    (-2.8973, 2.8973),
-    (-0.0175, 3.7525),
-    (-2.8973, 2.8973),
-)
-"""The Panda's joint limits (radians), from its datasheet (as panda.urdf)."""
 
 
 class LookCancelled(Cancelled, PerceptionError):
@@ -141,11 +131,13 @@ def solve_view(
     start_rad: Sequence[float] = HOME_CONFIGURATION,
 ) -> np.ndarray | None:
     """Joints (radians) whose wrist camera sits at ``eye_m`` looking at ``target_m``, within
-    :data:`EYE_TOLERANCE_M` and :data:`AXIS_TOLERANCE_DEG`; None when the IK misses."""
+    :data:`EYE_TOLERANCE_M` and :data:`AXIS_TOLERANCE_DEG`, inside the joint range the
+    Panda's controller accepts (``hardware.real.panda.wall_limits``); None when the IK
+    misses."""
     wanted = look_at(eye_m, target_m)
-    lower = np.array([lo for lo, _ in PANDA_JOINT_LIMITS_RAD])
-    upper = np.array([hi for _, hi in PANDA_JOINT_LIMITS_RAD])
-
+    # Within panda-py's joint walls, not merely the joint limits: the real arm moves a
+    # target inside the walls to their edge (another view) or refuses it.
+    lower, upper = wall_limits()
     start = np.clip(np.asarray(start_rad, float), lower + 1e-3, upper - 1e-3)
     fit = least_squares(
         view_residual, start, bounds=(lower, upper), diff_step=1e-4, args=(kinematics, wanted)
