@@ -25,7 +25,8 @@ class InstructHelper(SkillBehaviour):
 
     Blackboard:
         reads ``/sitting/pose``, ``/chair/mesh``, ``/mission/arena``, ``/mission/seed``,
-        ``/assistance/instructions``, ``/assistance/rotations``; writes the last two.
+        ``/assistance/instructions``, ``/assistance/rotations``; writes the last two and
+        ``/assistance/requested`` (the turn asked for).
     """
 
     activity = "instructing the helper"
@@ -41,7 +42,7 @@ class InstructHelper(SkillBehaviour):
                 keys.INSTRUCTIONS,
                 keys.ROTATIONS,
             ),
-            writes=(keys.INSTRUCTIONS, keys.ROTATIONS),
+            writes=(keys.INSTRUCTIONS, keys.ROTATIONS, keys.REQUESTED_ROTATION),
         )
 
     def prepare(self) -> Callable[[], tuple[RotationChoice, Instruction | None]]:
@@ -73,6 +74,7 @@ class InstructHelper(SkillBehaviour):
         said = [*self._optional(keys.INSTRUCTIONS, []), instruction.sentence]
         self.blackboard.set(keys.INSTRUCTIONS, said, overwrite=True)
         self.blackboard.set(keys.ROTATIONS, self._optional(keys.ROTATIONS, 0) + 1, overwrite=True)
+        self.blackboard.set(keys.REQUESTED_ROTATION, choice.rotation_rad, overwrite=True)
         if not choice.predicted_accessible:
             return self.succeed(f'said "{instruction.sentence}" ({choice.reason})')
         return self.succeed(f'said "{instruction.sentence}"')
@@ -100,20 +102,24 @@ class MeasureChairRotation(SkillBehaviour):
     """Measures g_rot by ICP and carries the chair and the sitting pose along with it.
 
     Blackboard:
-        reads ``/chair/points``, ``/chair/mesh``, ``/sitting/pose``, ``/assistance/measured``;
-        writes the first three back moved by g_rot, and appends to ``/assistance/measured``.
+        reads ``/chair/points``, ``/chair/mesh``, ``/sitting/pose``, ``/assistance/measured``
+        and ``/assistance/requested`` (when set: a weak fit must agree with it); writes the
+        first three back moved by g_rot, and appends to ``/assistance/measured``.
     """
 
     activity = "measuring the chair's rotation"
 
     def __init__(self, name: str = "MeasureChairRotation"):
         moved = (keys.CHAIR_POINTS, keys.CHAIR_MESH, keys.SITTING_POSE, keys.MEASURED_ROTATIONS)
-        super().__init__(name, reads=moved, writes=moved)
+        super().__init__(name, reads=(*moved, keys.REQUESTED_ROTATION), writes=moved)
 
     def prepare(self) -> Callable[[], ChairRotation]:
         skills, robot = self.need()
         reference_points = self.blackboard.get(keys.CHAIR_POINTS)
-        return lambda: skills.measure_chair_rotation(robot.arm, reference_points)
+        requested = self._optional(keys.REQUESTED_ROTATION, None)
+        return lambda: skills.measure_chair_rotation(
+            robot.arm, reference_points, requested_yaw_rad=requested
+        )
 
     def conclude(self, rotation: ChairRotation) -> Status:
         T_world_new_old = rotation.T_world_new_old

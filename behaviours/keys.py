@@ -21,6 +21,7 @@ key                      value                                                  
 /accessibility/se2_goal  bearchair.core.se2.SE2Pose: where the humanoid stands       CheckAccessibility
 /assistance/instructions list[str]: the sentences said, in order                     InstructHelper                                             InstructHelper
 /assistance/rotations    int: rotations asked for so far                             InstructHelper                                             InstructHelper, GiveUp
+/assistance/requested    float: the last turn asked for, rad, counterclockwise +     InstructHelper                                             MeasureChairRotation
 /assistance/measured     list[ChairRotation]: each measured g_rot                    MeasureChairRotation                                       MeasureChairRotation
 /walk/result             bearchair.skills.results.WalkResult                         WalkToChair
 /seat/plan               bearchair.skills.results.SeatingPlan                        SeatBear                                                   ReleaseAndStand
@@ -41,6 +42,7 @@ ACCESSIBILITY = "/accessibility/result"
 SE2_GOAL = "/accessibility/se2_goal"
 INSTRUCTIONS = "/assistance/instructions"
 ROTATIONS = "/assistance/rotations"
+REQUESTED_ROTATION = "/assistance/requested"
 MEASURED_ROTATIONS = "/assistance/measured"
 WALK = "/walk/result"
 SEATING_PLAN = "/seat/plan"
@@ -60,6 +62,7 @@ VALUES = {
     SE2_GOAL: "bearchair.core.se2.SE2Pose: where the humanoid stands",
     INSTRUCTIONS: "list[str]: the sentences said, in order",
     ROTATIONS: "int: rotations asked for so far",
+    REQUESTED_ROTATION: "float: the last turn asked for, rad, counterclockwise +",
     MEASURED_ROTATIONS: "list[ChairRotation]: each measured g_rot",
     WALK: "bearchair.skills.results.WalkResult",
     SEATING_PLAN: "bearchair.skills.results.SeatingPlan",

@@ -114,7 +114,11 @@ class MissionSkills(Protocol):
     ) -> float: ...
 
     def measure_chair_rotation(
-        self, arm: ScanningArm, reference_points: np.ndarray
+        self,
+        arm: ScanningArm,
+        reference_points: np.ndarray,
+        *,
+        requested_yaw_rad: float | None = None,
     ) -> ChairRotation: ...
 
     def walk_path(

@@ -233,9 +233,15 @@ class ScriptedSkills:
         return self._answer("wait_until_chair_still", arm, clock, cancel=cancel)
 
     def measure_chair_rotation(
-        self, arm: ScanningArm, reference_points: np.ndarray
+        self,
+        arm: ScanningArm,
+        reference_points: np.ndarray,
+        *,
+        requested_yaw_rad: float | None = None,
     ) -> skill_results.ChairRotation:
-        return self._answer("measure_chair_rotation", arm, reference_points)
+        return self._answer(
+            "measure_chair_rotation", arm, reference_points, requested_yaw_rad=requested_yaw_rad
+        )
 
     def walk_path(
         self,

@@ -195,7 +195,7 @@ def test_a_second_turn_is_measured_against_the_chair_as_the_first_left_it():
     references: list[np.ndarray] = []
     step_m = np.array([0.1, 0.0, 0.0])  # each scripted measurement moves the chair 10 cm
 
-    def measure(arm, reference_points):
+    def measure(arm, reference_points, requested_yaw_rad=None):
         references.append(np.asarray(reference_points))
         return DEFAULTS["measure_chair_rotation"]._replace(
             chair_points=np.asarray(reference_points) + step_m
@@ -229,6 +229,22 @@ def test_instruct_helper_speaks_and_counts():
     assert robot.speaker.spoken == [sentence, sentence]
     assert py_trees.blackboard.Blackboard.get(keys.ROTATIONS) == 2
     assert py_trees.blackboard.Blackboard.get(keys.INSTRUCTIONS) == [sentence, sentence]
+    requested = DEFAULTS["choose_rotation"].rotation_rad
+    assert py_trees.blackboard.Blackboard.get(keys.REQUESTED_ROTATION) == requested
+
+
+def test_the_turn_asked_for_reaches_the_measurement():
+    """The registration judges a weak fit against the turn asked for, so the leaf passes
+    what InstructHelper wrote (and None before anything was asked)."""
+    skills = ScriptedSkills()
+    leaf = make(MeasureChairRotation, skills)
+    assert tick_until_done(leaf)[-1] == Status.SUCCESS
+    py_trees.blackboard.Blackboard.set(keys.REQUESTED_ROTATION, -np.pi)
+    again = MeasureChairRotation(name="MeasureAgain")
+    again.setup(skills=skills, robot=fake_robot())
+    assert tick_until_done(again)[-1] == Status.SUCCESS
+    asked = [kwargs["requested_yaw_rad"] for _, kwargs in skills.calls["measure_chair_rotation"]]
+    assert asked == [None, -np.pi]
 
 
 def test_instruct_helper_asks_for_nothing_when_no_rotation_helps():

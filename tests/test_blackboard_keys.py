@@ -35,6 +35,12 @@ SCENARIOS = [
     {"check_accessibility": [BLOCKED, ACCESSIBLE]},
     # one turn no fit accepts: the chair scanned and imagined anew
     {"check_accessibility": [BLOCKED, ACCESSIBLE], "measure_chair_rotation": REJECTED},
+    # the same, and no sitting on the turned chair's scan: looked at from above
+    {
+        "check_accessibility": [BLOCKED, ACCESSIBLE],
+        "measure_chair_rotation": REJECTED,
+        "imagine_sitting": [FOUND, NOT_FOUND, FOUND],
+    },
     # never accessible: GiveUp
     {"check_accessibility": BLOCKED},
     # no sitting on the scan: looked at from above, then found

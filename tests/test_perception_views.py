@@ -372,3 +372,25 @@ def test_the_side_looks_bound_the_whole_sofa_so_the_views_are_checked_against_it
     kept = [view for view in planned if view.status != "skipped"]
     assert len(kept) >= MIN_SCAN_VIEWS
     assert all(view.clearance_m >= VIEW_CLEARANCE_M for view in kept)
+
+
+@pytest.mark.slow
+def test_a_fit_accepted_only_as_a_peak_must_agree_with_the_turn_asked_for(
+    turned_chair, monkeypatch
+):
+    """With no fit reaching the visible-overlap bound and every fit a peak, acceptance
+    rests on the peak alone: the fit stands when it agrees with the turn asked for (or
+    its reverse, the helper who turned the wrong way) and is rejected, naming both
+    turns, when it is more than one instruction step from either."""
+    from bearchair.skills.perception import registration
+
+    reference, new, frames, motion = turned_chair
+    carried = transform_points(motion, reference)
+    half = reference[carried[:, 0] > np.median(carried[:, 0])]
+    monkeypatch.setattr(registration, "is_visible_peak", lambda *_args: True)
+    peak_only = RegistrationConfig(min_visible_fitness=1.01)
+    for asked_deg in (150.0, 170.0, -150.0):
+        fit = register_chair(new, half, peak_only, frames, math.radians(asked_deg))
+        assert abs(math.degrees(wrap_angle(yaw_of(fit.T_world_new_old) - yaw_of(motion)))) < 3.0
+    with pytest.raises(RegistrationError, match=r"turns the chair \+15\d deg.*\+60 deg asked for"):
+        register_chair(new, half, peak_only, frames, math.radians(60.0))

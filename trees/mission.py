@@ -23,7 +23,9 @@
                         --> MeasureChairRotation       ICP against the chair as it was
                         [-] Scan the turned chair anew Sequence (memory)
                             --> ScanTurnedChair        when no fit is accepted
-                            --> ImagineTurnedChair
+                            [o] ImagineTurnedChair     as ImagineSitting: ImagineOnTurnedScan,
+                                                       then up to 3 of LookAtTurnedChair and
+                                                       ImagineTurnedAgain
                     --> CheckAccessibilityAgain
             --> GiveUp
         --> WalkToChair
@@ -71,20 +73,31 @@ STAGES = (
 """The mission's stages: the names of the root's children, in order."""
 
 
-def create_imagination(max_looks: int) -> py_trees.behaviour.Behaviour:
+def create_imagination(
+    max_looks: int,
+    *,
+    name: str = "ImagineSitting",
+    on_scan_name: str = "ImagineOnScan",
+    look_name: str = "LookFromAbove",
+    again_name: str = "ImagineAgain",
+) -> py_trees.behaviour.Behaviour:
     """The ``ImagineSitting`` stage: the imagination on the scan, and where it finds no
     sitting, up to ``max_looks`` looks at the chair from above, each followed by the
-    imagination on the chair reconstructed with it (0: the imagination alone)."""
+    imagination on the chair reconstructed with it (0: the imagination alone, named
+    ``name``). The names let the turned chair's re-scan compose the same thing."""
     if max_looks == 0:
-        return ImagineSitting()
-    on_scan = ImagineSitting(name="ImagineOnScan")
+        return ImagineSitting(name=name)
+    on_scan = ImagineSitting(name=on_scan_name)
     again = py_trees.composites.Sequence(
         name="Look again and imagine",
         memory=True,
-        children=[LookFromAbove(backs_up=on_scan), ImagineSitting(name="ImagineAgain")],
+        children=[
+            LookFromAbove(name=look_name, backs_up=on_scan),
+            ImagineSitting(name=again_name),
+        ],
     )
     return py_trees.composites.Selector(
-        name="ImagineSitting",
+        name=name,
         memory=True,
         children=[
             on_scan,
@@ -106,17 +119,28 @@ def create_seat_check(max_looks: int) -> py_trees.behaviour.Behaviour:
     )
 
 
-def create_locate_turned_chair(rescan_fallback: bool = True) -> py_trees.behaviour.Behaviour:
+def create_locate_turned_chair(
+    rescan_fallback: bool = True, max_looks: int = 0
+) -> py_trees.behaviour.Behaviour:
     """Where the chair is after a turn: the rotation measured by ICP, or, when no fit is
     accepted (a turn that shows sides the first scan never saw), the chair scanned and its
-    sitting pose imagined again, so that the next instruction is not given for a chair
-    where it no longer stands. Without ``rescan_fallback``: ICP alone."""
+    sitting pose imagined again (with up to ``max_looks`` looks from above, as on the
+    first scan: a chair turned half round shows the arm its back, which hides the seat),
+    so that the next instruction is not given for a chair where it no longer stands.
+    Without ``rescan_fallback``: ICP alone."""
     if not rescan_fallback:
         return MeasureChairRotation()
+    imagine = create_imagination(
+        max_looks,
+        name="ImagineTurnedChair",
+        on_scan_name="ImagineOnTurnedScan",
+        look_name="LookAtTurnedChair",
+        again_name="ImagineTurnedAgain",
+    )
     anew = py_trees.composites.Sequence(
         name="Scan the turned chair anew",
         memory=True,
-        children=[ScanChair(name="ScanTurnedChair"), ImagineSitting(name="ImagineTurnedChair")],
+        children=[ScanChair(name="ScanTurnedChair"), imagine],
     )
     return py_trees.composites.Selector(
         name="LocateTurnedChair", memory=True, children=[MeasureChairRotation(), anew]
@@ -124,16 +148,17 @@ def create_locate_turned_chair(rescan_fallback: bool = True) -> py_trees.behavio
 
 
 def create_assistance_loop(
-    max_rotations: int = keys.MAX_ROTATIONS, rescan_fallback: bool = True
+    max_rotations: int = keys.MAX_ROTATIONS, rescan_fallback: bool = True, max_looks: int = 0
 ) -> py_trees.behaviour.Behaviour:
-    """The human-assistance loop: check, then ask for up to ``max_rotations`` rotations."""
+    """The human-assistance loop: check, then ask for up to ``max_rotations`` rotations
+    (``rescan_fallback`` and ``max_looks``: :func:`create_locate_turned_chair`)."""
     ask_once = py_trees.composites.Sequence(
         name="Ask the helper to rotate the chair",
         memory=True,
         children=[
             InstructHelper(),
             WaitUntilChairStill(),
-            create_locate_turned_chair(rescan_fallback),
+            create_locate_turned_chair(rescan_fallback, max_looks),
             CheckAccessibility(name="CheckAccessibilityAgain"),
         ],
     )
@@ -155,7 +180,7 @@ def create_accessibility(options: TreeOptions) -> py_trees.behaviour.Behaviour:
     the one check (named as the stage, so the stages keep their names)."""
     if not options.assistance:
         return CheckAccessibility(name="MakeChairAccessible")
-    return create_assistance_loop(options.max_rotations, options.rescan_fallback)
+    return create_assistance_loop(options.max_rotations, options.rescan_fallback, options.max_looks)
 
 
 def create_tree(options: TreeOptions | None = None) -> py_trees.behaviour.Behaviour:

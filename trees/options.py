@@ -32,9 +32,10 @@ class TreeOptions:
         max_rotations: rotations the helper may be asked for before giving up (>= 1).
         rescan_fallback: when ICP cannot measure the turn, scan and imagine the turned
             chair anew; False: an unmeasured turn fails that attempt.
-        max_looks: when the imagination finds no sitting on the scan, look at the chair
-            from above and imagine again, up to this many times; when the scan shows no
-            seat under the sitting point, look at it once (0: neither).
+        max_looks: when the imagination finds no sitting on the scan (the first, or a
+            turned chair's re-scan), look at the chair from above and imagine again, up
+            to this many times; when the scan shows no seat under the sitting point,
+            look at it once (0: neither).
 
     Raises:
         ValueError: ``max_rotations`` is not a whole number of at least 1, or

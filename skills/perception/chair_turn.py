@@ -26,6 +26,7 @@ def measure_chair_rotation(
     *,
     views: tuple[int, ...] = TRACKING_VIEWS,
     more_views: tuple[int, ...] | None = None,
+    requested_yaw_rad: float | None = None,
     reconstruction: ReconstructionConfig | None = None,
     registration: RegistrationConfig | None = None,
     cancel: threading.Event | None = None,
@@ -39,6 +40,9 @@ def measure_chair_rotation(
             motions between them are checked), visited from and back to HOME.
         more_views: captured too when the fit from ``views`` is rejected; by default
             the scan views not in ``views`` (``()``: never).
+        requested_yaw_rad: the turn the helper was asked for (radians, counterclockwise
+            positive; None: unknown): a weak fit must agree with it
+            (:func:`register_chair`).
 
     Returns:
         The motion T_world_new_old, its yaw, fitness and inlier RMSE; ``chair_points`` is
@@ -55,7 +59,11 @@ def measure_chair_rotation(
     frames = _capture(arm, views, cancel)
     try:
         fit = register_chair(
-            reconstruct_chair(frames, config).chair_points, reference, registration, frames
+            reconstruct_chair(frames, config).chair_points,
+            reference,
+            registration,
+            frames,
+            requested_yaw_rad,
         )
     except RegistrationError as first:
         # A turn shows sides the reference never saw, which lowers the fitness of the
@@ -66,7 +74,9 @@ def measure_chair_rotation(
         frames += _capture(arm, more_views, cancel)
         scan = reconstruct_chair(frames, config)
         try:
-            fit = register_chair(scan.chair_points, reference, registration, frames)
+            fit = register_chair(
+                scan.chair_points, reference, registration, frames, requested_yaw_rad
+            )
         except RegistrationError as error:
             raise RegistrationError(f"{error}, also from {len(frames)} views") from first
     moved = transform_points(fit.T_world_new_old, reference)

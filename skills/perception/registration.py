@@ -70,6 +70,13 @@ class RegistrationConfig:
             higher. The floor stays above the overlap of a yaw 30 degrees off (below 0.6).
         peak_step_m, peak_step_deg: the neighbours of the peak test: an error worth
             rejecting (3 cm moves the bear's seat point off a margin of a few cm).
+        request_tolerance_deg: with the turn the helper was asked for, a fit accepted
+            only as a peak must turn the chair within this of it, or of its reverse (a
+            helper who turned the wrong way). From the few tracking views, a chair
+            turned half round can match its unturned self better than the right fit
+            (the views see sides the reference never saw; both fill the same box), and
+            only a peak's overlap is that weak. One instruction step (30 deg): the
+            helper turns by the words, not by the exact angle they round.
         global_voxel_m: downsampling of the FPFH + RANSAC global registration.
     """
 
@@ -86,6 +93,7 @@ class RegistrationConfig:
     min_peak_visible_fitness: float = 0.7
     peak_step_m: float = 0.03
     peak_step_deg: float = 5.0
+    request_tolerance_deg: float = 30.0
     global_voxel_m: float = 0.02
 
 
@@ -142,6 +150,7 @@ def register_chair(
     reference_points: np.ndarray,
     config: RegistrationConfig | None = None,
     new_frames: list[RGBDFrame] | None = None,
+    requested_yaw_rad: float | None = None,
 ) -> Registration:
     """Estimates the rigid motion that carried the chair from ``reference_points`` to
     ``new_points`` (both world frame), rotations up to ±180 degrees.
@@ -149,7 +158,10 @@ def register_chair(
     The new (possibly partial) view is registered onto the complete reference, so the
     fitness is the fraction of the new points that the moved reference explains. With
     ``new_frames`` (the captures the new points came from), a fit whose fitness is too
-    low is judged by the views' visible overlap instead (see the module doc).
+    low is judged by the views' visible overlap instead (see the module doc); with
+    ``requested_yaw_rad`` too (the turn the helper was asked for, counterclockwise
+    positive), a fit accepted only as a peak of that overlap must agree with the request
+    (``request_tolerance_deg``).
 
     Raises:
         RegistrationError: too few points, or the best fit's fitness (and visible
@@ -187,8 +199,10 @@ def register_chair(
                 new_frames,
                 config,
             )
+        against_request = not _agrees_with_request(T_old_new, requested_yaw_rad, config)
         accepted = visible >= config.min_visible_fitness or (
             visible >= config.min_peak_visible_fitness
+            and not against_request
             and is_visible_peak(
                 transform_points(np.linalg.inv(T_old_new), reference), new_frames, config
             )
@@ -197,7 +211,29 @@ def register_chair(
             return _refined_on_visible(
                 T_old_new, fitness, rmse, visible, new_points, fine, new_frames, config
             )
+        if against_request and visible >= config.min_peak_visible_fitness:
+            assert requested_yaw_rad is not None
+            raise RegistrationError(
+                f"chair registration rejected: the best fit turns the chair "
+                f"{math.degrees(yaw_of(np.linalg.inv(T_old_new))):+.0f} deg, more than "
+                f"{config.request_tolerance_deg:.0f} deg from the "
+                f"{math.degrees(requested_yaw_rad):+.0f} deg asked for (or its reverse), on "
+                f"a visible overlap of only {visible:.2f} "
+                f"(need {config.min_visible_fitness:.2f} for that)"
+            )
     raise _rejection(fitness, rmse, visible, config)
+
+
+def _agrees_with_request(
+    T_old_new: np.ndarray, requested_yaw_rad: float | None, config: RegistrationConfig
+) -> bool:
+    """Whether the fit's turn is within ``request_tolerance_deg`` of the requested turn
+    or of its reverse (always, without a request)."""
+    if requested_yaw_rad is None:
+        return True
+    yaw = yaw_of(np.linalg.inv(T_old_new))
+    tolerance = math.radians(config.request_tolerance_deg)
+    return any(abs(wrap_angle(yaw - sign * requested_yaw_rad)) <= tolerance for sign in (1.0, -1.0))
 
 
 def _yaw_hypotheses(
