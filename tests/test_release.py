@@ -91,9 +91,12 @@ def test_no_placement_where_the_bear_stays_fails_before_the_release(chair, monke
     with pytest.raises(InfeasibleSeating, match="would not stay seated: the bear touches"):
         release_choice.plan_seating_released(chair, SITTING_POSE, NAO_POSE)
     assert len(tried) > 1  # other placements along the ray were tried
-    monkeypatch.setenv(release_choice.RELEASE_CHECK_ENV, "predict")
-    plan = release_choice.plan_seating_released(chair, SITTING_POSE, NAO_POSE)
-    assert plan.release is falls and plan.to_json()["release"]["stays"] is False
+    for mode in ("predict", "prefer"):  # a prediction of "falls" alone releases as planned
+        tried.clear()
+        monkeypatch.setenv(release_choice.RELEASE_CHECK_ENV, mode)
+        plan = release_choice.plan_seating_released(chair, SITTING_POSE, NAO_POSE)
+        assert plan.release is falls and plan.to_json()["release"]["stays"] is False
+        assert (len(tried) > 1) == (mode == "prefer")
     monkeypatch.setenv(release_choice.RELEASE_CHECK_ENV, "sometimes")
     with pytest.raises(ValueError, match="BEARCHAIR_RELEASE_CHECK"):
         release_choice.plan_seating_released(chair, SITTING_POSE, NAO_POSE)
@@ -137,3 +140,27 @@ def test_the_runtime_reset_closes_every_release_world():
     RUNTIME.reset()
     assert world.closed
     assert release._world(box_chair_mesh()) is not world
+
+
+@pytest.mark.slow
+def test_prefer_moves_p_to_the_first_other_placement_predicted_to_stay(chair, monkeypatch):
+    falls = imagine_release(chair, _bear_at(0.19, SEAT_HEIGHT_M + 0.01), 0.0, NAO_POSE)
+    stays = imagine_release(chair, _bear_at(0.0, SEAT_HEIGHT_M + 0.01), 0.0, NAO_POSE)
+    assert stays.stays and not falls.stays
+    tried: list[float] = []
+
+    patched = stays._replace(seat_patched=True)
+
+    def stays_only_nearer(chair_mesh, sitting_pose, humanoid_pose, plan):
+        along_m = float(sitting_pose.position[0] - SITTING_POSE.position[0])
+        tried.append(along_m)
+        if along_m < -1e-9:  # deeper: stays only on a seat patched from the seat map
+            return patched
+        return stays if along_m > 0.0 else falls  # +x: toward the NAO
+
+    monkeypatch.setattr(release_choice, "predict_release", stays_only_nearer)
+    monkeypatch.setenv(release_choice.RELEASE_CHECK_ENV, "prefer")
+    plan = release_choice.plan_seating_released(chair, SITTING_POSE, NAO_POSE)
+    # As planned (falls), deeper (stays on a patched seat: not trusted), nearer (stays).
+    assert plan.release is stays
+    assert tried == pytest.approx([0.0, -0.02, 0.02])

@@ -11,9 +11,12 @@ p moves.
 
 ``BEARCHAIR_RELEASE_CHECK`` (environment): ``predict`` (the default: imagine and record
 the prediction, release as planned), ``choose`` (as above: move p or fail before the
-release), ``off``. ``predict`` is the default because, measured, a prediction of "falls"
-was wrong more often than right (docs/decisions.md): ``choose`` stopped releases the
-judge would have seated.
+release), ``prefer`` (move p to the first other placement predicted to stay on seat the scan
+shows, not one patched from the seat map; where none is, release as planned: a
+prediction of "falls" alone never stops the release), ``off``.
+``predict`` is the default because, measured, a prediction of "falls" was wrong more
+often than right (docs/decisions.md): ``choose`` stopped releases the judge would have
+seated.
 """
 
 from __future__ import annotations
@@ -38,7 +41,7 @@ from bearchair.skills.planning.wholebody.seating import plan_seating, plan_seati
 from bearchair.skills.results import SeatingPlan
 
 RELEASE_CHECK_ENV = "BEARCHAIR_RELEASE_CHECK"
-RELEASE_CHECK_MODES = ("choose", "predict", "off")
+RELEASE_CHECK_MODES = ("choose", "prefer", "predict", "off")
 OTHER_PLACEMENTS_M = (-0.02, 0.02, -0.04)
 """Where else p may go along the sitting ray (metres; negative: deeper, toward the back),
 when the planned release is predicted to fail: a bear's torso is 8.5 cm deep, so 2 cm
@@ -102,7 +105,8 @@ def plan_seating_released(
 
     Raises:
         InfeasibleSeating: no plan (as :func:`.seating.plan_seating_where_standing`), or
-            (:data:`RELEASE`) the bear is predicted to fall at every placement tried.
+            (:data:`RELEASE`, ``choose`` only) the bear is predicted to fall at every
+            placement tried.
     """
     mode = release_check_mode()
     plan = plan_seating_where_standing(chair_mesh, sitting_pose, humanoid_pose, raised=raised)
@@ -124,8 +128,12 @@ def plan_seating_released(
             continue
         tried += 1
         other_prediction = predict_release(chair_mesh, moved, humanoid_pose, other)
-        if other_prediction.stays:
+        # ``prefer`` trusts no seat patched from the seat map over the planned release's
+        # own prediction: a patched "stays" is the weak one (decisions.md).
+        if other_prediction.stays and (mode == "choose" or not other_prediction.seat_patched):
             return other._replace(release=other_prediction)
+    if mode == "prefer":
+        return plan._replace(release=prediction)
     raise InfeasibleSeating(
         RELEASE,
         f"the bear would not stay seated: {prediction.reason} in "
