@@ -211,7 +211,12 @@ def register_chair(
             return _refined_on_visible(
                 T_old_new, fitness, rmse, visible, new_points, fine, new_frames, config
             )
-        if against_request and visible >= config.min_peak_visible_fitness:
+        if (
+            against_request
+            and visible >= config.min_peak_visible_fitness
+            and rmse <= config.max_rmse_m
+        ):
+            # The request alone rejected it: say so (else the generic rejection's reason).
             assert requested_yaw_rad is not None
             raise RegistrationError(
                 f"chair registration rejected: the best fit turns the chair "
