@@ -53,7 +53,15 @@ not at the imagined sitting pose's height (the sitter's pelvis, 6 to 10 cm over 
 a bear released there tips over the seat's front edge). It covers the scan's error in the
 seat's height, which put the scanned seat 2-5 mm above the true one in the campaign
 trials. Released from 2 cm the bear lands at 0.6 m/s and bounced off curved or railed
-seats and the NAO's wrists; from 1 cm, at 0.44 m/s."""
+seats and the NAO's wrists; from 1 cm, at 0.44 m/s. Over a seat lower than the NAO's
+crouch reaches, the bear is let go at the lowest height a goal posture holds it, up to
+``LOW_SEAT_RELEASE_GAP_M`` over the seat."""
+
+LOW_SEAT_RELEASE_GAP_M = 0.05
+"""Over a seat lower than the NAO reaches in its deepest crouch (knees at their limit),
+the bear's seat point is let go at the crouch's lowest height, at most this high over the
+seat (metres); a lower seat is out of reach. Bounded by the bench of low seats
+(``bench/low_seats.py``, docs/decisions.md)."""
 
 BEAR_TORSO_DEPTH_M = 0.085
 """Fore-aft depth of the bear's torso (metres), the part it sits on: its legs stick out

@@ -10,14 +10,18 @@ import trimesh
 
 from bearchair.core.geometry import SittingPose
 from bearchair.core.meshes import box_chair_mesh
+from bearchair.core.nao_carrying import BEAR_SEAT_CLEARANCE_M, LOW_SEAT_RELEASE_GAP_M
 from bearchair.core.se2 import SE2Pose
 from bearchair.skills.planning.wholebody import InfeasibleSeating, preplan_approach
 from bearchair.skills.planning.wholebody.reach_model import (
     ReachModel,
     raised_carry_height_m,
     reach_model,
+    release_heights,
     solve_reach_cell,
 )
+from bearchair.skills.planning.wholebody.release_choice import planned_release_pose
+from bearchair.skills.planning.wholebody.seating import plan_seating
 
 PLANNER_TOLERANCE_M = 0.005
 """The planner seats the bear wherever the model reaches, less this (metres)."""
@@ -55,8 +59,42 @@ def test_the_shipped_table_is_what_the_whole_body_model_gives(height, front):
     assert solve_reach_cell(height, front) == pytest.approx(model.max_forward_m[i, j], abs=0.002)
 
 
-def test_no_posture_reaches_a_seat_below_the_crouch():
-    assert math.isnan(solve_reach_cell(0.12, 0.25))
+def test_the_release_heights_are_the_whole_body_model_s():
+    shipped, solved = reach_model().release, release_heights()
+    assert np.allclose(shipped.free_reach_m, solved.free_reach_m, atol=0.002, equal_nan=True)
+    # The NAO's knees stop its crouch a little over 0.16 m; bent at the hips it reaches
+    # 5 cm or more farther than crouching.
+    assert 0.15 <= shipped.lowest_height_m < shipped.hip_height_m <= 0.20
+    jump_at = int(np.searchsorted(shipped.heights_m, shipped.hip_height_m))
+    assert shipped.free_reach_m[jump_at] - shipped.free_reach_m[jump_at - 2] >= 0.05
+
+
+def test_the_bear_is_let_go_higher_only_over_seats_below_the_bent_hip_postures():
+    model = reach_model()
+    z_hip, z_low = model.release.hip_height_m, model.release.lowest_height_m
+    for seat in (0.18, 0.25, 0.40):
+        assert model.release_height_m(seat) == pytest.approx(seat + BEAR_SEAT_CLEARANCE_M)
+    # Below, at z_hip while the drop stays within the gap; then from the crouch; then none.
+    assert model.release_height_m(z_hip - BEAR_SEAT_CLEARANCE_M - 0.001) == z_hip
+    assert model.release_height_m(z_hip - LOW_SEAT_RELEASE_GAP_M) == z_hip
+    assert model.release_height_m(z_hip - LOW_SEAT_RELEASE_GAP_M - 0.001) == z_low
+    assert math.isnan(model.release_height_m(z_low - LOW_SEAT_RELEASE_GAP_M - 0.001))
+    assert math.isnan(solve_reach_cell(z_low - LOW_SEAT_RELEASE_GAP_M - 0.001, 0.25))
+    assert model.min_seat_height_m() >= z_low - LOW_SEAT_RELEASE_GAP_M
+
+
+@pytest.mark.parametrize("height", [0.145, 0.165])
+def test_the_planner_lets_the_bear_go_bent_at_the_hips_over_a_low_seat(height):
+    front = 0.185
+    d_max = reach_model().max_forward(height, front)
+    assert d_max > 0.28  # the bent-hip postures' reach, not the crouch's 0.22-0.24 m
+    chair = _chair_in_front_of_the_nao(height, front)
+    pose = SittingPose(np.array([d_max - PLANNER_TOLERANCE_M, 0.0, height + 0.05]), math.pi)
+    plan = plan_seating(chair, pose, SE2Pose(0.0, 0.0, 0.0))
+    release = planned_release_pose(plan, SE2Pose(0.0, 0.0, 0.0))
+    z_hip = reach_model().release.hip_height_m
+    assert z_hip - 0.016 <= release[2, 3] <= z_hip + 0.001
+    assert release[2, 3] - height <= LOW_SEAT_RELEASE_GAP_M
 
 
 @pytest.mark.parametrize(("height", "front"), CASES)
@@ -95,4 +133,3 @@ def test_seats_higher_than_the_raised_bear_are_out_of_reach():
     assert highest == pytest.approx(model.carry_height_m - 0.003, abs=1e-9)
     assert not np.isnan(model.max_forward_m[model.seat_heights_m > highest + 0.02]).all()
     assert math.isnan(model.max_forward(highest + 0.01, 0.3))
-    assert 0.14 <= model.min_seat_height_m() <= 0.18

@@ -3,14 +3,18 @@
 For a seat whose top is at height h and whose front plane (everything at or below the
 seat, in the band the NAO's body sweeps) is at x_f ahead of the NAO frame's origin, the
 model holds d_max(h, x_f): the farthest forward distance at which some goal posture of
-:mod:`.optimisation` puts the bear's base at height ``h + BEAR_SEAT_CLEARANCE_M``, with
+:mod:`.optimisation` puts the bear's base at the release height r(h), with
 every posture constraint of the planner (joint limits, bear upright, centre of mass over
 the feet, body and bear clear of the seat block, floor) and no backrest:
 
 .. math::
 
     d_{max}(h, x_f) = \\max_q \\; b_x(q) \\quad \\text{s.t.} \\quad
-        b_z(q) = h + c,\\; g(q; h, x_f) \\in [g_{lo}, g_{hi}].
+        b_z(q) = r(h),\\; g(q; h, x_f) \\in [g_{lo}, g_{hi}],
+
+where r(h) is the release height (:mod:`.release_height`: ``BEAR_SEAT_CLEARANCE_M`` over
+the seat, higher over a low seat, where the bent-hip postures reach much farther than a
+crouch); a seat without one has no cell.
 
 It answers, before any pre-plan, whether a sitting point is reachable from a stance
 (``d <= d_max(h, d - f)`` where f is how far the seat's front lies ahead of the sitting
@@ -23,8 +27,9 @@ The grid is computed once (``python -m bearchair.skills.planning.wholebody.reach
 ``reach_table.json`` beside this module, about a minute on the 2-core machine) and
 shipped; a test recomputes cells and compares. Figures of the shipped table (seat
 fronts at least 0.20 m ahead, the bear let go 1 cm over the seat): the NAO places the bear
-on seats 0.16-0.45 m high (the carry over the seat's front limits it to 0.40 m), reaching
-0.29-0.32 m ahead on seats 0.20-0.40 m high and 0.22-0.23 m on seats 0.16-0.17 m.
+on seats 0.14-0.45 m high (the carry over the seat's front limits it to 0.40 m; below
+0.16 m the bear is let go at the crouch's lowest, 0.163 m), reaching 0.29-0.32 m ahead on
+seats 0.20-0.40 m high and 0.21-0.23 m on seats 0.14-0.17 m.
 """
 
 from __future__ import annotations
@@ -38,7 +43,6 @@ from typing import NamedTuple
 import casadi as ca
 import numpy as np
 
-from bearchair.core.nao_carrying import BEAR_SEAT_CLEARANCE_M
 from bearchair.skills.planning.wholebody.chair_profile import ChairProfile
 from bearchair.skills.planning.wholebody.optimisation import (
     BEAR_CHAIR_MARGIN_M,
@@ -53,6 +57,11 @@ from bearchair.skills.planning.wholebody.posture_check import (
     exact_posture_violation,
 )
 from bearchair.skills.planning.wholebody.postures import RAISED_POSTURE
+from bearchair.skills.planning.wholebody.release_height import (
+    NO_LOW_SEATS,
+    ReleaseHeights,
+    compute_release_heights,
+)
 
 TABLE_PATH = Path(__file__).with_name("reach_table.json")
 SEAT_HEIGHTS_M = np.round(np.arange(0.10, 0.501, 0.01), 3)
@@ -87,12 +96,19 @@ class ReachModel(NamedTuple):
             raised posture, :data:`.postures.RAISED_POSTURE`), metres: the bear comes over
             the seat's front at this height, so no seat above it less
             ``BEAR_CHAIR_MARGIN_M`` can be reached from any stance.
+        release: the free reach and the release height rule r(h).
     """
 
     seat_heights_m: np.ndarray
     seat_fronts_m: np.ndarray
     max_forward_m: np.ndarray
     carry_height_m: float = math.inf
+    release: ReleaseHeights = NO_LOW_SEATS
+
+    def release_height_m(self, seat_height_m: float) -> float:
+        """r(h): where the goal lets the bear's seat point go over a seat top (metres; NaN:
+        nowhere near enough)."""
+        return self.release.release_height_m(seat_height_m)
 
     def max_forward(self, seat_height_m: float, seat_front_m: float) -> float:
         """d_max (metres) at a seat height and front, NaN when nothing is reachable.
@@ -147,6 +163,7 @@ class ReachModel(NamedTuple):
     def to_json(self) -> dict:
         return {
             "carry_height_m": round(self.carry_height_m, 4),
+            "release": self.release.to_json(),
             "seat_heights_m": self.seat_heights_m.tolist(),
             "seat_fronts_m": self.seat_fronts_m.tolist(),
             "max_forward_m": [
@@ -165,6 +182,7 @@ class ReachModel(NamedTuple):
             np.array(data["seat_fronts_m"]),
             table,
             float(data["carry_height_m"]),
+            ReleaseHeights.from_json(data["release"]) if "release" in data else NO_LOW_SEATS,
         )
 
 
@@ -182,12 +200,12 @@ class _MaxForwardProblem:
         self.solver = ca.nlpsol("reach_cell", "ipopt", nlp, _ipopt_options(300))
         self.problems = problems
 
-    def solve(self, seat_height_m: float, seat_front_m: float) -> float:
-        """d_max of one cell (metres), NaN when no guess reaches a feasible posture."""
+    def solve(self, seat_height_m: float, seat_front_m: float, bear_z: float) -> float:
+        """d_max of one cell (metres) with the bear's base at ``bear_z``, NaN when no guess
+        reaches a feasible posture."""
         problems = self.problems
         profile = ChairProfile(seat_front_m, seat_height_m, NO_BACKREST, seat_height_m)
         lower, upper = problems.posture_bounds(g_xz=None, tilt_rad=BEAR_TILT_GOAL_RAD)
-        bear_z = seat_height_m + BEAR_SEAT_CLEARANCE_M
         lower[1], upper[1] = bear_z - HEIGHT_TOLERANCE_M, bear_z + HEIGHT_TOLERANCE_M
         best = math.nan
         for guess in _GUESSES:
@@ -212,17 +230,44 @@ class _MaxForwardProblem:
         return best
 
 
+def _solve_cell(
+    problem: _MaxForwardProblem, seat_height_m: float, seat_front_m: float, release: ReleaseHeights
+) -> float:
+    bear_z = release.release_height_m(seat_height_m)
+    return math.nan if math.isnan(bear_z) else problem.solve(seat_height_m, seat_front_m, bear_z)
+
+
 def compute_reach_model(
     seat_heights_m: np.ndarray = SEAT_HEIGHTS_M, seat_fronts_m: np.ndarray = SEAT_FRONTS_M
 ) -> ReachModel:
     """Solves every cell of the grid (see the module doc); about a minute."""
     problem = _MaxForwardProblem(seating_problems())
+    release = _release_heights(problem)
     table = np.array(
-        [[problem.solve(float(h), float(f)) for f in seat_fronts_m] for h in seat_heights_m]
+        [
+            [_solve_cell(problem, float(h), float(f), release) for f in seat_fronts_m]
+            for h in seat_heights_m
+        ]
     )
     return ReachModel(
-        np.asarray(seat_heights_m), np.asarray(seat_fronts_m), table, raised_carry_height_m()
+        np.asarray(seat_heights_m),
+        np.asarray(seat_fronts_m),
+        table,
+        raised_carry_height_m(),
+        release,
     )
+
+
+def _release_heights(problem: _MaxForwardProblem) -> ReleaseHeights:
+    """The free reach d(r): the bear's base at r over a seat far below and far ahead."""
+    seat_height_m, seat_front_m = float(SEAT_HEIGHTS_M[0]) - 0.05, float(SEAT_FRONTS_M[-1])
+    return compute_release_heights(lambda r: problem.solve(seat_height_m, seat_front_m, r))
+
+
+@lru_cache(maxsize=1)
+def release_heights() -> ReleaseHeights:
+    """The free reach and release heights, solved now (not the shipped table's)."""
+    return _release_heights(_max_forward_problem())
 
 
 def raised_carry_height_m() -> float:
@@ -232,7 +277,7 @@ def raised_carry_height_m() -> float:
 
 def solve_reach_cell(seat_height_m: float, seat_front_m: float) -> float:
     """d_max of one (seat height, seat front) pair, solved now (metres, NaN: none)."""
-    return _max_forward_problem().solve(seat_height_m, seat_front_m)
+    return _solve_cell(_max_forward_problem(), seat_height_m, seat_front_m, release_heights())
 
 
 @lru_cache(maxsize=1)

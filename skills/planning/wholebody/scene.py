@@ -10,7 +10,6 @@ import numpy as np
 import trimesh
 
 from bearchair.core.geometry import SittingPose, transform_points, wrap_angle
-from bearchair.core.nao_carrying import BEAR_SEAT_CLEARANCE_M
 from bearchair.core.se2 import SE2Pose
 from bearchair.skills.planning.wholebody.chair_profile import (
     ChairProfile,
@@ -18,6 +17,7 @@ from bearchair.skills.planning.wholebody.chair_profile import (
     fit_chair_profile,
 )
 from bearchair.skills.planning.wholebody.infeasible import InfeasibleSeating
+from bearchair.skills.planning.wholebody.reach_model import reach_model
 
 LATERAL_TOLERANCE_M = 0.05
 """How far g may lie beside the NAO's sagittal plane (the planar motion cannot reach it)."""
@@ -29,8 +29,9 @@ class SeatingScene(NamedTuple):
     """The seating problem's numbers in the NAO frame (metres, radians).
 
     Attributes:
-        g_xz: the bear's target base: forward distance d of the sitting pose, height h
-            ``BEAR_SEAT_CLEARANCE_M`` over the seat's top under it.
+        g_xz: the bear's target base: forward distance d of the sitting pose, height the
+            release height over the seat's top under it (``BEAR_SEAT_CLEARANCE_M`` over it,
+            or the NAO's deepest crouch over a lower seat: :meth:`.ReachModel.release_height_m`).
         lateral_m: g's offset beside the sagittal plane (ignored by the planar motion).
         facing_error_rad: the NAO's heading minus the opposite of the sitting direction.
         profile: the chair's two-block cross-section.
@@ -70,5 +71,5 @@ def seating_scene(
         profile = fit_chair_profile(chair_mesh, T_nao_world, g_nao)
     except ChairProfileError as error:
         raise InfeasibleSeating("chair", str(error)) from error
-    g_xz = np.array([g_nao[0], profile.seat_top_z + BEAR_SEAT_CLEARANCE_M])
+    g_xz = np.array([g_nao[0], reach_model().release_height_m(profile.seat_top_z)])
     return SeatingScene(g_xz, float(g_nao[1]), facing_error, profile)
