@@ -308,6 +308,12 @@ def main(argv: list[str] | None = None) -> int:
         help="only this family (repeat for several); with --missions, that family's chairs "
         "among the N generated, the same chairs as the whole bench's",
     )
+    parser.add_argument(
+        "--only",
+        default="",
+        help="--missions: only chairs whose name contains one of these (comma-separated, "
+        "e.g. armchair-0163,x_frame-0045), the same seeds and conditions as the whole bench's",
+    )
     parser.add_argument("--verbose", action="store_true", help="a line per chair")
     parser.add_argument("--workers", type=int, default=1, help="processes (chairs are independent)")
     parser.add_argument(
@@ -332,8 +338,9 @@ def main(argv: list[str] | None = None) -> int:
         sys.path.insert(0, str(Path(__file__).resolve().parent))
         from generalization_missions import run_missions
 
+        names = [n for n in args.only.split(",") if n]
         return run_missions(
-            args.missions, args.seed, args.workers, args.out, args.timeout, args.family
+            args.missions, args.seed, args.workers, args.out, args.timeout, args.family, names
         )
     if args.calibration:
         calibration_reach(args.calibration)

@@ -64,14 +64,21 @@ def run_missions(
     out: Path,
     timeout_s: float,
     families: list[str] | None = None,
+    names: list[str] | None = None,
 ) -> int:
     """Runs the missions and prints the figures; returns the exit status. With
     ``families``, only their chairs among the ``count`` generated (the same chairs, seeds
-    and conditions as the whole bench's)."""
+    and conditions as the whole bench's); with ``names``, only chairs whose name contains
+    one of them (``armchair-0163``)."""
     chairs = [c for c in generate_chairs(count, seed) if c.front_yaw_rad is not None]
     specs = mission_specs(chairs, out / "chairs", seed)
-    if families:
-        kept = {c.name + ".obj" for c in chairs if c.family in families}
+    if families or names:
+        kept = {
+            c.name + ".obj"
+            for c in chairs
+            if (not families or c.family in families)
+            and (not names or any(n in c.name for n in names))
+        }
         chairs = [c for c in chairs if c.name + ".obj" in kept]
         specs = [s for s in specs if s.chair in kept]
     print(

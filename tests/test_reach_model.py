@@ -12,7 +12,11 @@ from bearchair.core.geometry import SittingPose
 from bearchair.core.meshes import box_chair_mesh
 from bearchair.core.nao_carrying import BEAR_SEAT_CLEARANCE_M, LOW_SEAT_RELEASE_GAP_M
 from bearchair.core.se2 import SE2Pose
+from bearchair.skills.imagination.sam import SamThresholds
 from bearchair.skills.planning.wholebody import InfeasibleSeating, preplan_approach
+from bearchair.skills.planning.wholebody.chair_profile import ChairProfile
+from bearchair.skills.planning.wholebody.postures import HIGH_RAISED_POSTURE, RAISED_POSTURES
+from bearchair.skills.planning.wholebody.raising import raised_posture
 from bearchair.skills.planning.wholebody.reach_model import (
     ReachModel,
     raised_carry_height_m,
@@ -129,7 +133,28 @@ def test_seats_higher_than_the_raised_bear_are_out_of_reach():
     model = reach_model()
     assert model.carry_height_m == pytest.approx(raised_carry_height_m(), abs=1e-4)
     highest = model.max_seat_height_m()
-    # The NAO lifts the bear's base 0.40 m high at most; postures exist above that.
+    # The NAO lifts the bear's base 0.43 m high at most; postures exist above that.
     assert highest == pytest.approx(model.carry_height_m - 0.003, abs=1e-9)
+    # ... which reaches every seat the imagination sits a child on (the pelvis at most
+    # H_max, 0.075 m over the seat).
+    assert highest >= SamThresholds().height_max_m - 0.075
     assert not np.isnan(model.max_forward_m[model.seat_heights_m > highest + 0.02]).all()
     assert math.isnan(model.max_forward(highest + 0.01, 0.3))
+
+
+@pytest.mark.parametrize(("seat_top", "expected"), [(0.30, 0), (0.39, 0), (0.41, 1), (0.425, 1)])
+def test_the_nao_raises_the_bear_to_the_lowest_posture_that_clears_the_seat(seat_top, expected):
+    profile = ChairProfile(0.25, seat_top, 10.0, seat_top)
+    assert raised_posture(profile) is RAISED_POSTURES[expected]
+
+
+def test_a_seat_above_the_first_raised_bear_is_seated_from_the_higher_one():
+    height, front = 0.415, 0.16  # the carried bear (0.16-0.20 m ahead) would be in it
+    chair = _chair_in_front_of_the_nao(height, front)
+    d_max = reach_model().max_forward(height, front)
+    pose = SittingPose(np.array([d_max - PLANNER_TOLERANCE_M, 0.0, height + 0.05]), math.pi)
+    assert preplan_approach(chair, pose, SE2Pose(0.0, 0.0, 0.0)) is not None  # raised
+    plan = plan_seating(chair, pose, SE2Pose(0.0, 0.0, 0.0), raised=True)
+    first = np.asarray(plan.positions_rad)[0]
+    shoulder = first[list(plan.joint_names).index("LShoulderPitch")]
+    assert shoulder == pytest.approx(HIGH_RAISED_POSTURE[3], abs=0.02)

@@ -29,8 +29,9 @@ within 30 degrees of the truth and still no table or stool sat on; L_max = 0.9.
 H_max was then raised from 0.45 to 0.50 m, the top of the tuned plateau: the pelvis
 rests about 0.075 m above a seat (the hip joint 0.03 m below the pelvis's centre, the
 thighs' radius 0.045 m), so 0.45 m judged seats above 0.375 m "too high", below the
-highest seat the NAO places a bear on (0.398 m, ``bearchair.skills.planning.wholebody.
-reach_model``), while children's chairs reach 0.45 m. With 0.50 m, seats up to 0.425 m
+highest seat the NAO then placed a bear on (0.398 m, ``bearchair.skills.planning.wholebody.
+reach_model``; 0.429 m since its higher raised posture), while children's chairs reach
+0.45 m. With 0.50 m, seats up to 0.425 m
 are sat on and a table top at 0.45 m (the lowest of the calibration tables) still
 puts the pelvis 2.5 cm too high; over the calibration meshes both gave 54 of 54 fronted
 meshes within 30 degrees and 0 of 14 tables.

@@ -8,10 +8,14 @@ import trimesh
 
 from bearchair.core.geometry import SittingPose
 from bearchair.core.se2 import SE2Pose
+from bearchair.skills.planning.wholebody.chair_profile import ChairProfile
 from bearchair.skills.planning.wholebody.infeasible import STANCE, InfeasibleSeating
 from bearchair.skills.planning.wholebody.nao_model import to_joint_positions
-from bearchair.skills.planning.wholebody.optimisation import seating_problems
-from bearchair.skills.planning.wholebody.postures import RAISED_POSTURE, STANDING_POSTURE
+from bearchair.skills.planning.wholebody.optimisation import (
+    BEAR_CHAIR_MARGIN_M,
+    seating_problems,
+)
+from bearchair.skills.planning.wholebody.postures import RAISED_POSTURES, STANDING_POSTURE
 from bearchair.skills.planning.wholebody.scene import seating_scene
 from bearchair.skills.planning.wholebody.trajectory import LEAD_IN_S, solve_trajectory
 
@@ -19,6 +23,17 @@ RAISE_STEP_M = 0.02
 """The raising pose steps back from s_goal in these steps until the raise is clear..."""
 MAX_RAISE_BACKOFF_M = 0.2
 """... up to this far (metres)."""
+
+
+def raised_posture(profile: ChairProfile) -> np.ndarray:
+    """The lowest of :data:`.postures.RAISED_POSTURES` whose bear's base clears the seat's
+    top by ``BEAR_CHAIR_MARGIN_M`` (the highest when none does: the planner then says
+    what is in the way)."""
+    problems = seating_problems()
+    for posture in RAISED_POSTURES:
+        if problems.geometry(posture).bear_base[1] >= profile.seat_top_z + BEAR_CHAIR_MARGIN_M:
+            return posture
+    return RAISED_POSTURES[-1]
 
 
 def raising_pose(
@@ -47,8 +62,8 @@ def raising_pose(
 def plan_raise(
     chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose, humanoid_pose: SE2Pose
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The arms' motion from :data:`STANDING_POSTURE` to :data:`RAISED_POSTURE` where the
-    NAO stands, legs still, clear of the chair.
+    """The arms' motion from :data:`STANDING_POSTURE` to the raised posture
+    (:func:`raised_posture`) where the NAO stands, legs still, clear of the chair.
 
     Returns:
         (knot times from the start of the motion, seconds; (K, J) joint angles of
@@ -63,7 +78,7 @@ def plan_raise(
         problems,
         scene.profile,
         STANDING_POSTURE,
-        RAISED_POSTURE,
+        raised_posture(scene.profile),
         bear_held=True,
         freeze_legs=True,
         phase="raise",

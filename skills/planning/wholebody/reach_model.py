@@ -26,10 +26,10 @@ no feasible posture holds NaN.
 The grid is computed once (``python -m bearchair.skills.planning.wholebody.reach_model`` writes
 ``reach_table.json`` beside this module, about a minute on the 2-core machine) and
 shipped; a test recomputes cells and compares. Figures of the shipped table (seat
-fronts at least 0.20 m ahead, the bear let go 1 cm over the seat): the NAO places the bear
-on seats 0.14-0.45 m high (the carry over the seat's front limits it to 0.40 m; below
-0.16 m the bear is let go at the crouch's lowest, 0.163 m), reaching 0.29-0.32 m ahead on
-seats 0.20-0.40 m high and 0.21-0.23 m on seats 0.14-0.17 m.
+fronts at least 0.20 m ahead): the NAO places the bear on seats 0.12-0.45 m high (the
+highest raised carry over the seat's front limits it to 0.429 m), reaching 0.29-0.32 m
+ahead on seats 0.135-0.40 m high (let go 1 cm over the seat, or bent at the hips 0.1875 m
+high over seats 0.135-0.1775 m) and 0.22 m from the crouch over seats 0.12-0.13 m.
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ from bearchair.skills.planning.wholebody.posture_check import (
     CHECK_TOLERANCE,
     exact_posture_violation,
 )
-from bearchair.skills.planning.wholebody.postures import RAISED_POSTURE
+from bearchair.skills.planning.wholebody.postures import RAISED_POSTURES
 from bearchair.skills.planning.wholebody.release_height import (
     NO_LOW_SEATS,
     ReleaseHeights,
@@ -93,7 +93,7 @@ class ReachModel(NamedTuple):
         seat_fronts_m: (F,) seat front planes in the NAO frame, metres.
         max_forward_m: (H, F) the farthest forward bear placement, metres (NaN: none).
         carry_height_m: the highest the NAO carries the bear's base into a stance (its
-            raised posture, :data:`.postures.RAISED_POSTURE`), metres: the bear comes over
+            highest raised posture, :data:`.postures.RAISED_POSTURES`), metres: the bear comes over
             the seat's front at this height, so no seat above it less
             ``BEAR_CHAIR_MARGIN_M`` can be reached from any stance.
         release: the free reach and the release height rule r(h).
@@ -271,8 +271,8 @@ def release_heights() -> ReleaseHeights:
 
 
 def raised_carry_height_m() -> float:
-    """Height (metres) of the bear's base in the raised carrying posture."""
-    return float(seating_problems().geometry(RAISED_POSTURE).bear_base[1])
+    """Height (metres) of the bear's base in the highest raised carrying posture."""
+    return float(seating_problems().geometry(RAISED_POSTURES[-1]).bear_base[1])
 
 
 def solve_reach_cell(seat_height_m: float, seat_front_m: float) -> float:

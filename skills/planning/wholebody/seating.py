@@ -13,8 +13,9 @@ The plan (the paper, "Motion Planning"):
    collision constraints at every knot (:mod:`.trajectory`). Knots after the goal is
    reached are dropped. Over a seat higher than the carried bear, the NAO first raises
    the bear (:func:`.raising.plan_raise`, a step back from s_goal) and steps in; the
-   trajectory then starts from :data:`.postures.RAISED_POSTURE` (:func:`preplan_approach`
-   decides).
+   trajectory then starts from the raised posture (:func:`.raising.raised_posture`:
+   :data:`.postures.RAISED_POSTURE`, or the higher one over a seat its bear does not
+   clear; :func:`preplan_approach` decides whether to raise).
 4. The retract motion, with the bear released: the legs hold still while the arms
    withdraw the hands back (toward the NAO) and a little up beside the bear,
    then the body stands up, clear of the bear where it was let go, to
@@ -46,8 +47,8 @@ from bearchair.skills.planning.wholebody.posture_check import (
     CHECK_TOLERANCE,
     exact_posture_violation,
 )
-from bearchair.skills.planning.wholebody.postures import RAISED_POSTURE, STANDING_POSTURE
-from bearchair.skills.planning.wholebody.raising import raising_pose
+from bearchair.skills.planning.wholebody.postures import STANDING_POSTURE
+from bearchair.skills.planning.wholebody.raising import raised_posture, raising_pose
 from bearchair.skills.planning.wholebody.retract import RETRACT_LEAD_IN_S, plan_retract
 from bearchair.skills.planning.wholebody.scene import SeatingScene, seating_scene
 from bearchair.skills.planning.wholebody.trajectory import LEAD_IN_S, solve_trajectory
@@ -70,9 +71,9 @@ def plan_seating(
         chair_mesh: the chair in the world frame (z up, metres).
         sitting_pose: the imagined sitting pose g (world frame).
         humanoid_pose: the NAO's planar pose (the point on the floor between its feet).
-        raised: the NAO holds the bear in :data:`.postures.RAISED_POSTURE` (it stepped in
-            with it raised, see :func:`.raising.plan_raise`), not in
-            :data:`.postures.STANDING_POSTURE`.
+        raised: the NAO holds the bear in the raised posture
+            (:func:`.raising.raised_posture`; it stepped in with it raised, see
+            :func:`.raising.plan_raise`), not in :data:`.postures.STANDING_POSTURE`.
 
     Returns:
         The plan: qibullet joint names (both sides), knot times, joint angles (the last
@@ -84,7 +85,7 @@ def plan_seating(
     problems = seating_problems()
     scene = seating_scene(chair_mesh, sitting_pose, humanoid_pose)
     _check_feet_clear(scene.profile)
-    start_posture = RAISED_POSTURE if raised else STANDING_POSTURE
+    start_posture = raised_posture(scene.profile) if raised else STANDING_POSTURE
     too_close = _start_in_chair(problems, scene.profile, start_posture, raised=raised)
     motion, goal_s = _first_feasible_motion(problems, scene, start_posture, too_close)
     times, knots, retract_times, retract_knots, trajectory_s, retract_s = motion
