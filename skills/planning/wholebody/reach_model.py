@@ -26,10 +26,10 @@ no feasible posture holds NaN.
 The grid is computed once (``python -m bearchair.skills.planning.wholebody.reach_model`` writes
 ``reach_table.json`` beside this module, about a minute on the 2-core machine) and
 shipped; a test recomputes cells and compares. Figures of the shipped table (seat
-fronts at least 0.20 m ahead): the NAO places the bear on seats 0.12-0.45 m high (the
+fronts at least 0.20 m ahead): the NAO places the bear on seats 0.11-0.45 m high (the
 highest raised carry over the seat's front limits it to 0.429 m), reaching 0.29-0.32 m
-ahead on seats 0.135-0.40 m high (let go 1 cm over the seat, or bent at the hips 0.1875 m
-high over seats 0.135-0.1775 m) and 0.22 m from the crouch over seats 0.12-0.13 m.
+ahead on seats 0.1375-0.40 m high (let go 1 cm over the seat, or bent at the hips 0.1975 m
+high over seats 0.1375-0.1875 m) and 0.22 m from the crouch over seats 0.11-0.13 m.
 """
 
 from __future__ import annotations
