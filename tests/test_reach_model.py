@@ -159,3 +159,15 @@ def test_a_seat_above_the_first_raised_bear_is_seated_from_the_higher_one():
     first = np.asarray(plan.positions_rad)[0]
     shoulder = first[list(plan.joint_names).index("LShoulderPitch")]
     assert shoulder == pytest.approx(HIGH_RAISED_POSTURE[3], abs=0.02)
+
+
+def test_a_seat_too_low_to_let_the_bear_go_on_is_infeasible_not_an_error():
+    # A seat top 3 cm over the floor (a base plate under p, a toy chair): no release height.
+    height = 0.03
+    chair = _chair_in_front_of_the_nao(height, 0.2)
+    pose = SittingPose(np.array([0.3, 0.0, height + 0.05]), math.pi)
+    assert math.isnan(reach_model().release_height_m(height))
+    with pytest.raises(InfeasibleSeating) as refused:
+        plan_seating(chair, pose, SE2Pose(0.0, 0.0, 0.0))
+    assert refused.value.constraint == "bear placement"
+    assert "seat too low to let the bear go on: its top 0.030 m" in str(refused.value)

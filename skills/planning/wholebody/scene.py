@@ -10,6 +10,7 @@ import numpy as np
 import trimesh
 
 from bearchair.core.geometry import SittingPose, transform_points, wrap_angle
+from bearchair.core.nao_carrying import LOW_SEAT_RELEASE_GAP_M
 from bearchair.core.se2 import SE2Pose
 from bearchair.skills.planning.wholebody.chair_profile import (
     ChairProfile,
@@ -50,7 +51,8 @@ def seating_scene(
 
     Raises:
         InfeasibleSeating: g is beside the sagittal plane, the NAO does not face the
-            chair, or the chair has no seat under g.
+            chair, the chair has no seat under g, or the seat under g is too low for the
+            NAO to let the bear go on.
     """
     T_nao_world = np.linalg.inv(humanoid_pose.as_transform())
     g_nao = transform_points(T_nao_world, np.asarray(sitting_pose.position, float)[None, :])[0]
@@ -71,5 +73,13 @@ def seating_scene(
         profile = fit_chair_profile(chair_mesh, T_nao_world, g_nao)
     except ChairProfileError as error:
         raise InfeasibleSeating("chair", str(error)) from error
-    g_xz = np.array([g_nao[0], reach_model().release_height_m(profile.seat_top_z)])
+    release_z = reach_model().release_height_m(profile.seat_top_z)
+    if math.isnan(release_z):
+        raise InfeasibleSeating(
+            "bear placement",
+            f"seat too low to let the bear go on: its top {profile.seat_top_z:.3f} m high, the "
+            f"NAO holds the bear no lower than {reach_model().release.lowest_height_m:.3f} m, "
+            f"at most {LOW_SEAT_RELEASE_GAP_M:.2f} m over a seat",
+        )
+    g_xz = np.array([g_nao[0], release_z])
     return SeatingScene(g_xz, float(g_nao[1]), facing_error, profile)
