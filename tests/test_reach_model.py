@@ -25,7 +25,11 @@ from bearchair.skills.planning.wholebody.reach_model import (
     solve_reach_cell,
 )
 from bearchair.skills.planning.wholebody.release_choice import planned_release_pose
-from bearchair.skills.planning.wholebody.release_height import HIP_POSTURE_MARGIN_M
+from bearchair.skills.planning.wholebody.release_height import (
+    HIP_POSTURE_MARGIN_M,
+    NO_LOW_SEATS,
+    ReleaseHeights,
+)
 from bearchair.skills.planning.wholebody.seating import plan_seating
 
 PLANNER_TOLERANCE_M = 0.005
@@ -171,3 +175,22 @@ def test_a_seat_too_low_to_let_the_bear_go_on_is_infeasible_not_an_error():
         plan_seating(chair, pose, SE2Pose(0.0, 0.0, 0.0))
     assert refused.value.constraint == "bear placement"
     assert "seat too low to let the bear go on: its top 0.030 m" in str(refused.value)
+
+
+def test_the_release_height_rule_on_a_free_reach_curve():
+    # No posture below 0.17 m, a crouch reaching 0.22 m up to 0.1825 m, then bent at the hips.
+    heights = np.round(np.arange(0.15, 0.3001, 0.0025), 4)
+    reach = np.where(heights < 0.17, np.nan, np.where(heights < 0.185, 0.22, 0.29 + heights / 10))
+    release = ReleaseHeights(heights, reach)
+    z_hip = 0.185 + HIP_POSTURE_MARGIN_M
+    assert release.lowest_height_m == pytest.approx(0.17)
+    assert release.hip_height_m == pytest.approx(z_hip)
+    c, gap = BEAR_SEAT_CLEARANCE_M, LOW_SEAT_RELEASE_GAP_M
+    assert release.release_height_m(0.25) == pytest.approx(0.25 + c)  # the usual 1 cm
+    assert release.release_height_m(z_hip - c) == pytest.approx(z_hip)  # 1 cm over: usual
+    assert release.release_height_m(z_hip - c - 0.001) == pytest.approx(z_hip)  # bent
+    assert release.release_height_m(z_hip - gap) == pytest.approx(z_hip)
+    assert release.release_height_m(z_hip - gap - 0.001) == pytest.approx(0.17)  # crouch
+    assert release.release_height_m(0.17 - gap) == pytest.approx(0.17)
+    assert math.isnan(release.release_height_m(0.17 - gap - 0.001))  # none
+    assert NO_LOW_SEATS.release_height_m(0.05) == pytest.approx(0.05 + c)
