@@ -5,9 +5,9 @@ Reads every ``summary.json`` under the folders given (a campaign's ``OUT/runs``,
 ``release_prediction`` and a ``judgement``), and prints the agreement, the confusion
 table, the error between the predicted and the actual settle position, and the
 imagination's share of SeatBear's time. Run the missions with
-``BEARCHAIR_RELEASE_CHECK=predict`` to measure it over every release (by default a
-release predicted to fail is not made, so only the predicted-to-stay ones have a
-verdict)::
+``BEARCHAIR_RELEASE_CHECK=predict`` to measure it over every release as planned (by
+default, ``prefer``, a release predicted to fall moves to a placement predicted to stay
+where there is one, so the "falls" predictions it avoided have no verdict)::
 
     .venv/bin/python bench/release_agreement.py /tmp/trials/runs [more folders]
 """

@@ -100,6 +100,8 @@ def test_no_placement_where_the_bear_stays_fails_before_the_release(chair, monke
     monkeypatch.setenv(release_choice.RELEASE_CHECK_ENV, "sometimes")
     with pytest.raises(ValueError, match="BEARCHAIR_RELEASE_CHECK"):
         release_choice.plan_seating_released(chair, SITTING_POSE, NAO_POSE)
+    monkeypatch.delenv(release_choice.RELEASE_CHECK_ENV)
+    assert release_choice.release_check_mode() == "prefer"  # the default
 
 
 def test_a_seat_the_scan_lost_under_the_bear_is_taken_from_the_seat_map():

@@ -9,14 +9,14 @@ the bear stays is taken; where none stays, the seating fails before the hands op
 saying why. The NAO has already walked, so the bear's yaw is the NAO's heading and only
 p moves.
 
-``BEARCHAIR_RELEASE_CHECK`` (environment): ``predict`` (the default: imagine and record
-the prediction, release as planned), ``choose`` (as above: move p or fail before the
-release), ``prefer`` (move p to the first other placement predicted to stay on seat the scan
-shows, not one patched from the seat map; where none is, release as planned: a
-prediction of "falls" alone never stops the release), ``off``.
-``predict`` is the default because, measured, a prediction of "falls" was wrong more
-often than right (docs/decisions.md): ``choose`` stopped releases the judge would have
-seated.
+``BEARCHAIR_RELEASE_CHECK`` (environment): ``prefer`` (the default: move p to the first
+other placement predicted to stay on seat the scan shows, not one patched from the seat
+map; where none is, release as planned: a prediction of "falls" alone never stops the
+release), ``predict`` (imagine and record the prediction, release as planned), ``choose``
+(as above: move p or fail before the release), ``off``. ``prefer`` is the default
+because, measured, it seated bears ``predict`` let fall, lost none where the two were
+compared trial by trial and seated as many in total elsewhere (docs/decisions.md), while ``choose`` stopped releases the judge would have seated: a
+prediction of "falls" was wrong more often than right.
 """
 
 from __future__ import annotations
@@ -55,12 +55,12 @@ _PLANAR_JOINTS = ("LAnklePitch", "LKneePitch", "LHipPitch", "LShoulderPitch", "R
 
 
 def release_check_mode() -> str:
-    """The mode from ``BEARCHAIR_RELEASE_CHECK`` (``predict`` when unset).
+    """The mode from ``BEARCHAIR_RELEASE_CHECK`` (``prefer`` when unset).
 
     Raises:
         ValueError: an unknown mode.
     """
-    mode = os.environ.get(RELEASE_CHECK_ENV, "predict") or "predict"
+    mode = os.environ.get(RELEASE_CHECK_ENV, "prefer") or "prefer"
     if mode not in RELEASE_CHECK_MODES:
         raise ValueError(
             f"{RELEASE_CHECK_ENV}={mode!r}: expected one of {', '.join(RELEASE_CHECK_MODES)}"
