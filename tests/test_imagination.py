@@ -516,6 +516,33 @@ def test_a_gap_between_two_steady_directions_keeps_the_chosen_rotation() -> None
     assert abs(math.degrees(wrap_angle(result.sitting_pose.yaw - math.pi))) < 1.0
 
 
+def test_a_window_centre_nobody_turned_toward_gives_way_to_the_paper_s_vote() -> None:
+    # A scan with a hole along an armrest: sitters dropped sideways (rotation 0) sit
+    # sideways, so the window centres on the diagonal (1), whose sitters turned toward
+    # the front (2, facing -90 degrees); the front has as many sittings and a lower J + L.
+    drops = [_sitting(0, d, 1.9) for d in (7.0, 10.0, 5.0)]
+    drops += [_sitting(1, d, 1.1) for d in (-52.0, -49.0, -53.0, -50.0)]
+    drops += [_sitting(2, d, 0.3) for d in (-91.0, -90.0, -92.0, -89.0)]
+    drops += [_failed(i) for i in (3, 4, 5, 6, 7)]
+    result = _choose(drops)
+    assert result.vote.split and result.vote.chosen == 2
+    assert result.vote.resolved_by.startswith("the paper's vote beside a window centre")
+    assert result.n_correct == 4
+    assert abs(math.degrees(wrap_angle(result.sitting_pose.yaw + math.pi / 2))) < 2.0
+
+
+def test_a_window_centre_its_neighbours_turned_toward_outvotes_a_larger_count() -> None:
+    # A round-fronted seat: the front (2) sits 4 times; the diagonal (3) 5 times, but
+    # its sitters, like the one at 1, turned 20-25 degrees toward the front.
+    drops = [_sitting(1, -66.0, 1.3)]
+    drops += [_sitting(2, d, 0.12) for d in (-88.0, -90.0, -94.0, -88.0)]
+    drops += [_sitting(3, d, 1.0) for d in (-115.0, -110.0, -112.0, -113.0, -110.0)]
+    drops += [_failed(i) for i in (0, 4, 5, 6, 7)]
+    result = _choose(drops)
+    assert result.vote.chosen == 2 and result.vote.resolved_by == "the window vote"
+    assert abs(math.degrees(wrap_angle(result.sitting_pose.yaw + math.pi / 2))) < 3.0
+
+
 def test_cli_json_reports_the_vote(tmp_path, capsys) -> None:
     from bearchair.executive import cmd_imagine
 

@@ -28,7 +28,11 @@ The paper's procedure ("Sitting Imagination"):
    vote is taken again over all drops. A hole that remains takes the pose from the
    sittings in its window, the agents on either side having turned toward it; a tie
    that remains goes to the paper's lowest mean J + L, which picked the front in every
-   tie measured (docs/decisions.md, "the imagination's tie-break").
+   tie measured (docs/decisions.md, "the imagination's tie-break"). A window centre
+   whose neighbours' sitters did not turn toward it (they sat as dropped: sideways
+   through a scan's hole along an armrest) gives way to the rotation beside it that
+   wins the paper's own vote (more correct sittings, then the lower mean J + L) and
+   whose neighbours' sitters did turn toward it.
 
 6. Beyond the paper, a seat without a backrest (a stool, a bench): when no drop of
    steps 2-5 is a correct sitting, the sitter leaning back has found nothing to lean

@@ -89,6 +89,13 @@ def _resolvevote_rotations(
             for d in by_rotation[(hole + offset) % N_ROTATIONS]
         ]
         return hole, chosen, "sitters on either side turning toward a rotation without its own"
+    toward = _turned_toward_instead(best, by_rotation, window_half_width)
+    if toward != best:
+        return (
+            toward,
+            by_rotation[toward],
+            "the paper's vote beside a window centre whose neighbours did not turn toward it",
+        )
     if holes:
         return best, chosen, "the chosen rotation (sitters beside the gap did not turn toward it)"
     if not split:
@@ -169,6 +176,39 @@ def vote_rotations(
         key=lambda i: (-window(i), i),
     )
     return best, contested, holes
+
+
+def _turned_toward_instead(
+    centre: int, by_rotation: dict[int, list[DropOutcome]], window_half_width: int
+) -> int:
+    """The window's centre, or the rotation beside it the sitters chose instead.
+
+    The window counts the sittings of the rotations beside α_c as votes for α_c; they
+    are votes only where those sitters turned toward α_c (:func:`_pulled_toward`). When
+    they did not (on a scan with a hole along an armrest, sitters dropped sideways sit
+    sideways), a rotation beside α_c replaces it if it wins the paper's own comparison
+    (more correct sittings, then the lower mean J + L) and its own neighbours' sitters
+    turned toward it; among several, the paper's comparison again.
+    """
+    if window_half_width == 0 or _pulled_toward(centre, by_rotation, window_half_width):
+        return centre
+
+    def paper_key(i: int) -> tuple[int, float, int]:
+        return (-len(by_rotation[i]), _mean_jl(by_rotation[i]), i)
+
+    beside = [
+        (centre + offset) % N_ROTATIONS
+        for offset in range(-window_half_width, window_half_width + 1)
+        if offset != 0
+    ]
+    instead = [
+        i
+        for i in beside
+        if by_rotation[i]
+        and paper_key(i) < paper_key(centre)
+        and _pulled_toward(i, by_rotation, window_half_width)
+    ]
+    return min(instead, key=paper_key) if instead else centre
 
 
 def _pulled_toward(
