@@ -13,10 +13,10 @@ p moves.
 other placement predicted to stay on seat the scan shows, not one patched from the seat
 map; where none is, release as planned: a prediction of "falls" alone never stops the
 release), ``predict`` (imagine and record the prediction, release as planned), ``choose``
-(as above: move p or fail before the release), ``off``. ``prefer`` is the default
-because, measured, it seated bears ``predict`` let fall, lost none where the two were
-compared trial by trial and seated as many in total elsewhere (docs/decisions.md), while ``choose`` stopped releases the judge would have seated: a
-prediction of "falls" was wrong more often than right.
+(as above: move p or fail before the release), ``off``. ``prefer`` is the default: a
+prediction of "falls" was wrong more often than right, so ``choose`` stopped releases
+the judge would have seated, while moving p where another placement is predicted to
+stay seated bears ``predict`` let fall (measurements: docs/decisions.md).
 """
 
 from __future__ import annotations
