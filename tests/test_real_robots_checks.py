@@ -148,7 +148,16 @@ def test_the_fr3s_limits_come_from_the_robot():
         arm.move_to(target)
 
 
-def test_ctrl_c_during_a_move_stops_the_arm():
+@pytest.fixture
+def python_ctrl_c():
+    """Python's own SIGINT handler for the test: a shell that starts pytest in the
+    background without job control leaves SIGINT ignored, and Python keeps it so."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_ctrl_c_during_a_move_stops_the_arm(python_ctrl_c):
     panda = PandaStandin("standin")
     panda.time_scale = 0.2  # a move of many seconds
     arm = _arm(panda)
