@@ -13,7 +13,7 @@ import py_trees
 from py_trees.common import Access, Status
 
 from bearchair.behaviours import keys
-from bearchair.behaviours.skill_behaviour import SkillBehaviour
+from bearchair.behaviours.skill_behaviour import SkillBehaviour, previous_failure
 from bearchair.behaviours.tracking import tracked_humanoid_pose
 from bearchair.skills.results import ChairRotation, Instruction, RotationChoice
 
@@ -158,18 +158,9 @@ class GiveUp(py_trees.behaviour.Behaviour):
         rotations = (
             self.blackboard.get(keys.ROTATIONS) if self.blackboard.exists(keys.ROTATIONS) else 0
         )
-        last = self._last_failure()
+        last = previous_failure(self)
         self.feedback_message = (
             f"chair not accessible after {rotations} rotation(s) "
             f"(at most {keys.MAX_ROTATIONS}); last failure: {last}"
         )
         return Status.FAILURE
-
-    def _last_failure(self) -> str:
-        """``<leaf>: <why>`` of the failure GiveUp gives up after, or that there is none."""
-        siblings = self.parent.children if self.parent is not None else [self]
-        index = siblings.index(self)
-        tip = siblings[index - 1].tip() if index > 0 else None
-        if tip is None or tip.status != Status.FAILURE:
-            return "no reason recorded"
-        return f"{tip.name}: {tip.feedback_message}"

@@ -8,8 +8,9 @@ from collections.abc import Callable
 from py_trees.common import Status
 
 from bearchair.behaviours import keys
-from bearchair.behaviours.skill_behaviour import SkillBehaviour
-from bearchair.skills.results import ImaginationResult
+from bearchair.behaviours.accessibility import REFUSED
+from bearchair.behaviours.skill_behaviour import SkillBehaviour, previous_failure
+from bearchair.skills.results import ImaginationResult, SeatReachability
 
 
 class ImagineSitting(SkillBehaviour):
@@ -55,3 +56,31 @@ class ImagineSitting(SkillBehaviour):
             f"sit at ({x:.3f}, {y:.3f}, {z:.3f}) m facing {math.degrees(pose.yaw):.0f} deg "
             f"({result.n_correct} correct of {result.n_drops} drops{direction})"
         )
+
+
+class NoSittingFound(SkillBehaviour):
+    """Always FAILURE, last in the ``ImagineSitting`` selector: why no sitting pose was
+    imagined. Where every level surface of the scan the bear rests on lies beyond the
+    seat heights the NAO places a bear on, the mission is refused with that reason (as
+    ``CheckSeatReachable`` refuses: no turn of the chair and no further look helps);
+    otherwise the leaf repeats the failure before it (the last imagination's or look's).
+
+    Blackboard:
+        reads ``/chair/mesh``.
+    """
+
+    activity = "checking the scan's seat heights"
+
+    def __init__(self, name: str = "NoSittingFound"):
+        super().__init__(name, reads=(keys.CHAIR_MESH,))
+
+    def prepare(self) -> Callable[[], SeatReachability]:
+        skills, _ = self.need()
+        chair_mesh = self.blackboard.get(keys.CHAIR_MESH)
+        return lambda: skills.check_seat_levels(chair_mesh)
+
+    def conclude(self, verdict: SeatReachability) -> Status:
+        last = previous_failure(self)
+        if not verdict.reachable:
+            return self.fail(f"{REFUSED}{verdict.reason}; no sitting imagined ({last})")
+        return self.fail(last)

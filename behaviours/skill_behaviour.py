@@ -154,6 +154,18 @@ class SkillBehaviour(py_trees.behaviour.Behaviour):
             return default
 
 
+def previous_failure(behaviour: py_trees.behaviour.Behaviour) -> str:
+    """``<leaf>: <why>`` of the failure that ended the sibling ticked before
+    ``behaviour`` (the tip of its previous sibling), or that none is recorded: what a
+    selector's last child, ticked only when every other child failed, gives up after."""
+    siblings = behaviour.parent.children if behaviour.parent is not None else [behaviour]
+    index = siblings.index(behaviour)
+    tip = siblings[index - 1].tip() if index > 0 else None
+    if tip is None or tip.status != Status.FAILURE:
+        return "no reason recorded"
+    return f"{tip.name}: {tip.feedback_message}"
+
+
 def _describe(error: BaseException) -> str:
     text = str(error) or type(error).__name__
     return (

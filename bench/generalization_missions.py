@@ -130,7 +130,7 @@ def print_missions(
     chairs: list[GeneratedChair],
 ) -> None:
     """Seating per family, per condition and per cause; the refusals with the reach check."""
-    from bearchair.evaluation.report import failure_cause, failure_kind
+    from bearchair.evaluation.report import failure_cause, failure_kind, refusal
 
     outside_reason = _inside_workspace(chairs)
     inside = {name: not reason for name, reason in outside_reason.items()}
@@ -147,7 +147,7 @@ def print_missions(
         if not seated:
             cause = failure_cause(record)
             causes[failure_kind(cause)] += 1
-            if record.failed_stage == "CheckSeatReachable":
+            if record.failed_stage == "CheckSeatReachable" or refusal(record):
                 refused.append((chair, cause, inside[chair.name]))
     total = [s for values in rows.values() for s in values]
     print(
@@ -191,10 +191,14 @@ def print_missions(
 def _outside_verdict(mission: TrialRecord) -> str:
     """What a mission did on a chair outside the workspace: refused (right), seated (the
     check on the true chair, with p over the seat's middle, is stricter than the mission,
-    which may seat the bear elsewhere on the seat), or failed at another stage, unrefused."""
+    which may seat the bear elsewhere on the seat), or failed at another stage, unrefused.
+    ``CheckSeatReachable`` failing counts as refused (a scan that cannot tell gives its
+    reason too), as does a refusal where no sitting was imagined."""
+    from bearchair.evaluation.report import refusal
+
     if mission.succeeded:
         return "seated"
-    if mission.failed_stage == "CheckSeatReachable":
+    if mission.failed_stage == "CheckSeatReachable" or refusal(mission):
         return "refused"
     return f"NOT refused: failed at {mission.failed_stage}"
 

@@ -122,24 +122,31 @@ def compute_table(records: list[TrialRecord]) -> TrialsTable:
     )
 
 
-REFUSING_STAGE = "CheckSeatReachable"
-"""The stage that refuses a seat out of the NAO's reach (trees.mission)."""
-
-
 def _refusals(failed: list[TrialRecord]) -> tuple[tuple[str, str, int], ...]:
-    """(chair, reason, trials) of the refused trials, by chair: failed at
-    :data:`REFUSING_STAGE` with a refusal (not, say, a scan that cannot tell)."""
+    """(chair, reason, trials) of the refused trials, by chair (see :func:`refusal`)."""
     by_chair: dict[str, list[str]] = {}
     for record in failed:
-        if record.failed_stage != REFUSING_STAGE:
-            continue
-        message = failure_cause(record).split(": ", 1)[1]
-        if message.startswith(REFUSED):
-            by_chair.setdefault(record.chair, []).append(message.removeprefix(REFUSED))
+        reason = refusal(record)
+        if reason:
+            by_chair.setdefault(record.chair, []).append(reason)
     return tuple(
         (chair, Counter(reasons).most_common(1)[0][0], len(reasons))
         for chair, reasons in sorted(by_chair.items())
     )
+
+
+def refusal(record: TrialRecord) -> str:
+    """Why the mission refused the chair (``CheckSeatReachable``, or ``NoSittingFound``
+    where no sitting was imagined: a message starting with ``refused: ``), empty when it
+    did not (it succeeded, or failed otherwise: say, a scan that cannot tell)."""
+    if record.succeeded or not record.failed_stage:
+        return ""
+    message = failure_cause(record).split(": ", 1)[1]
+    # The stage's own leaf writes its message bare; a leaf inside it prefixes its name.
+    for text in (message, message.split(": ", 1)[-1]):
+        if text.startswith(REFUSED):
+            return text.removeprefix(REFUSED)
+    return ""
 
 
 def failure_kind(cause: str) -> str:

@@ -34,6 +34,7 @@ class DefaultSkills:
     wait_until_chair_still = staticmethod(perception.wait_until_chair_still)
     measure_chair_rotation = staticmethod(perception.measure_chair_rotation)
     check_seat_reachable = staticmethod(stance.check_seat_reachable)
+    check_seat_levels = staticmethod(stance.check_seat_levels)
     check_accessibility = staticmethod(accessibility.check_accessibility)
     choose_rotation = staticmethod(assistance.choose_rotation)
     compose_instruction = staticmethod(assistance.compose_instruction)

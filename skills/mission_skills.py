@@ -82,6 +82,8 @@ class MissionSkills(Protocol):
         self, chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose
     ) -> SeatReachability: ...
 
+    def check_seat_levels(self, chair_mesh: trimesh.Trimesh) -> SeatReachability: ...
+
     def check_accessibility(
         self,
         chair_mesh: trimesh.Trimesh,

@@ -71,6 +71,7 @@ def default_results() -> dict[str, Any]:
         ),
         "locate_humanoid": SE2Pose(1.9, 0.0, np.pi),
         "check_seat_reachable": skill_results.SeatReachability(True, "", 0.24, 0.0, 0.3, 0.01),
+        "check_seat_levels": skill_results.SeatReachability(True, "", float("nan")),
         "check_accessibility": skill_results.AccessibilityResult(
             True, SE2_GOAL, SITTING_POSE, (SE2Pose(1.9, 0.0, np.pi), SE2_GOAL), "", 0.01
         ),
@@ -192,6 +193,9 @@ class ScriptedSkills:
         self, chair_mesh: trimesh.Trimesh, sitting_pose: SittingPose
     ) -> skill_results.SeatReachability:
         return self._answer("check_seat_reachable", chair_mesh, sitting_pose)
+
+    def check_seat_levels(self, chair_mesh: trimesh.Trimesh) -> skill_results.SeatReachability:
+        return self._answer("check_seat_levels", chair_mesh)
 
     def check_accessibility(
         self,

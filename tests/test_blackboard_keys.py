@@ -47,6 +47,14 @@ SCENARIOS = [
     {"imagine_sitting": [NOT_FOUND, FOUND]},
     # no seat under the sitting point on the scan: looked at
     {"look_at_seat": default_results()["look_from_above"]},
+    # no sitting on the scan after every look: NoSittingFound
+    {"imagine_sitting": NOT_FOUND},
+    # nor on the turned chair's scan: NoSittingOnTurnedChair
+    {
+        "check_accessibility": BLOCKED,
+        "measure_chair_rotation": REJECTED,
+        "imagine_sitting": [FOUND, NOT_FOUND],
+    },
 ]
 
 

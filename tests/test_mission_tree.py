@@ -144,9 +144,35 @@ def test_no_sitting_after_every_look_fails_the_stage_with_the_imagination_s_reas
     skills = ScriptedSkills({"imagine_sitting": NO_SITTING})
     summary, _ = run_scripted_mission(skills)
     assert summary.failed_stage == "ImagineSitting"
-    assert summary.reason == "ImagineAgain: no sitting pose: no correct sitting in 80 drops"
+    # NoSittingFound, last, repeats the last imagination's failure: the scan's levels
+    # (scripted) leave the seat within the NAO's heights.
+    assert summary.reason == (
+        "NoSittingFound: ImagineAgain: no sitting pose: no correct sitting in 80 drops"
+    )
     assert len(skills.calls["look_from_above"]) == 3  # MAX_LOOKS
+    assert len(skills.calls["check_seat_levels"]) == 1
     assert not skills.calls["check_seat_reachable"]
+
+
+def test_no_sitting_on_a_seat_beyond_the_nao_s_heights_is_refused_with_the_height():
+    too_high = SeatReachability(
+        False,
+        "seat too high for the NAO: seat 0.446 m, the NAO places a bear at most 0.429 m high",
+        0.446,
+    )
+    skills = ScriptedSkills({"imagine_sitting": NO_SITTING, "check_seat_levels": too_high})
+    summary, _ = run_scripted_mission(skills)
+    assert summary.failed_stage == "ImagineSitting"
+    assert summary.reason.startswith(
+        "NoSittingFound: refused: seat too high for the NAO: seat 0.446 m"
+    )
+    assert summary.reason.endswith(
+        "(ImagineAgain: no sitting pose: no correct sitting in 80 drops)"
+    )
+    # The levels are checked on the chair with every look in it.
+    looked = skills.results["look_from_above"].chair_mesh
+    assert skills.calls["check_seat_levels"][0][0][0] is looked
+    assert summary.rotations == 0 and not skills.calls["compose_instruction"]
 
 
 def test_a_seat_the_scan_lacks_is_looked_at_before_the_seat_check():

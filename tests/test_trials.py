@@ -613,6 +613,28 @@ def test_refused_chairs_are_a_cause_of_their_own():
     assert "tall.obj (3 trials, manifest seat 0.432 m)" in markdown
 
 
+def test_a_refusal_where_no_sitting_was_imagined_is_counted_as_one():
+    reason = "seat too high for the NAO: seat 0.446 m, the NAO places a bear at most 0.429 m high"
+    refused = make_record(
+        "accessible",
+        "failure",
+        chair="sled.obj",
+        failed_stage="ImagineSitting",
+        reason=f"NoSittingFound: refused: {reason}; no sitting imagined (ImagineAgain: ...)",
+    )
+    not_refused = make_record(
+        "accessible",
+        "failure",
+        chair="sofa.obj",
+        failed_stage="ImagineSitting",
+        reason="NoSittingFound: ImagineAgain: no sitting pose: no correct sitting in 80 drops",
+    )
+    table = compute_table([refused, not_refused])
+    assert table.refusals == (
+        ("sled.obj", f"{reason}; no sitting imagined (ImagineAgain: ...)", 1),
+    )
+
+
 def test_a_scan_that_cannot_tell_the_reach_is_not_a_refusal():
     lost = make_record(
         "accessible",

@@ -10,6 +10,8 @@
                 [-] Look again and imagine             Sequence (memory)
                     --> LookFromAbove                  one more view, where none looked from
                     --> ImagineAgain
+            --> NoSittingFound                         refuses a chair with no level surface
+                                                       at the NAO's seat heights, else fails
         [-] CheckSeatReachable                         Sequence (memory)
             --> LookAtSeat                             one more view, if no seat under p
             --> CheckSeatReachable                     refuses a seat no stance reaches
@@ -25,7 +27,8 @@
                             --> ScanTurnedChair        when no fit is accepted
                             [o] ImagineTurnedChair     as ImagineSitting: ImagineOnTurnedScan,
                                                        then up to 3 of LookAtTurnedChair and
-                                                       ImagineTurnedAgain
+                                                       ImagineTurnedAgain, then
+                                                       NoSittingOnTurnedChair
                     --> CheckAccessibilityAgain
             --> GiveUp
         --> WalkToChair
@@ -55,7 +58,7 @@ from bearchair.behaviours.assistance import (
     MeasureChairRotation,
     WaitUntilChairStill,
 )
-from bearchair.behaviours.imagine import ImagineSitting
+from bearchair.behaviours.imagine import ImagineSitting, NoSittingFound
 from bearchair.behaviours.scan import LookAtSeat, LookFromAbove, ScanChair
 from bearchair.behaviours.seat import ReleaseAndStand, SeatBear
 from bearchair.behaviours.walk import WalkToChair
@@ -80,11 +83,14 @@ def create_imagination(
     on_scan_name: str = "ImagineOnScan",
     look_name: str = "LookFromAbove",
     again_name: str = "ImagineAgain",
+    no_sitting_name: str = "NoSittingFound",
 ) -> py_trees.behaviour.Behaviour:
     """The ``ImagineSitting`` stage: the imagination on the scan, and where it finds no
     sitting, up to ``max_looks`` looks at the chair from above, each followed by the
-    imagination on the chair reconstructed with it (0: the imagination alone, named
-    ``name``). The names let the turned chair's re-scan compose the same thing."""
+    imagination on the chair reconstructed with it; when all fail, ``NoSittingFound``
+    says why, refusing a chair whose level surfaces are all beyond the NAO's seat heights
+    (0: the imagination alone, named ``name``). The names let the turned chair's
+    re-scan compose the same thing."""
     if max_looks == 0:
         return ImagineSitting(name=name)
     on_scan = ImagineSitting(name=on_scan_name)
@@ -104,6 +110,7 @@ def create_imagination(
             py_trees.decorators.Retry(
                 name=f"Up to {max_looks} looks", child=again, num_failures=max_looks
             ),
+            NoSittingFound(name=no_sitting_name),
         ],
     )
 
@@ -136,6 +143,7 @@ def create_locate_turned_chair(
         on_scan_name="ImagineOnTurnedScan",
         look_name="LookAtTurnedChair",
         again_name="ImagineTurnedAgain",
+        no_sitting_name="NoSittingOnTurnedChair",
     )
     anew = py_trees.composites.Sequence(
         name="Scan the turned chair anew",

@@ -149,22 +149,31 @@ def blocked_above_reason(chair: ChairAlongRay, ray: SeatRay) -> str:
     )
 
 
+def seat_height_reason(height_m: float, model: ReachModel) -> str:
+    """Why a seat ``height_m`` high (metres) is beyond the heights the NAO places a bear
+    on from any stance; empty when it is within them."""
+    highest, lowest = model.max_seat_height_m(), model.min_seat_height_m()
+    if height_m > highest:
+        return (
+            f"seat too high for the NAO: seat {height_m:.3f} m, the NAO places a bear at most "
+            f"{highest:.3f} m high"
+        )
+    if height_m < lowest:
+        return (
+            f"seat too low for the NAO: seat {height_m:.3f} m, the NAO places a bear on seats "
+            f"at least {lowest:.3f} m high"
+        )
+    return ""
+
+
 def out_of_reach_reason(
     ray: SeatRay, front_m: float, stances_m: np.ndarray, model: ReachModel
 ) -> str:
     """Why the reach model places the bear nowhere on this seat from any stance."""
     height = float(ray.seat_heights_m[0])
-    highest, lowest = model.max_seat_height_m(), model.min_seat_height_m()
-    if height > highest:
-        return (
-            f"seat too high for the NAO: seat {height:.3f} m, the NAO places a bear at most "
-            f"{highest:.3f} m high"
-        )
-    if height < lowest:
-        return (
-            f"seat too low for the NAO: seat {height:.3f} m, the NAO places a bear on seats "
-            f"at least {lowest:.3f} m high"
-        )
+    beyond = seat_height_reason(height, model)
+    if beyond:
+        return beyond
     # The stance that comes closest: the nearest sitting point against the reach there.
     best = (math.inf, math.nan, math.nan)
     for stance in stances_m:

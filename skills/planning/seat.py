@@ -373,3 +373,46 @@ def slide_on_seat(
     moved[:2] += slide * sitting_pose.direction()
     moved[2] += float(ray.seat_heights_m[allowed[-1]] - ray.seat_heights_m[0])
     return SittingPose(moved, sitting_pose.yaw), slide
+
+
+def level_surfaces(chair_mesh: trimesh.Trimesh) -> np.ndarray:
+    """Heights (metres) of the chair's level surfaces the bear's torso rests on, one per
+    surface, largest first.
+
+    The top surface over the chair's footprint is sampled on a ``STEP_M`` grid by vertical
+    rays (:func:`_first_surface_below`). A cell holds the torso where every cell within
+    ``SUPPORT_RADIUS_M`` of it (the torso's half width) has a surface, all within
+    ``SEAT_HEIGHT_TOLERANCE_M`` of one another: a seat, not an armrest's narrow top nor a
+    backrest's edge. Each connected group of such cells is a surface; its height is its
+    cells' median, and the largest (most cells) comes first.
+    """
+    if len(chair_mesh.faces) == 0:
+        return np.zeros(0)
+    (x0, y0, _), (x1, y1, z1) = chair_mesh.bounds
+    xs = np.arange(x0, x1 + STEP_M, STEP_M)
+    ys = np.arange(y0, y1 + STEP_M, STEP_M)
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    heights = _first_surface_below(
+        chair_mesh, np.column_stack([gx.ravel(), gy.ravel()]), float(z1) + 0.01
+    ).reshape(gx.shape)
+    radius = round(SUPPORT_RADIUS_M / STEP_M)
+    disc = np.hypot(*np.mgrid[-radius : radius + 1, -radius : radius + 1]) <= radius + 1e-9
+    missing = np.isnan(heights)
+    near_missing = cast(
+        np.ndarray, ndimage.maximum_filter(missing, footprint=disc, mode="constant", cval=True)
+    )
+    highest = ndimage.maximum_filter(
+        np.where(missing, -np.inf, heights), footprint=disc, mode="constant", cval=-np.inf
+    )
+    lowest = ndimage.minimum_filter(
+        np.where(missing, np.inf, heights), footprint=disc, mode="constant", cval=np.inf
+    )
+    holds = ~near_missing & (highest - lowest <= SEAT_HEIGHT_TOLERANCE_M)
+    # Two surfaces at heights further apart than the tolerance never touch: the cells at
+    # the step between them hold nothing.
+    labels, n = cast(tuple[np.ndarray, int], ndimage.label(holds))
+    if n == 0:
+        return np.zeros(0)
+    sizes = np.bincount(labels.ravel())[1:]
+    order = np.argsort(-sizes, kind="stable") + 1
+    return np.array([float(np.median(heights[labels == label])) for label in order])

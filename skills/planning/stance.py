@@ -53,11 +53,12 @@ from bearchair.skills.planning.chair_along_ray import (
     chair_along_ray,
     closed_above,
     out_of_reach_reason,
+    seat_height_reason,
     surface_points,
 )
 from bearchair.skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from bearchair.skills.planning.preplan import SeatingCheck, SeatingValidator, wholebody_validator
-from bearchair.skills.planning.seat import STEP_M, SeatRay, seat_ray
+from bearchair.skills.planning.seat import STEP_M, SeatRay, level_surfaces, seat_ray
 from bearchair.skills.planning.wholebody.chair_profile import (
     ChairProfileError,
     fit_chair_profile,
@@ -462,3 +463,32 @@ def check_seat_reachable(
         return SeatReachability(False, reason, height, seconds=seconds, seat_seen=ray.seat_seen)
     stance = float(np.hypot(choice.se2_goal.x - p0[0], choice.se2_goal.y - p0[1]))
     return SeatReachability(True, "", height, choice.slide_m, stance, seconds, choice.centred_m)
+
+
+def check_seat_levels(chair_mesh: trimesh.Trimesh) -> SeatReachability:
+    """Where no sitting was imagined: whether the scan shows the seat out of the NAO's
+    reach whatever the sitting point, as no level surface the bear's torso rests on
+    (:func:`bearchair.skills.planning.seat.level_surfaces`) lying within the seat heights
+    the NAO places a bear on.
+
+    Not reachable only when the scan has such surfaces and every one is too high or too
+    low; the reason names the largest. Reachable (nothing rules the chair out) when one
+    lies within the heights, or when the scan shows none (it may have lost the seat).
+
+    Args:
+        chair_mesh: the chair, world frame, z up (the floor at z = 0).
+    """
+    began = time.perf_counter()
+    model = reach_model()
+    levels = level_surfaces(chair_mesh)
+    beyond = [seat_height_reason(float(height), model) for height in levels]
+    seconds = time.perf_counter() - began
+    if not len(levels) or not all(beyond):
+        return SeatReachability(True, "", math.nan, seconds=seconds)
+    others = (
+        f" (the scan's {len(levels) - 1} other level surface(s) the bear rests on lie at "
+        f"{levels[1:].min():.3f}-{levels[1:].max():.3f} m)"
+        if len(levels) > 1
+        else ""
+    )
+    return SeatReachability(False, beyond[0] + others, float(levels[0]), seconds=seconds)
