@@ -73,14 +73,17 @@ class NoSittingFound(SkillBehaviour):
 
     def __init__(self, name: str = "NoSittingFound"):
         super().__init__(name, reads=(keys.CHAIR_MESH,))
+        self._last_failure = ""
 
     def prepare(self) -> Callable[[], SeatReachability]:
         skills, _ = self.need()
         chair_mesh = self.blackboard.get(keys.CHAIR_MESH)
+        # Read now, in the tick its sibling failed in: the selector resets it later.
+        self._last_failure = previous_failure(self)
         return lambda: skills.check_seat_levels(chair_mesh)
 
     def conclude(self, verdict: SeatReachability) -> Status:
-        last = previous_failure(self)
+        last = self._last_failure
         if not verdict.reachable:
             return self.fail(f"{REFUSED}{verdict.reason}; no sitting imagined ({last})")
         return self.fail(last)

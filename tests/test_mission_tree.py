@@ -141,7 +141,8 @@ def test_no_sitting_on_the_scan_looks_from_above_and_the_mission_goes_on():
 
 
 def test_no_sitting_after_every_look_fails_the_stage_with_the_imagination_s_reason():
-    skills = ScriptedSkills({"imagine_sitting": NO_SITTING})
+    # The level check takes a few ticks, as on a robot: the reason survives them.
+    skills = ScriptedSkills({"imagine_sitting": NO_SITTING}, delays_s={"check_seat_levels": 0.05})
     summary, _ = run_scripted_mission(skills)
     assert summary.failed_stage == "ImagineSitting"
     # NoSittingFound, last, repeats the last imagination's failure: the scan's levels
@@ -160,7 +161,10 @@ def test_no_sitting_on_a_seat_beyond_the_nao_s_heights_is_refused_with_the_heigh
         "seat too high for the NAO: seat 0.446 m, the NAO places a bear at most 0.429 m high",
         0.446,
     )
-    skills = ScriptedSkills({"imagine_sitting": NO_SITTING, "check_seat_levels": too_high})
+    skills = ScriptedSkills(
+        {"imagine_sitting": NO_SITTING, "check_seat_levels": too_high},
+        delays_s={"check_seat_levels": 0.05},
+    )
     summary, _ = run_scripted_mission(skills)
     assert summary.failed_stage == "ImagineSitting"
     assert summary.reason.startswith(
