@@ -86,3 +86,20 @@ def test_a_scan_with_no_level_surface_rules_nothing_out():
     assert len(level_surfaces(tilted)) == 0
     verdict = check_seat_levels(tilted)
     assert verdict.reachable and math.isnan(verdict.seat_height_m)
+
+
+def test_rails_too_high_over_a_seat_within_reach_are_named_not_the_seat():
+    from bearchair.core.geometry import SittingPose
+    from bearchair.skills.planning.stance import check_seat_reachable
+
+    seat_m, rail_top_m = 0.38, 0.50
+    rails = [
+        box((SEAT_M, 0.03, rail_top_m - seat_m), (0.0, side * 0.12, (rail_top_m + seat_m) / 2))
+        for side in (-1, 1)
+    ]
+    mesh = cast(trimesh.Trimesh, trimesh.util.concatenate([chair(seat_m), *rails]))
+    # Facing +x, away from the backrest, the pelvis 8 cm over the seat.
+    verdict = check_seat_reachable(mesh, SittingPose(np.array([-0.05, 0.0, seat_m + 0.08]), 0.0))
+    assert not verdict.reachable
+    assert verdict.reason.startswith("chair too high in the NAO's way: the bear is carried over")
+    assert f"(the seat under the sitting point is {seat_m:.3f} m)" in verdict.reason

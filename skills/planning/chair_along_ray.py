@@ -167,11 +167,27 @@ def seat_height_reason(height_m: float, model: ReachModel) -> str:
 
 
 def out_of_reach_reason(
-    ray: SeatRay, front_m: float, stances_m: np.ndarray, model: ReachModel
+    ray: SeatRay,
+    front_m: float,
+    stances_m: np.ndarray,
+    model: ReachModel,
+    seat_under_p_m: float = math.nan,
 ) -> str:
-    """Why the reach model places the bear nowhere on this seat from any stance."""
+    """Why the reach model places the bear nowhere on this seat from any stance.
+
+    ``ray`` holds the heights the bear is carried over (the seat, or the chair's top in
+    the NAO's way where higher); ``seat_under_p_m``, the seat itself under p (metres),
+    names which of the two is too high.
+    """
     height = float(ray.seat_heights_m[0])
     beyond = seat_height_reason(height, model)
+    if beyond and height > seat_under_p_m + 1e-3 and not seat_height_reason(seat_under_p_m, model):
+        return (
+            f"chair too high in the NAO's way: the bear is carried over armrests or rails as "
+            f"onto a {height:.3f} m seat (the seat under the sitting point is "
+            f"{seat_under_p_m:.3f} m), and the NAO places a bear at most "
+            f"{model.max_seat_height_m():.3f} m high"
+        )
     if beyond:
         return beyond
     # The stance that comes closest: the nearest sitting point against the reach there.

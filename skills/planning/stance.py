@@ -265,7 +265,7 @@ def _choose_stance_on_ray(
     pairs, stances = _stance_pairs(planner_ray, front, walk_in, model)
     if not pairs:
         return none._replace(
-            reason=out_of_reach_reason(planner_ray, front, stances, model),
+            reason=out_of_reach_reason(planner_ray, front, stances, model, seat_under_p0),
             depends_on_scene=scene and walk_in > chair_clear + 1e-9,
         )
     search = _RaySearch(
