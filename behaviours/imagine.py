@@ -10,31 +10,46 @@ from py_trees.common import Status
 from bearchair.behaviours import keys
 from bearchair.behaviours.accessibility import REFUSED
 from bearchair.behaviours.skill_behaviour import SkillBehaviour, previous_failure
+from bearchair.core.geometry import PELVIS_OVER_SEAT_M, SittingPose
 from bearchair.skills.results import ImaginationResult, SeatReachability
 
 
 class ImagineSitting(SkillBehaviour):
     """Drops a virtual child onto the chair mesh and keeps the best sitting pose g.
 
+    Args:
+        name: the leaf's name.
+        after_turn: the chair was imagined before a turn about the vertical axis, which
+            keeps heights: a sitting more than ``PELVIS_OVER_SEAT_M`` above or below the
+            one before (``/sitting/pose``) sits on something else than the seat (the new
+            scan lost it, or an armrest), so the leaf fails as if no sitting was found,
+            for a look from above to follow.
+
     Blackboard:
-        reads ``/mission/seed``, ``/chair/mesh``;
+        reads ``/mission/seed``, ``/chair/mesh`` (and ``/sitting/pose`` after a turn);
         writes ``/sitting/imagination``, ``/sitting/pose``.
     """
 
     activity = "imagining sitting"
 
-    def __init__(self, name: str = "ImagineSitting"):
+    def __init__(self, name: str = "ImagineSitting", after_turn: bool = False):
         super().__init__(
-            name, reads=(keys.SEED, keys.CHAIR_MESH), writes=(keys.IMAGINATION, keys.SITTING_POSE)
+            name,
+            reads=(keys.SEED, keys.CHAIR_MESH) + ((keys.SITTING_POSE,) if after_turn else ()),
+            writes=(keys.IMAGINATION, keys.SITTING_POSE),
         )
+        self.after_turn = after_turn
+        self._before: SittingPose | None = None
 
     def prepare(self) -> Callable[[], ImaginationResult]:
         skills, _ = self.need()
         chair_mesh = self.blackboard.get(keys.CHAIR_MESH)
         seed = self.blackboard.get(keys.SEED)
+        self._before = self._optional(keys.SITTING_POSE, None) if self.after_turn else None
         return lambda: skills.imagine_sitting(chair_mesh, seed=seed, cancel=self.cancel_event)
 
     def conclude(self, result: ImaginationResult) -> Status:
+        result = self._kept_height(result)
         self.blackboard.set(keys.IMAGINATION, result, overwrite=True)
         if not result.found or result.sitting_pose is None:
             return self.fail(f"no sitting pose: {result.reason or 'no correct sitting'}")
@@ -55,6 +70,26 @@ class ImagineSitting(SkillBehaviour):
         return self.succeed(
             f"sit at ({x:.3f}, {y:.3f}, {z:.3f}) m facing {math.degrees(pose.yaw):.0f} deg "
             f"({result.n_correct} correct of {result.n_drops} drops{direction})"
+        )
+
+    def _kept_height(self, result: ImaginationResult) -> ImaginationResult:
+        """The result, or, after a turn, no sitting where it moved the pelvis more than
+        ``PELVIS_OVER_SEAT_M`` up or down."""
+        if self._before is None or not result.found or result.sitting_pose is None:
+            return result
+        before_m = float(self._before.position[2])
+        now_m = float(result.sitting_pose.position[2])
+        if abs(now_m - before_m) <= PELVIS_OVER_SEAT_M:
+            return result
+        return result._replace(
+            found=False,
+            sitting_pose=None,
+            reason=(
+                f"the sitting found is {now_m:.3f} m high, {abs(now_m - before_m):.3f} m "
+                f"{'below' if now_m < before_m else 'above'} the {before_m:.3f} m the chair "
+                f"was sat at before the turn (a turn keeps heights: the scan lost the seat, "
+                f"or the sitter sat on something else)"
+            ),
         )
 
 

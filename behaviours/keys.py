@@ -5,16 +5,16 @@ Every key is absolute. Behaviours register the ones they read (READ access) and 
 shows who touches what. The table below is generated from those registrations
 (``bearchair.executive.tree_render.blackboard_table``); a test keeps it in step with the tree.
 
-======================== =========================================================== ========================================================== ======================================================================================================================
+======================== =========================================================== ========================================================== ===================================================================================================================================
 key                      value                                                       written by                                                 read by
-======================== =========================================================== ========================================================== ======================================================================================================================
+======================== =========================================================== ========================================================== ===================================================================================================================================
 /mission/seed            int: the run's seed                                         executive                                                  ScanChair, ImagineSitting, LookFromAbove, LookAtSeat, CheckAccessibility, InstructHelper
 /mission/arena           bearchair.core.arena.Arena: walls, obstacles, chair area    executive                                                  CheckAccessibility, InstructHelper
 /chair/scan              bearchair.skills.results.ChairScan                          ScanChair, LookFromAbove, LookAtSeat                       LookFromAbove, LookAtSeat
 /chair/mesh              trimesh.Trimesh: the chair now, world frame                 ScanChair, LookFromAbove, LookAtSeat, MeasureChairRotation ImagineSitting, NoSittingFound, CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, SeatBear
 /chair/points            (N, 3) ndarray: the chair now, world frame (ICP ref.)       ScanChair, LookFromAbove, LookAtSeat, MeasureChairRotation MeasureChairRotation
 /sitting/imagination     bearchair.skills.results.ImaginationResult                  ImagineSitting                                             LookFromAbove
-/sitting/pose            bearchair.core.geometry.SittingPose: g now, world frame     ImagineSitting, CheckAccessibility, MeasureChairRotation   LookAtSeat, CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, SeatBear, ReleaseAndStand
+/sitting/pose            bearchair.core.geometry.SittingPose: g now, world frame     ImagineSitting, CheckAccessibility, MeasureChairRotation   LookAtSeat, CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, ImagineSitting, SeatBear, ReleaseAndStand
 /humanoid/pose           bearchair.core.se2.SE2Pose: last tracked humanoid pose      CheckAccessibility
 /accessibility/reachable bearchair.skills.results.SeatReachability: the chair alone  CheckSeatReachable
 /accessibility/result    bearchair.skills.results.AccessibilityResult (latest check) CheckAccessibility                                         WalkToChair, SeatBear
@@ -26,7 +26,7 @@ key                      value                                                  
 /walk/result             bearchair.skills.results.WalkResult                         WalkToChair
 /seat/plan               bearchair.skills.results.SeatingPlan                        SeatBear                                                   ReleaseAndStand
 /seat/judgement          bearchair.hardware.interfaces.SeatingJudgement (simulation) ReleaseAndStand
-======================== =========================================================== ========================================================== ======================================================================================================================
+======================== =========================================================== ========================================================== ===================================================================================================================================
 """
 
 SEED = "/mission/seed"

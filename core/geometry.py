@@ -50,6 +50,13 @@ def transform_points(transform: np.ndarray, points: np.ndarray) -> np.ndarray:
     return points @ transform[:3, :3].T + transform[:3, 3]
 
 
+PELVIS_OVER_SEAT_M = 0.03 + 0.045
+"""How far (metres) the imagined sitter's pelvis centre p rests above the seat it sits
+on: its hip joints 0.03 m below p and its thighs' radius, 0.045 m
+(``bearchair.skills.imagination.agent``). Two sittings on the same seat lie within about
+this of each other in height; a sitting further off sits on something else."""
+
+
 class SittingPose(NamedTuple):
     """The imagined sitting pose g = (p, γ) in the world frame.
 

@@ -159,6 +159,29 @@ def test_a_missing_skill_fails_at_its_leaf_naming_it():
     assert "imagine_sitting" in leaf.feedback_message
 
 
+@pytest.mark.parametrize(
+    ("height_change_m", "kept"), [(-0.13, False), (0.09, False), (-0.03, True)]
+)
+def test_after_a_turn_a_sitting_at_another_height_is_no_sitting(height_change_m, kept):
+    before = DEFAULTS["imagine_sitting"].sitting_pose
+    moved = before._replace(position=before.position + np.array([0.1, 0.0, height_change_m]))
+    found = DEFAULTS["imagine_sitting"]._replace(sitting_pose=moved)
+    fill_blackboard()
+    leaf = ImagineSitting(after_turn=True)
+    leaf.setup(skills=ScriptedSkills({"imagine_sitting": found}), robot=fake_robot())
+    status = tick_until_done(leaf)[-1]
+    imagination = py_trees.blackboard.Blackboard.get(keys.IMAGINATION)
+    if kept:
+        assert status == Status.SUCCESS and imagination.found
+        assert py_trees.blackboard.Blackboard.get(keys.SITTING_POSE) is moved
+        return
+    # No sitting, as the look from above that follows needs, and g left as it was.
+    assert status == Status.FAILURE and not imagination.found
+    assert f"{abs(height_change_m):.3f} m" in leaf.feedback_message
+    assert "the chair was sat at before the turn" in leaf.feedback_message
+    assert py_trees.blackboard.Blackboard.get(keys.SITTING_POSE) is before
+
+
 def test_a_missing_blackboard_input_fails_without_calling_the_skill():
     skills = ScriptedSkills()
     leaf = ImagineSitting()

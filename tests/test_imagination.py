@@ -569,3 +569,12 @@ def test_the_picture_without_matplotlib_names_the_extra(tmp_path, monkeypatch):
     with pytest.raises(RenderError, match=r"bearchair\[trials\]"):
         render_sitting(box_chair_mesh(), None, tmp_path / "sitting.png", "box chair")
     assert not (tmp_path / "sitting.png").exists()
+
+
+def test_the_pelvis_over_the_seat_is_the_agent_s_hip_offset_and_thigh_radius():
+    from bearchair.core.geometry import PELVIS_OVER_SEAT_M
+    from bearchair.skills.imagination.agent import JOINTS, LINKS
+
+    hip = next(joint for joint in JOINTS if joint.child == "left_hip")
+    thigh = next(link for link in LINKS if link.name == "left_thigh")
+    assert pytest.approx(-hip.origin_m[2] + thigh.size[0]) == PELVIS_OVER_SEAT_M

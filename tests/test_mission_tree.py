@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import time
 
+import numpy as np
 import py_trees
 import pytest
 from py_trees.common import Status
@@ -177,6 +178,30 @@ def test_no_sitting_on_a_seat_beyond_the_nao_s_heights_is_refused_with_the_heigh
     looked = skills.results["look_from_above"].chair_mesh
     assert skills.calls["check_seat_levels"][0][0][0] is looked
     assert summary.rotations == 0 and not skills.calls["compose_instruction"]
+
+
+def test_a_turned_chair_sat_at_another_height_is_looked_at_from_above():
+    found = default_results()["imagine_sitting"]
+    sunk = found._replace(
+        sitting_pose=found.sitting_pose._replace(
+            position=found.sitting_pose.position - np.array([0.0, 0.0, 0.13])
+        )
+    )
+    accessible = default_results()["check_accessibility"]
+    blocked = accessible._replace(accessible=False, se2_goal=None, path=(), reason="blocked")
+    skills = ScriptedSkills(
+        {
+            "check_accessibility": [blocked, accessible],
+            "measure_chair_rotation": RegistrationError("chair registration rejected"),
+            "imagine_sitting": [found, sunk, found],
+        }
+    )
+    summary, _ = run_scripted_mission(skills)
+    assert summary.outcome == "success", summary.reason
+    # The re-scan's sitting, 0.13 m lower than before the turn, was looked at once.
+    assert len(skills.calls["look_from_above"]) == 1
+    assert any("before the turn" in failure for failure in summary.failures)
+    assert skills.calls["check_accessibility"][-1][0][1] is found.sitting_pose
 
 
 def test_a_seat_the_scan_lacks_is_looked_at_before_the_seat_check():

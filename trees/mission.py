@@ -84,16 +84,19 @@ def create_imagination(
     look_name: str = "LookFromAbove",
     again_name: str = "ImagineAgain",
     no_sitting_name: str = "NoSittingFound",
+    after_turn: bool = False,
 ) -> py_trees.behaviour.Behaviour:
     """The ``ImagineSitting`` stage: the imagination on the scan, and where it finds no
     sitting, up to ``max_looks`` looks at the chair from above, each followed by the
     imagination on the chair reconstructed with it; when all fail, ``NoSittingFound``
     says why, refusing a chair whose level surfaces are all beyond the NAO's seat heights
     (0: the imagination alone, named ``name``). The names let the turned chair's
-    re-scan compose the same thing."""
+    re-scan compose the same thing; ``after_turn``, its imagination on the scan is held to
+    the height the chair was sat at before the turn (a look from above follows where it
+    moved: ``ImagineSitting``), and what the looks find is kept."""
     if max_looks == 0:
         return ImagineSitting(name=name)
-    on_scan = ImagineSitting(name=on_scan_name)
+    on_scan = ImagineSitting(name=on_scan_name, after_turn=after_turn)
     again = py_trees.composites.Sequence(
         name="Look again and imagine",
         memory=True,
@@ -144,6 +147,7 @@ def create_locate_turned_chair(
         look_name="LookAtTurnedChair",
         again_name="ImagineTurnedAgain",
         no_sitting_name="NoSittingOnTurnedChair",
+        after_turn=True,
     )
     anew = py_trees.composites.Sequence(
         name="Scan the turned chair anew",
