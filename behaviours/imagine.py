@@ -17,35 +17,35 @@ from bearchair.skills.results import ImaginationResult, SeatReachability
 class ImagineSitting(SkillBehaviour):
     """Drops a virtual child onto the chair mesh and keeps the best sitting pose g.
 
+    On a chair already sat on (``/sitting/pose`` set: it was turned about the vertical
+    axis and scanned anew since, which keeps heights), a sitting more than
+    ``PELVIS_OVER_SEAT_M`` above or below the one before sits on something else than the
+    seat (the new scan lost it, or an armrest): the leaf fails as if no sitting was found,
+    for a look from above to follow.
+
     Args:
         name: the leaf's name.
-        after_turn: the chair was imagined before a turn about the vertical axis, which
-            keeps heights: a sitting more than ``PELVIS_OVER_SEAT_M`` above or below the
-            one before (``/sitting/pose``) sits on something else than the seat (the new
-            scan lost it, or an armrest), so the leaf fails as if no sitting was found,
-            for a look from above to follow.
 
     Blackboard:
-        reads ``/mission/seed``, ``/chair/mesh`` (and ``/sitting/pose`` after a turn);
+        reads ``/mission/seed``, ``/chair/mesh``, ``/sitting/pose``;
         writes ``/sitting/imagination``, ``/sitting/pose``.
     """
 
     activity = "imagining sitting"
 
-    def __init__(self, name: str = "ImagineSitting", after_turn: bool = False):
+    def __init__(self, name: str = "ImagineSitting"):
         super().__init__(
             name,
-            reads=(keys.SEED, keys.CHAIR_MESH) + ((keys.SITTING_POSE,) if after_turn else ()),
+            reads=(keys.SEED, keys.CHAIR_MESH, keys.SITTING_POSE),
             writes=(keys.IMAGINATION, keys.SITTING_POSE),
         )
-        self.after_turn = after_turn
         self._before: SittingPose | None = None
 
     def prepare(self) -> Callable[[], ImaginationResult]:
         skills, _ = self.need()
         chair_mesh = self.blackboard.get(keys.CHAIR_MESH)
         seed = self.blackboard.get(keys.SEED)
-        self._before = self._optional(keys.SITTING_POSE, None) if self.after_turn else None
+        self._before = self._optional(keys.SITTING_POSE, None)
         return lambda: skills.imagine_sitting(chair_mesh, seed=seed, cancel=self.cancel_event)
 
     def conclude(self, result: ImaginationResult) -> Status:
@@ -73,8 +73,8 @@ class ImagineSitting(SkillBehaviour):
         )
 
     def _kept_height(self, result: ImaginationResult) -> ImaginationResult:
-        """The result, or, after a turn, no sitting where it moved the pelvis more than
-        ``PELVIS_OVER_SEAT_M`` up or down."""
+        """The result, or, on a chair sat on before, no sitting where it moved the pelvis
+        more than ``PELVIS_OVER_SEAT_M`` up or down."""
         if self._before is None or not result.found or result.sitting_pose is None:
             return result
         before_m = float(self._before.position[2])

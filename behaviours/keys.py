@@ -14,7 +14,7 @@ key                      value                                                  
 /chair/mesh              trimesh.Trimesh: the chair now, world frame                 ScanChair, LookFromAbove, LookAtSeat, MeasureChairRotation ImagineSitting, NoSittingFound, CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, SeatBear
 /chair/points            (N, 3) ndarray: the chair now, world frame (ICP ref.)       ScanChair, LookFromAbove, LookAtSeat, MeasureChairRotation MeasureChairRotation
 /sitting/imagination     bearchair.skills.results.ImaginationResult                  ImagineSitting                                             LookFromAbove
-/sitting/pose            bearchair.core.geometry.SittingPose: g now, world frame     ImagineSitting, CheckAccessibility, MeasureChairRotation   LookAtSeat, CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, ImagineSitting, SeatBear, ReleaseAndStand
+/sitting/pose            bearchair.core.geometry.SittingPose: g now, world frame     ImagineSitting, CheckAccessibility, MeasureChairRotation   ImagineSitting, LookAtSeat, CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, SeatBear, ReleaseAndStand
 /humanoid/pose           bearchair.core.se2.SE2Pose: last tracked humanoid pose      CheckAccessibility
 /accessibility/reachable bearchair.skills.results.SeatReachability: the chair alone  CheckSeatReachable
 /accessibility/result    bearchair.skills.results.AccessibilityResult (latest check) CheckAccessibility                                         WalkToChair, SeatBear

@@ -167,7 +167,7 @@ def test_after_a_turn_a_sitting_at_another_height_is_no_sitting(height_change_m,
     moved = before._replace(position=before.position + np.array([0.1, 0.0, height_change_m]))
     found = DEFAULTS["imagine_sitting"]._replace(sitting_pose=moved)
     fill_blackboard()
-    leaf = ImagineSitting(after_turn=True)
+    leaf = ImagineSitting()
     leaf.setup(skills=ScriptedSkills({"imagine_sitting": found}), robot=fake_robot())
     status = tick_until_done(leaf)[-1]
     imagination = py_trees.blackboard.Blackboard.get(keys.IMAGINATION)

@@ -49,7 +49,7 @@ SCENARIOS = [
     {"look_at_seat": default_results()["look_from_above"]},
     # no sitting on the scan after every look: NoSittingFound
     {"imagine_sitting": NOT_FOUND},
-    # nor on the turned chair's scan: NoSittingOnTurnedChair
+    # nor on the turned chair's scan (no NoSittingFound there: the next turn follows)
     {
         "check_accessibility": BLOCKED,
         "measure_chair_rotation": REJECTED,

@@ -159,7 +159,8 @@ def test_no_sitting_after_every_look_fails_the_stage_with_the_imagination_s_reas
 def test_no_sitting_on_a_seat_beyond_the_nao_s_heights_is_refused_with_the_height():
     too_high = SeatReachability(
         False,
-        "seat too high for the NAO: seat 0.446 m, the NAO places a bear at most 0.429 m high",
+        "no level surface the bear rests on within the NAO's seat heights (0.110-0.429 m): "
+        "the scan's lie at 0.446 m",
         0.446,
     )
     skills = ScriptedSkills(
@@ -169,7 +170,8 @@ def test_no_sitting_on_a_seat_beyond_the_nao_s_heights_is_refused_with_the_heigh
     summary, _ = run_scripted_mission(skills)
     assert summary.failed_stage == "ImagineSitting"
     assert summary.reason.startswith(
-        "NoSittingFound: refused: seat too high for the NAO: seat 0.446 m"
+        "NoSittingFound: refused: no level surface the bear rests on within the NAO's seat "
+        "heights (0.110-0.429 m): the scan's lie at 0.446 m"
     )
     assert summary.reason.endswith(
         "(ImagineAgain: no sitting pose: no correct sitting in 80 drops)"

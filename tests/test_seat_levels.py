@@ -50,14 +50,15 @@ def test_a_torso_wide_armrest_is_a_surface_of_its_own():
 
 
 def test_a_seat_above_the_nao_s_heights_is_refused_with_its_height():
-    highest = reach_model().max_seat_height_m()
-    seat_m = highest + 2 * SEAT_HEIGHT_TOLERANCE_M
+    model = reach_model()
+    seat_m = model.max_seat_height_m() + 2 * SEAT_HEIGHT_TOLERANCE_M
     verdict = check_seat_levels(chair(seat_m))
     assert not verdict.reachable
     assert verdict.seat_height_m == pytest.approx(seat_m, abs=0.005)
     assert verdict.reason == (
-        f"seat too high for the NAO: seat {verdict.seat_height_m:.3f} m, the NAO places a "
-        f"bear at most {highest:.3f} m high"
+        f"no level surface the bear rests on within the NAO's seat heights "
+        f"({model.min_seat_height_m():.3f}-{model.max_seat_height_m():.3f} m): the scan's lie "
+        f"at {verdict.seat_height_m:.3f} m"
     )
 
 
@@ -77,7 +78,7 @@ def test_a_level_surface_within_the_heights_beside_a_high_seat_rules_nothing_out
 def test_a_shelf_under_a_high_seat_leaves_it_refused():
     # The shelf lies under the seat, where the bear has no room: only top surfaces count.
     verdict = check_seat_levels(chair(0.46, shelf_top_m=0.25))
-    assert not verdict.reachable and verdict.reason.startswith("seat too high for the NAO")
+    assert not verdict.reachable and verdict.reason.startswith("no level surface the bear")
 
 
 def test_a_scan_with_no_level_surface_rules_nothing_out():

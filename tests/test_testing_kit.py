@@ -158,7 +158,6 @@ DOCUMENTED_TREE = [
     ("Look again and imagine", "Sequence", 8, True),
     ("LookAtTurnedChair", "LookFromAbove", 9, None),
     ("ImagineTurnedAgain", "ImagineSitting", 9, None),
-    ("NoSittingOnTurnedChair", "NoSittingFound", 7, None),
     ("CheckAccessibilityAgain", "CheckAccessibility", 4, None),
     ("GiveUp", "GiveUp", 2, None),
     ("WalkToChair", "WalkToChair", 1, None),

@@ -614,7 +614,10 @@ def test_refused_chairs_are_a_cause_of_their_own():
 
 
 def test_a_refusal_where_no_sitting_was_imagined_is_counted_as_one():
-    reason = "seat too high for the NAO: seat 0.446 m, the NAO places a bear at most 0.429 m high"
+    reason = (
+        "no level surface the bear rests on within the NAO's seat heights (0.110-0.429 m): "
+        "the scan's lie at 0.446 m"
+    )
     refused = make_record(
         "accessible",
         "failure",

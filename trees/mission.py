@@ -27,8 +27,7 @@
                             --> ScanTurnedChair        when no fit is accepted
                             [o] ImagineTurnedChair     as ImagineSitting: ImagineOnTurnedScan,
                                                        then up to 3 of LookAtTurnedChair and
-                                                       ImagineTurnedAgain, then
-                                                       NoSittingOnTurnedChair
+                                                       ImagineTurnedAgain
                     --> CheckAccessibilityAgain
             --> GiveUp
         --> WalkToChair
@@ -83,7 +82,6 @@ def create_imagination(
     on_scan_name: str = "ImagineOnScan",
     look_name: str = "LookFromAbove",
     again_name: str = "ImagineAgain",
-    no_sitting_name: str = "NoSittingFound",
     after_turn: bool = False,
 ) -> py_trees.behaviour.Behaviour:
     """The ``ImagineSitting`` stage: the imagination on the scan, and where it finds no
@@ -91,12 +89,13 @@ def create_imagination(
     imagination on the chair reconstructed with it; when all fail, ``NoSittingFound``
     says why, refusing a chair whose level surfaces are all beyond the NAO's seat heights
     (0: the imagination alone, named ``name``). The names let the turned chair's
-    re-scan compose the same thing; ``after_turn``, its imagination on the scan is held to
-    the height the chair was sat at before the turn (a look from above follows where it
-    moved: ``ImagineSitting``), and what the looks find is kept."""
+    re-scan compose the same thing; ``after_turn`` (the turned chair), no ``NoSittingFound``
+    follows: the mission goes on to the next turn, so nothing there may refuse it. (A
+    sitting found there at another height than before the turn counts as none, for a look
+    to follow: ``ImagineSitting``.)"""
     if max_looks == 0:
         return ImagineSitting(name=name)
-    on_scan = ImagineSitting(name=on_scan_name, after_turn=after_turn)
+    on_scan = ImagineSitting(name=on_scan_name)
     again = py_trees.composites.Sequence(
         name="Look again and imagine",
         memory=True,
@@ -113,7 +112,7 @@ def create_imagination(
             py_trees.decorators.Retry(
                 name=f"Up to {max_looks} looks", child=again, num_failures=max_looks
             ),
-            NoSittingFound(name=no_sitting_name),
+            *([] if after_turn else [NoSittingFound()]),
         ],
     )
 
@@ -146,7 +145,6 @@ def create_locate_turned_chair(
         on_scan_name="ImagineOnTurnedScan",
         look_name="LookAtTurnedChair",
         again_name="ImagineTurnedAgain",
-        no_sitting_name="NoSittingOnTurnedChair",
         after_turn=True,
     )
     anew = py_trees.composites.Sequence(

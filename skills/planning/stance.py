@@ -53,7 +53,6 @@ from bearchair.skills.planning.chair_along_ray import (
     chair_along_ray,
     closed_above,
     out_of_reach_reason,
-    seat_height_reason,
     surface_points,
 )
 from bearchair.skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
@@ -466,29 +465,32 @@ def check_seat_reachable(
 
 
 def check_seat_levels(chair_mesh: trimesh.Trimesh) -> SeatReachability:
-    """Where no sitting was imagined: whether the scan shows the seat out of the NAO's
-    reach whatever the sitting point, as no level surface the bear's torso rests on
-    (:func:`bearchair.skills.planning.seat.level_surfaces`) lying within the seat heights
-    the NAO places a bear on.
+    """Where no sitting was imagined: whether the scan shows nothing the NAO can place the
+    bear on, whatever the sitting point: no level surface the bear's torso rests on
+    (:func:`bearchair.skills.planning.seat.level_surfaces`) within the seat heights the
+    NAO places a bear on.
 
     Not reachable only when the scan has such surfaces and every one is too high or too
-    low; the reason names the largest. Reachable (nothing rules the chair out) when one
-    lies within the heights, or when the scan shows none (it may have lost the seat).
+    low (the reason lists them, largest first; ``seat_height_m`` is the largest's).
+    Reachable (nothing rules the chair out) when one lies within the heights, or when the
+    scan shows none (it may have lost the seat).
 
     Args:
         chair_mesh: the chair, world frame, z up (the floor at z = 0).
     """
     began = time.perf_counter()
     model = reach_model()
+    lowest, highest = model.min_seat_height_m(), model.max_seat_height_m()
     levels = level_surfaces(chair_mesh)
-    beyond = [seat_height_reason(float(height), model) for height in levels]
     seconds = time.perf_counter() - began
-    if not len(levels) or not all(beyond):
+    if not len(levels) or bool(np.any((levels >= lowest) & (levels <= highest))):
         return SeatReachability(True, "", math.nan, seconds=seconds)
-    others = (
-        f" (the scan's {len(levels) - 1} other level surface(s) the bear rests on lie at "
-        f"{levels[1:].min():.3f}-{levels[1:].max():.3f} m)"
-        if len(levels) > 1
-        else ""
+    shown = ", ".join(f"{height:.3f}" for height in levels[:3])
+    more = f" and {len(levels) - 3} more" if len(levels) > 3 else ""
+    return SeatReachability(
+        False,
+        f"no level surface the bear rests on within the NAO's seat heights "
+        f"({lowest:.3f}-{highest:.3f} m): the scan's lie at {shown} m{more}",
+        float(levels[0]),
+        seconds=seconds,
     )
-    return SeatReachability(False, beyond[0] + others, float(levels[0]), seconds=seconds)
