@@ -160,10 +160,14 @@ def test_a_rejected_fit_rescans_the_turned_chair_and_imagines_it_again(world, fi
     ):
         board.register_key(key=key, access=py_trees.common.Access.WRITE)
         board.set(key, value)
-    from bearchair.core.geometry import SittingPose
+    from bearchair.core.geometry import PELVIS_OVER_SEAT_M, SittingPose
+    from bearchair.skills.planning.seat import level_surfaces
 
+    # Stale in where and which way, not in height: a turn keeps the height the chair was
+    # sat at (the imagination on the new scan is held to it).
+    sat_at_m = float(level_surfaces(first_scan.chair_mesh)[0]) + PELVIS_OVER_SEAT_M
     board.register_key(key=keys.SITTING_POSE, access=py_trees.common.Access.WRITE)
-    board.set(keys.SITTING_POSE, SittingPose(np.zeros(3), stale_pose_yaw))
+    board.set(keys.SITTING_POSE, SittingPose(np.array([0.0, 0.0, sat_at_m]), stale_pose_yaw))
     locate = create_locate_turned_chair()
     tree = py_trees.trees.BehaviourTree(locate)
     tree.setup(skills=_RejectingSkills(), robot=world.robot)
