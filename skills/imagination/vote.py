@@ -212,18 +212,18 @@ def _turned_toward_instead(
 
 
 def _pulled_toward(
-    hole: int, by_rotation: dict[int, list[DropOutcome]], window_half_width: int
+    target: int, by_rotation: dict[int, list[DropOutcome]], window_half_width: int
 ) -> bool:
-    """True when the sittings in the hole's window turned, on their 1 / (J + L) weighted
-    mean, more than ``PULL_MIN_RAD`` from the way they were dropped toward the hole's
+    """True when the sittings in the target's window turned, on their 1 / (J + L) weighted
+    mean, more than ``PULL_MIN_RAD`` from the way they were dropped toward the target's
     direction (in the chair frame, where rotation i drops the agent facing −iπ/4)."""
     progress, weights = [], []
     for offset in range(-window_half_width, window_half_width + 1):
         if offset == 0:
             continue
-        rotation = (hole + offset) % N_ROTATIONS
+        rotation = (target + offset) % N_ROTATIONS
         for drop in by_rotation[rotation]:
-            # Dropped facing −rotation·π/4; the hole lies at +offset·π/4 from there.
+            # Dropped facing −rotation·π/4; the target lies at +offset·π/4 from there.
             turned = wrap_angle(drop.yaw + rotation * math.pi / 4.0)
             progress.append(math.copysign(1.0, offset) * turned)
             weights.append(1.0 / max(_jl(drop), 1e-6))

@@ -181,7 +181,7 @@ def out_of_reach_reason(
     """
     height = float(ray.seat_heights_m[0])
     beyond = seat_height_reason(height, model)
-    if beyond and height > seat_under_p_m + 1e-3 and not seat_height_reason(seat_under_p_m, model):
+    if beyond and height > seat_under_p_m and not seat_height_reason(seat_under_p_m, model):
         return (
             f"chair too high in the NAO's way: the bear is carried over armrests or rails as "
             f"onto a {height:.3f} m seat (the seat under the sitting point is "
