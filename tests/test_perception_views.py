@@ -24,6 +24,7 @@ from bearchair.skills.perception.clearance import (
 from bearchair.skills.perception.errors import RegistrationError
 from bearchair.skills.perception.registration import (
     RegistrationConfig,
+    climb_visible_overlap,
     is_visible_peak,
     register_chair,
     visible_fitness,
@@ -226,6 +227,42 @@ def test_the_right_fit_is_a_peak_of_the_visible_overlap_and_an_offset_one_is_not
     )
     for offset in offsets:
         assert not is_visible_peak(transform_points(offset @ motion, reference[::2]), frames)
+
+
+def _turned_about(centre: np.ndarray, yaw_deg: float) -> np.ndarray:
+    return (
+        yaw_transform(0.0, centre)
+        @ yaw_transform(math.radians(yaw_deg))
+        @ yaw_transform(0.0, -centre)
+    )
+
+
+def test_a_slipped_fit_climbs_back_to_the_right_one(turned_chair):
+    """ICP on a turned chair is left a few cm along it: the climb on the visible overlap
+    brings such fits back to the helper's motion, above the bound."""
+    reference, _, frames, motion = turned_chair
+    points = reference[::2]
+    centroid = np.append(points.mean(axis=0), 1.0)
+    slips = [yaw_transform(0.0, np.array([dx, dy, 0.0])) for dx, dy in ((0.02, 0.0), (0.0, -0.03))]
+    slips += [
+        yaw_transform(0.0, np.array([0.03, 0.03, 0.0])),
+        _turned_about(T_WORLD_CHAIR[:3, 3], 5.0),
+    ]
+    for slip in slips:
+        start = slip @ motion
+        assert visible_fitness(transform_points(start, points), frames) < 0.9
+        climbed, overlap = climb_visible_overlap(start, points, frames)
+        assert overlap >= RegistrationConfig().min_visible_fitness
+        assert np.linalg.norm((climbed - motion) @ centroid) < 0.01
+        assert abs(math.degrees(wrap_angle(yaw_of(climbed) - yaw_of(motion)))) <= 1.5
+
+
+def test_a_fit_turned_30_deg_or_more_off_stays_below_the_bound_after_climbing(turned_chair):
+    reference, _, frames, motion = turned_chair
+    for error_deg in (30.0, -30.0, 90.0, 180.0):
+        start = _turned_about(T_WORLD_CHAIR[:3, 3], error_deg) @ motion
+        _, overlap = climb_visible_overlap(start, reference[::2], frames)
+        assert overlap < RegistrationConfig().min_visible_fitness, error_deg
 
 
 @pytest.mark.slow
