@@ -231,8 +231,12 @@ def register_chair(
         # Not refined on the visible points, which pull it back to where ICP left it; no
         # RMSE bound, which measures ICP's convergence: a fit moved off ICP's minimum has
         # its inliers spread over the inlier distance (8.7 mm if uniform within 15 mm).
+        # A climb lifts a wrong fit too (a sofa's turn read 180 deg off climbed to 0.884),
+        # so it must agree with the request as a peak must.
         climbed = _climbed_on_visible(T_old_new, fine, new_frames, config)
-        if climbed.visible_fitness >= config.min_visible_fitness:
+        if climbed.visible_fitness >= config.min_visible_fitness and _agrees_with_request(
+            np.linalg.inv(climbed.T_world_new_old), requested_yaw_rad, config
+        ):
             return climbed
         T_old_new = np.linalg.inv(climbed.T_world_new_old)
         fitness, rmse, visible = climbed.fitness, climbed.inlier_rmse_m, climbed.visible_fitness
