@@ -299,8 +299,10 @@ def test_with_frames_a_fit_exactly_at_the_visible_overlap_and_rmse_bounds_is_acc
         at_the_boundary, min_visible_fitness=above, min_peak_visible_fitness=visible
     )
     register_chair(new, reference, at_the_peak_floor, frames)
+    # Past the bound, without the climb (which moves the fit to a higher overlap).
+    no_climb = replace(at_the_boundary, climb_steps_m=(), climb_steps_deg=())
     with pytest.raises(RegistrationError, match="visible overlap"):
-        register_chair(new, reference, replace(at_the_boundary, min_visible_fitness=above), frames)
+        register_chair(new, reference, replace(no_climb, min_visible_fitness=above), frames)
     with pytest.raises(RegistrationError, match="RMSE"):
         register_chair(
             new,

@@ -33,85 +33,31 @@ Without frames, the fitness bound decides as before.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 import open3d as o3d
 
-from bearchair.core.geometry import rot_z, transform_points, wrap_angle, yaw_of, yaw_transform
+from bearchair.core.geometry import rot_z, transform_points, wrap_angle, yaw_of
 from bearchair.hardware.interfaces import RGBDFrame
 from bearchair.skills.perception.determinism import one_open3d_thread
 from bearchair.skills.perception.errors import RegistrationError
+from bearchair.skills.perception.registration_config import RegistrationConfig
+from bearchair.skills.perception.visible_overlap import (
+    climb_visible_overlap,
+    is_visible_peak,
+    visibility_masks,
+    visible_fitness,
+)
 
-
-@dataclass(frozen=True)
-class RegistrationConfig:
-    """Parameters of :func:`register_chair` (metres, degrees).
-
-    Attributes:
-        hypothesis_step_deg: spacing of the initial yaw hypotheses.
-        coarse_voxel_m, fine_voxel_m: downsampling of the coarse and fine ICP stages.
-        coarse_distance_m, fine_distance_m: correspondence distances of the two stages.
-        inlier_distance_m: a point within this of the reference after the fit is an inlier.
-        min_fitness: reject when fewer inliers than this fraction of the new points
-            (unless the visible-overlap test below accepts the fit).
-        max_rmse_m: reject when the inliers' RMSE is larger.
-        visible_tolerance_m: a carried reference point within this of the depth a new
-            camera measured along its pixel is seen; nearer the camera by more, the camera
-            saw through it (a contradiction); farther, it is hidden (no evidence). Twice
-            the inlier distance: the depth noise at 1-1.5 m plus the reference's voxel.
-        min_visible_fitness: accept a fit whose seen / (seen + contradicted) share of the
-            reference is at least this. A right fit's contradictions come from silhouette
-            pixels only: 0.90-0.97 on generated chairs turned 90 and 180 degrees (rendered
-            and simulated views); a fit 3 cm off along the chair scored 0.77-0.84 (and a
-            fit 3.2 cm off 0.86, accepted when this bound was 0.85), a yaw 10 degrees off
-            0.64-0.77, 30 degrees or more below 0.6. Below it, only a peak is accepted.
-        min_peak_visible_fitness: a fit below ``min_visible_fitness`` is accepted down to
-            this when it is a peak of the visible overlap: no fit moved by
-            ``peak_step_m`` along x or y or turned by ``peak_step_deg`` scores higher.
-            The overlap a right fit reaches depends on the chair (a chair with thin
-            slats, seen from sides the reference saw obliquely, scored 0.80-0.86 with the
-            true motion in the simulated world while its 3 cm slips scored 0.42-0.65); a
-            fit that is itself off has a neighbour nearer the right one that scores
-            higher. The floor stays above the overlap of a yaw 30 degrees off (below 0.6).
-        peak_step_m, peak_step_deg: the neighbours of the peak test: an error worth
-            rejecting (3 cm moves the bear's seat point off a margin of a few cm).
-        request_tolerance_deg: with the turn the helper was asked for, a fit accepted
-            only as a peak must turn the chair within this of it, or of its reverse (a
-            helper who turned the wrong way). From the few tracking views, a chair
-            turned half round can match its unturned self better than the right fit
-            (the views see sides the reference never saw; both fill the same box), and
-            only a peak's overlap is that weak. One instruction step (30 deg): the
-            helper turns by the words, not by the exact angle they round.
-        global_voxel_m: downsampling of the FPFH + RANSAC global registration.
-        climb_steps_m, climb_steps_deg: the moves (along x and y) and turns (about the
-            carried reference's centroid) of the climb on the visible overlap, coarse to
-            fine, each kept while it raises the overlap. The first is about the error
-            ICP leaves on a turned chair (0.5-4 cm); the last is a third of the fine
-            voxel.
-        climb_max_evaluations: bounds the climb's time (each evaluation projects the
-            reference into every frame).
-    """
-
-    hypothesis_step_deg: float = 30.0
-    coarse_voxel_m: float = 0.02
-    fine_voxel_m: float = 0.008
-    coarse_distance_m: float = 0.06
-    fine_distance_m: float = 0.02
-    inlier_distance_m: float = 0.015
-    min_fitness: float = 0.6
-    max_rmse_m: float = 0.01
-    visible_tolerance_m: float = 0.03
-    min_visible_fitness: float = 0.88
-    min_peak_visible_fitness: float = 0.7
-    peak_step_m: float = 0.03
-    peak_step_deg: float = 5.0
-    request_tolerance_deg: float = 30.0
-    global_voxel_m: float = 0.02
-    climb_steps_m: tuple[float, ...] = (0.01, 0.005, 0.0025)
-    climb_steps_deg: tuple[float, ...] = (2.0, 1.0, 0.5)
-    climb_max_evaluations: int = 400
+__all__ = [
+    "Registration",
+    "RegistrationConfig",
+    "climb_visible_overlap",
+    "is_visible_peak",
+    "register_chair",
+    "visible_fitness",
+]
 
 
 class Registration(NamedTuple):
@@ -228,19 +174,20 @@ def register_chair(
             return _refined_on_visible(
                 T_old_new, fitness, rmse, visible, new_points, fine, new_frames, config
             )
-        # Not refined on the visible points, which pull it back to where ICP left it; no
-        # RMSE bound, which measures ICP's convergence: a fit moved off ICP's minimum has
-        # its inliers spread over the inlier distance (8.7 mm if uniform within 15 mm).
-        # A climb lifts a wrong fit too (a sofa's turn read 180 deg off climbed to 0.884),
-        # so it must agree with the request as a peak must.
-        climbed = _climbed_on_visible(T_old_new, fine, new_frames, config)
-        if climbed.visible_fitness >= config.min_visible_fitness and _agrees_with_request(
-            np.linalg.inv(climbed.T_world_new_old), requested_yaw_rad, config
-        ):
-            return climbed
-        T_old_new = np.linalg.inv(climbed.T_world_new_old)
-        fitness, rmse, visible = climbed.fitness, climbed.inlier_rmse_m, climbed.visible_fitness
-        against_request = not _agrees_with_request(T_old_new, requested_yaw_rad, config)
+        if not accepted:
+            # The climb: not refined on the visible points after, which pull it back to
+            # where ICP left it; no RMSE bound, which measures ICP's convergence: a fit
+            # moved off ICP's minimum has its inliers spread over the inlier distance
+            # (8.7 mm if uniform within 15 mm). A climb lifts a wrong fit too (a sofa's
+            # turn read 180 deg off climbed to 0.884), so it must agree with the request
+            # as a peak must.
+            climbed = _climbed_on_visible(T_old_new, fine, new_frames, config)
+            T_old_new = np.linalg.inv(climbed.T_world_new_old)
+            against_request = not _agrees_with_request(T_old_new, requested_yaw_rad, config)
+            if climbed.visible_fitness >= config.min_visible_fitness and not against_request:
+                return climbed
+            fitness, rmse = climbed.fitness, climbed.inlier_rmse_m
+            visible = climbed.visible_fitness
         if (
             against_request
             and visible >= config.min_peak_visible_fitness
@@ -377,7 +324,7 @@ def _refined_on_visible(
     reference = np.asarray(fine.target.points)
     T_new_old = np.linalg.inv(T_old_new)
     carried = transform_points(T_new_old, reference)
-    mask, _ = _visibility(carried, frames, config)
+    mask, _ = visibility_masks(carried, frames, config)
     if mask.sum() >= 100:
         target = _cloud(new_points, config.fine_voxel_m)
         source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(reference[mask]))
@@ -405,59 +352,6 @@ def _climbed_on_visible(
         fine.source, fine.target, config.inlier_distance_m, np.linalg.inv(T_new_old)
     )
     return Registration(T_new_old, float(quality.fitness), float(quality.inlier_rmse), visible)
-
-
-def climb_visible_overlap(
-    T_world_new_old: np.ndarray,
-    reference_points: np.ndarray,
-    frames: list[RGBDFrame],
-    config: RegistrationConfig | None = None,
-) -> tuple[np.ndarray, float]:
-    """A fit moved to the nearest local maximum of the visible overlap
-    (:func:`visible_fitness`) of the reference it carries.
-
-    Coordinate ascent on (dx, dy, dyaw) applied after the fit: at each scale of
-    ``climb_steps_m`` / ``climb_steps_deg``, the six moves (±dx, ±dy, ±dyaw about the
-    carried reference's centroid) are tried and the first that raises the overlap is
-    kept, until none does; then the next, finer scale. At most
-    ``climb_max_evaluations`` overlaps are computed.
-
-    Args:
-        T_world_new_old: the fit to start from (world frame motion of the chair).
-        reference_points: (N, 3) the chair before the turn (world frame).
-        frames: the captures of the turned chair.
-
-    Returns:
-        The climbed T_world_new_old and its visible overlap.
-    """
-    config = config or RegistrationConfig()
-    carried = transform_points(T_world_new_old, np.asarray(reference_points, np.float64))
-    centre = carried.mean(axis=0)
-
-    def move(offset: np.ndarray) -> np.ndarray:
-        """The world motion of the offset (dx m, dy m, dyaw rad), turning about ``centre``."""
-        return yaw_transform(float(offset[2]), centre + np.array([offset[0], offset[1], 0.0])) @ (
-            yaw_transform(0.0, -centre)
-        )
-
-    offset = np.zeros(3)
-    best = visible_fitness(carried, frames, config)
-    evaluations = 1
-    for step_m, step_deg in zip(config.climb_steps_m, config.climb_steps_deg, strict=True):
-        unit_steps = np.diag([step_m, step_m, math.radians(step_deg)])
-        steps = [sign * step for step in unit_steps for sign in (1.0, -1.0)]
-        rising = True
-        while rising and evaluations < config.climb_max_evaluations:
-            rising = False
-            for step in steps:
-                score = visible_fitness(
-                    transform_points(move(offset + step), carried), frames, config
-                )
-                evaluations += 1
-                if score > best:
-                    best, offset, rising = score, offset + step, True
-                    break
-    return move(offset) @ T_world_new_old, best
 
 
 def _rejection(
@@ -508,71 +402,3 @@ def _global_registration(
         registration.RANSACConvergenceCriteria(100000, 0.999),
     )
     return np.asarray(result.transformation)
-
-
-def visible_fitness(
-    points_world: np.ndarray, frames: list[RGBDFrame], config: RegistrationConfig | None = None
-) -> float:
-    """Share of ``points_world`` that the frames saw, among those they could have seen.
-
-    Each point is projected into each frame: within ``visible_tolerance_m`` of the
-    measured depth it is seen; nearer the camera by more, the camera saw through it;
-    farther, something nearer hides it. A point seen in some frame counts as seen, one
-    only seen through as contradicted; the rest say nothing.
-
-    Returns:
-        seen / (seen + contradicted), or 0 when no frame could see any point.
-    """
-    seen, contradicted = _visibility(points_world, frames, config or RegistrationConfig())
-    judged = int(seen.sum() + contradicted.sum())
-    return float(seen.sum()) / judged if judged else 0.0
-
-
-def is_visible_peak(
-    points_world: np.ndarray, frames: list[RGBDFrame], config: RegistrationConfig | None = None
-) -> bool:
-    """Whether the reference carried by a fit (``points_world``) scores a visible overlap
-    at least as high as every neighbouring fit: moved by ``peak_step_m`` along ±x and ±y,
-    or turned by ±``peak_step_deg`` about its centroid's vertical."""
-    config = config or RegistrationConfig()
-    points = np.asarray(points_world, dtype=np.float64)
-    score = visible_fitness(points, frames, config)
-    centre = points.mean(axis=0)
-    step = config.peak_step_m
-    neighbours = [
-        yaw_transform(0.0, np.array([dx, dy, 0.0]))
-        for dx, dy in ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step))
-    ]
-    for sign in (1.0, -1.0):
-        turn = yaw_transform(sign * math.radians(config.peak_step_deg))
-        neighbours.append(yaw_transform(0.0, centre) @ turn @ yaw_transform(0.0, -centre))
-    return all(
-        visible_fitness(transform_points(T, points), frames, config) <= score for T in neighbours
-    )
-
-
-def _visibility(
-    points_world: np.ndarray, frames: list[RGBDFrame], config: RegistrationConfig
-) -> tuple[np.ndarray, np.ndarray]:
-    """(seen, contradicted) masks of ``points_world`` (see :func:`visible_fitness`)."""
-    points = np.asarray(points_world, dtype=np.float64)
-    seen = np.zeros(len(points), bool)
-    through = np.zeros(len(points), bool)
-    for frame in frames:
-        T_camera_world = np.linalg.inv(np.asarray(frame.T_world_camera, dtype=np.float64))
-        local = transform_points(T_camera_world, points)
-        intr = frame.intrinsics
-        z = local[:, 2]
-        front = z > 0.05
-        u = np.full(len(points), -1, np.int64)
-        v = np.full(len(points), -1, np.int64)
-        u[front] = np.round(intr.fx * local[front, 0] / z[front] + intr.cx).astype(np.int64)
-        v[front] = np.round(intr.fy * local[front, 1] / z[front] + intr.cy).astype(np.int64)
-        inside = front & (u >= 0) & (u < intr.width) & (v >= 0) & (v < intr.height)
-        depth = np.zeros(len(points))
-        depth[inside] = np.asarray(frame.depth_m)[v[inside], u[inside]]
-        valid = inside & np.isfinite(depth) & (depth > 0)
-        residual = z - depth
-        seen |= valid & (np.abs(residual) <= config.visible_tolerance_m)
-        through |= valid & (residual < -config.visible_tolerance_m)
-    return seen, through & ~seen
