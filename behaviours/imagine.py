@@ -1,4 +1,6 @@
-"""ImagineSitting: find how to sit on the scanned chair by physical simulation."""
+"""ImagineSitting: find how to sit on the scanned chair by physical simulation;
+ImagineOnSeatView: again once the seat under the sitting point was looked at;
+NoSittingFound: refuse a chair whose level surfaces the NAO cannot reach."""
 
 from __future__ import annotations
 
@@ -53,24 +55,8 @@ class ImagineSitting(SkillBehaviour):
         self.blackboard.set(keys.IMAGINATION, result, overwrite=True)
         if not result.found or result.sitting_pose is None:
             return self.fail(f"no sitting pose: {result.reason or 'no correct sitting'}")
-        pose = result.sitting_pose
-        self.blackboard.set(keys.SITTING_POSE, pose, overwrite=True)
-        x, y, z = pose.position
-        direction = ""
-        check = result.backrest
-        if check is not None and check.used:
-            off_deg = math.degrees(check.disagreement_rad)
-            direction = f"; direction from the backrest, the vote's was {off_deg:+.0f} deg off"
-        elif check is not None and not math.isnan(check.mirror_vote):
-            direction = (
-                f"; the backrest's direction, {math.degrees(check.disagreement_rad):+.0f} deg "
-                f"off, mirrors the chair less ({check.mirror_back:.2f} against "
-                f"{check.mirror_vote:.2f})"
-            )
-        return self.succeed(
-            f"sit at ({x:.3f}, {y:.3f}, {z:.3f}) m facing {math.degrees(pose.yaw):.0f} deg "
-            f"({result.n_correct} correct of {result.n_drops} drops{direction})"
-        )
+        self.blackboard.set(keys.SITTING_POSE, result.sitting_pose, overwrite=True)
+        return self.succeed(describe_sitting(result))
 
     def _kept_height(self, result: ImaginationResult) -> ImaginationResult:
         """The result, or, on a chair sat on before, no sitting where it moved the pelvis
@@ -91,6 +77,72 @@ class ImagineSitting(SkillBehaviour):
                 f"or the sitter sat on something else)"
             ),
         )
+
+
+class ImagineOnSeatView(SkillBehaviour):
+    """Imagines the sitting again when LookAtSeat had to add a view over p: the sitting
+    was imagined on a scan that showed no seat under its own point, so the chair the
+    imagination saw lacked what the sitter sat on. Without such a view it succeeds at
+    once; where the completed scan gives no sitting, the one before stands.
+
+    Args:
+        name: the leaf's name.
+
+    Blackboard:
+        reads ``/mission/seed``, ``/chair/mesh``, ``/chair/seat_view``;
+        writes ``/sitting/imagination``, ``/sitting/pose``.
+    """
+
+    activity = "imagining sitting on the scan with the seat view"
+
+    def __init__(self, name: str = "ImagineOnSeatView"):
+        super().__init__(
+            name,
+            reads=(keys.SEED, keys.CHAIR_MESH, keys.SEAT_VIEW),
+            writes=(keys.IMAGINATION, keys.SITTING_POSE),
+        )
+
+    def prepare(self) -> Callable[[], ImaginationResult | None]:
+        if not self._optional(keys.SEAT_VIEW, ""):
+            return lambda: None
+        skills, _ = self.need()
+        chair_mesh = self.blackboard.get(keys.CHAIR_MESH)
+        seed = self.blackboard.get(keys.SEED)
+        return lambda: skills.imagine_sitting(chair_mesh, seed=seed, cancel=self.cancel_event)
+
+    def conclude(self, result: ImaginationResult | None) -> Status:
+        if result is None:
+            return self.succeed("no view was added: the sitting imagined on the scan stands")
+        if not result.found or result.sitting_pose is None:
+            return self.succeed(
+                f"no sitting on the scan with the seat view "
+                f"({result.reason or 'no correct sitting'}): the one imagined before stands"
+            )
+        self.blackboard.set(keys.IMAGINATION, result, overwrite=True)
+        self.blackboard.set(keys.SITTING_POSE, result.sitting_pose, overwrite=True)
+        return self.succeed(f"again with the seat view: {describe_sitting(result)}")
+
+
+def describe_sitting(result: ImaginationResult) -> str:
+    """A found sitting in one line: g, the vote, and where the backrest weighed in."""
+    assert result.sitting_pose is not None
+    pose = result.sitting_pose
+    x, y, z = pose.position
+    direction = ""
+    check = result.backrest
+    if check is not None and check.used:
+        off_deg = math.degrees(check.disagreement_rad)
+        direction = f"; direction from the backrest, the vote's was {off_deg:+.0f} deg off"
+    elif check is not None and not math.isnan(check.mirror_vote):
+        direction = (
+            f"; the backrest's direction, {math.degrees(check.disagreement_rad):+.0f} deg "
+            f"off, mirrors the chair less ({check.mirror_back:.2f} against "
+            f"{check.mirror_vote:.2f})"
+        )
+    return (
+        f"sit at ({x:.3f}, {y:.3f}, {z:.3f}) m facing {math.degrees(pose.yaw):.0f} deg "
+        f"({result.n_correct} correct of {result.n_drops} drops{direction})"
+    )
 
 
 class NoSittingFound(SkillBehaviour):

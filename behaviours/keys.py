@@ -5,28 +5,29 @@ Every key is absolute. Behaviours register the ones they read (READ access) and 
 shows who touches what. The table below is generated from those registrations
 (``bearchair.executive.tree_render.blackboard_table``); a test keeps it in step with the tree.
 
-======================== =========================================================== ========================================================== ===================================================================================================================================
-key                      value                                                       written by                                                 read by
-======================== =========================================================== ========================================================== ===================================================================================================================================
-/mission/seed            int: the run's seed                                         executive                                                  ScanChair, ImagineSitting, LookFromAbove, LookAtSeat, CheckAccessibility, InstructHelper
-/mission/arena           bearchair.core.arena.Arena: walls, obstacles, chair area    executive                                                  CheckAccessibility, InstructHelper
-/chair/scan              bearchair.skills.results.ChairScan                          ScanChair, LookFromAbove, LookAtSeat                       LookFromAbove, LookAtSeat
-/chair/mesh              trimesh.Trimesh: the chair now, world frame                 ScanChair, LookFromAbove, LookAtSeat, MeasureChairRotation ImagineSitting, NoSittingFound, CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, SeatBear
-/chair/points            (N, 3) ndarray: the chair now, world frame (ICP ref.)       ScanChair, LookFromAbove, LookAtSeat, MeasureChairRotation MeasureChairRotation
-/sitting/imagination     bearchair.skills.results.ImaginationResult                  ImagineSitting                                             LookFromAbove
-/sitting/pose            bearchair.core.geometry.SittingPose: g now, world frame     ImagineSitting, CheckAccessibility, MeasureChairRotation   ImagineSitting, LookAtSeat, CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, SeatBear, ReleaseAndStand
+======================== =========================================================== =========================================================================== =========================================================================================================================================
+key                      value                                                       written by                                                                  read by
+======================== =========================================================== =========================================================================== =========================================================================================================================================
+/mission/seed            int: the run's seed                                         executive                                                                   ScanChair, ImagineSitting, LookFromAbove, LookAtSeat, ImagineOnSeatView, CheckAccessibility, InstructHelper
+/mission/arena           bearchair.core.arena.Arena: walls, obstacles, chair area    executive                                                                   CheckAccessibility, InstructHelper
+/chair/scan              bearchair.skills.results.ChairScan                          ScanChair, LookFromAbove, LookAtSeat                                        LookFromAbove, LookAtSeat
+/chair/mesh              trimesh.Trimesh: the chair now, world frame                 ScanChair, LookFromAbove, LookAtSeat, MeasureChairRotation                  ImagineSitting, NoSittingFound, ImagineOnSeatView, CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, SeatBear
+/chair/points            (N, 3) ndarray: the chair now, world frame (ICP ref.)       ScanChair, LookFromAbove, LookAtSeat, MeasureChairRotation                  MeasureChairRotation
+/chair/seat_view         str: the view LookAtSeat added over p ('': none)            LookAtSeat                                                                  ImagineOnSeatView
+/sitting/imagination     bearchair.skills.results.ImaginationResult                  ImagineSitting, ImagineOnSeatView                                           LookFromAbove
+/sitting/pose            bearchair.core.geometry.SittingPose: g now, world frame     ImagineSitting, ImagineOnSeatView, CheckAccessibility, MeasureChairRotation ImagineSitting, LookAtSeat, CheckSeatReachable, CheckAccessibility, InstructHelper, MeasureChairRotation, SeatBear, ReleaseAndStand
 /humanoid/pose           bearchair.core.se2.SE2Pose: last tracked humanoid pose      CheckAccessibility
 /accessibility/reachable bearchair.skills.results.SeatReachability: the chair alone  CheckSeatReachable
-/accessibility/result    bearchair.skills.results.AccessibilityResult (latest check) CheckAccessibility                                         WalkToChair, SeatBear
+/accessibility/result    bearchair.skills.results.AccessibilityResult (latest check) CheckAccessibility                                                          WalkToChair, SeatBear
 /accessibility/se2_goal  bearchair.core.se2.SE2Pose: where the humanoid stands       CheckAccessibility
-/assistance/instructions list[str]: the sentences said, in order                     InstructHelper                                             InstructHelper
-/assistance/rotations    int: rotations asked for so far                             InstructHelper                                             InstructHelper, GiveUp
-/assistance/requested    float: the last turn asked for, rad, counterclockwise +     InstructHelper                                             MeasureChairRotation
-/assistance/measured     list[ChairRotation]: each measured g_rot                    MeasureChairRotation                                       MeasureChairRotation
+/assistance/instructions list[str]: the sentences said, in order                     InstructHelper                                                              InstructHelper
+/assistance/rotations    int: rotations asked for so far                             InstructHelper                                                              InstructHelper, GiveUp
+/assistance/requested    float: the last turn asked for, rad, counterclockwise +     InstructHelper                                                              MeasureChairRotation
+/assistance/measured     list[ChairRotation]: each measured g_rot                    MeasureChairRotation                                                        MeasureChairRotation
 /walk/result             bearchair.skills.results.WalkResult                         WalkToChair
-/seat/plan               bearchair.skills.results.SeatingPlan                        SeatBear                                                   ReleaseAndStand
+/seat/plan               bearchair.skills.results.SeatingPlan                        SeatBear                                                                    ReleaseAndStand
 /seat/judgement          bearchair.hardware.interfaces.SeatingJudgement (simulation) ReleaseAndStand
-======================== =========================================================== ========================================================== ===================================================================================================================================
+======================== =========================================================== =========================================================================== =========================================================================================================================================
 """
 
 SEED = "/mission/seed"
@@ -34,6 +35,7 @@ ARENA = "/mission/arena"
 CHAIR_SCAN = "/chair/scan"
 CHAIR_MESH = "/chair/mesh"
 CHAIR_POINTS = "/chair/points"
+SEAT_VIEW = "/chair/seat_view"
 IMAGINATION = "/sitting/imagination"
 SITTING_POSE = "/sitting/pose"
 HUMANOID_POSE = "/humanoid/pose"
@@ -54,6 +56,7 @@ VALUES = {
     CHAIR_SCAN: "bearchair.skills.results.ChairScan",
     CHAIR_MESH: "trimesh.Trimesh: the chair now, world frame",
     CHAIR_POINTS: "(N, 3) ndarray: the chair now, world frame (ICP ref.)",
+    SEAT_VIEW: "str: the view LookAtSeat added over p ('': none)",
     IMAGINATION: "bearchair.skills.results.ImaginationResult",
     SITTING_POSE: "bearchair.core.geometry.SittingPose: g now, world frame",
     HUMANOID_POSE: "bearchair.core.se2.SE2Pose: last tracked humanoid pose",

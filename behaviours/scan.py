@@ -108,7 +108,8 @@ class LookAtSeat(SkillBehaviour):
 
     Blackboard:
         reads ``/mission/seed``, ``/chair/scan``, ``/sitting/pose``;
-        writes ``/chair/scan``, ``/chair/mesh``, ``/chair/points``.
+        writes ``/chair/scan``, ``/chair/mesh``, ``/chair/points``, ``/chair/seat_view``
+        (the view added, empty when none was).
     """
 
     activity = "looking for the seat under the sitting point"
@@ -117,7 +118,7 @@ class LookAtSeat(SkillBehaviour):
         super().__init__(
             name,
             reads=(keys.SEED, keys.CHAIR_SCAN, keys.SITTING_POSE),
-            writes=(keys.CHAIR_SCAN, keys.CHAIR_MESH, keys.CHAIR_POINTS),
+            writes=(keys.CHAIR_SCAN, keys.CHAIR_MESH, keys.CHAIR_POINTS, keys.SEAT_VIEW),
         )
 
     def prepare(self) -> Callable[[], ChairScan]:
@@ -132,7 +133,9 @@ class LookAtSeat(SkillBehaviour):
     def conclude(self, scan: ChairScan) -> Status:
         before: ChairScan = self.blackboard.get(keys.CHAIR_SCAN)
         if scan is before:
+            self.blackboard.set(keys.SEAT_VIEW, "", overwrite=True)
             return self.succeed("the scan shows the seat under the sitting point")
         put_scan(self.blackboard, scan)
         note = scan.notes[-1] if scan.notes else "one more view"
+        self.blackboard.set(keys.SEAT_VIEW, note, overwrite=True)
         return self.succeed(f"the scan showed no seat under the sitting point: {note}")

@@ -14,6 +14,7 @@
                                                        at the NAO's seat heights, else fails
         [-] CheckSeatReachable                         Sequence (memory)
             --> LookAtSeat                             one more view, if no seat under p
+            --> ImagineOnSeatView                      the sitting again, if a view was added
             --> CheckSeatReachable                     refuses a seat no stance reaches
         [o] MakeChairAccessible                        Selector (memory)
             --> CheckAccessibility
@@ -57,7 +58,7 @@ from bearchair.behaviours.assistance import (
     MeasureChairRotation,
     WaitUntilChairStill,
 )
-from bearchair.behaviours.imagine import ImagineSitting, NoSittingFound
+from bearchair.behaviours.imagine import ImagineOnSeatView, ImagineSitting, NoSittingFound
 from bearchair.behaviours.scan import LookAtSeat, LookFromAbove, ScanChair
 from bearchair.behaviours.seat import ReleaseAndStand, SeatBear
 from bearchair.behaviours.walk import WalkToChair
@@ -119,12 +120,15 @@ def create_imagination(
 
 def create_seat_check(max_looks: int) -> py_trees.behaviour.Behaviour:
     """The ``CheckSeatReachable`` stage: where the scan shows no seat under the sitting
-    point, one look from above it first (none with ``max_looks`` 0); then the check, its
-    leaf named as the stage so its refusals read as before."""
+    point, one look from above it first and the sitting imagined again with that view
+    (neither with ``max_looks`` 0); then the check, its leaf named as the stage so its
+    refusals read as before."""
     if max_looks == 0:
         return CheckSeatReachable()
     return py_trees.composites.Sequence(
-        name="CheckSeatReachable", memory=True, children=[LookAtSeat(), CheckSeatReachable()]
+        name="CheckSeatReachable",
+        memory=True,
+        children=[LookAtSeat(), ImagineOnSeatView(), CheckSeatReachable()],
     )
 
 
