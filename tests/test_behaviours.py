@@ -18,11 +18,12 @@ from bearchair.behaviours.assistance import (
     MeasureChairRotation,
     WaitUntilChairStill,
 )
-from bearchair.behaviours.imagine import ImagineSitting
+from bearchair.behaviours.imagine import ImagineOnSeatView, ImagineSitting
 from bearchair.behaviours.scan import LookAtSeat, LookFromAbove, ScanChair
 from bearchair.behaviours.seat import ReleaseAndStand, SeatBear
 from bearchair.behaviours.walk import WalkToChair
 from bearchair.core.arena import DEFAULT_ARENA
+from bearchair.core.geometry import SittingPose
 from bearchair.core.se2 import SE2Pose
 from bearchair.hardware.fakes import FakeJudge, fake_robot
 from bearchair.hardware.interfaces import SeatingJudgement
@@ -47,6 +48,7 @@ LEAVES = [
     (LookFromAbove, "look_from_above", None),
     (LookAtSeat, "look_at_seat", None),
     (ImagineSitting, "imagine_sitting", NO_SITTING),
+    (ImagineOnSeatView, "imagine_sitting", None),
     (
         CheckSeatReachable,
         "check_seat_reachable",
@@ -77,6 +79,7 @@ def fill_blackboard() -> None:
         keys.CHAIR_MESH: DEFAULTS["scan_chair"].chair_mesh,
         keys.IMAGINATION: NO_SITTING,
         keys.CHAIR_POINTS: DEFAULTS["scan_chair"].chair_points,
+        keys.SEAT_VIEW: "one more view from (0.49, -0.19, 0.90) m",
         keys.SITTING_POSE: DEFAULTS["imagine_sitting"].sitting_pose,
         keys.ACCESSIBILITY: DEFAULTS["check_accessibility"],
         keys.SEATING_PLAN: DEFAULTS["plan_seating"],
@@ -405,6 +408,42 @@ def test_look_from_above_looks_only_after_an_imagination_found_no_sitting(imagin
     )
 
 
+def _sitting_pose_now():
+    board = py_trees.blackboard.Client(name="reader")
+    board.register_key(key=keys.SITTING_POSE, access=py_trees.common.Access.READ)
+    return board.get(keys.SITTING_POSE)
+
+
+def test_imagine_on_seat_view_imagines_on_the_completed_scan_and_takes_its_sitting():
+    moved = SittingPose(np.array([0.62, 0.05, 0.43]), 0.4)
+    found = DEFAULTS["imagine_sitting"]._replace(sitting_pose=moved)
+    skills = ScriptedSkills({"imagine_sitting": found})
+    leaf = make(ImagineOnSeatView, skills)
+    assert tick_until_done(leaf)[-1] == Status.SUCCESS
+    ((chair_mesh,), kwargs) = skills.calls["imagine_sitting"][0]
+    assert chair_mesh is DEFAULTS["scan_chair"].chair_mesh and kwargs["seed"] == 7
+    assert _sitting_pose_now() is moved
+    assert leaf.feedback_message.startswith("again with the seat view: sit at (0.620, 0.050")
+
+
+def test_imagine_on_seat_view_does_nothing_when_no_view_was_added():
+    skills = ScriptedSkills()
+    leaf = make(ImagineOnSeatView, skills)
+    write_blackboard({keys.SEAT_VIEW: ""})
+    assert tick_until_done(leaf)[-1] == Status.SUCCESS
+    assert not skills.calls["imagine_sitting"]
+    assert _sitting_pose_now() is DEFAULTS["imagine_sitting"].sitting_pose
+
+
+def test_imagine_on_seat_view_keeps_the_sitting_when_the_completed_scan_gives_none():
+    skills = ScriptedSkills({"imagine_sitting": NO_SITTING})
+    leaf = make(ImagineOnSeatView, skills)
+    assert tick_until_done(leaf)[-1] == Status.SUCCESS
+    assert len(skills.calls["imagine_sitting"]) == 1
+    assert _sitting_pose_now() is DEFAULTS["imagine_sitting"].sitting_pose
+    assert "no correct sitting): the one imagined before stands" in leaf.feedback_message
+
+
 @pytest.mark.parametrize("seen", [True, False])
 def test_look_at_seat_keeps_a_scan_that_shows_the_seat_and_takes_the_one_with_the_look(seen):
     looked = DEFAULTS["look_from_above"]
@@ -420,3 +459,5 @@ def test_look_at_seat_keeps_a_scan_that_shows_the_seat_and_takes_the_one_with_th
     expected = DEFAULTS["scan_chair"] if seen else looked
     assert board.get(keys.CHAIR_MESH) is expected.chair_mesh
     assert ("no seat under the sitting point" in leaf.feedback_message) != seen
+    board.register_key(key=keys.SEAT_VIEW, access=py_trees.common.Access.READ)
+    assert bool(board.get(keys.SEAT_VIEW)) != seen

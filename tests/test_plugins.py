@@ -278,7 +278,8 @@ def test_inspect_says_whether_the_record_is_of_the_tree_a_spec_builds(tmp_path, 
 
     run_scripted_mission(ScriptedSkills(), out_dir=tmp_path)
     assert cli.main(["inspect", str(tmp_path), "--tree", "mission"]) == 0
-    assert "tree: the one mission builds (33 nodes)" in capsys.readouterr().out
+    nodes = len(list(create_tree().iterate()))
+    assert f"tree: the one mission builds ({nodes} nodes)" in capsys.readouterr().out
     assert cli.main(["inspect", str(tmp_path), "--tree", "example-no-assistance"]) == 0
     assert "tree: not the one example-no-assistance builds" in capsys.readouterr().out
 

@@ -141,6 +141,7 @@ DOCUMENTED_TREE = [
     ("NoSittingFound", "NoSittingFound", 2, None),
     ("CheckSeatReachable", "Sequence", 1, True),
     ("LookAtSeat", "LookAtSeat", 2, None),
+    ("ImagineOnSeatView", "ImagineOnSeatView", 2, None),
     ("CheckSeatReachable", "CheckSeatReachable", 2, None),
     ("MakeChairAccessible", "Selector", 1, True),
     ("CheckAccessibility", "CheckAccessibility", 2, None),
