@@ -200,8 +200,13 @@ def register_chair(
                 f"{math.degrees(yaw_of(np.linalg.inv(T_old_new))):+.0f} deg, more than "
                 f"{config.request_tolerance_deg:.0f} deg from the "
                 f"{math.degrees(requested_yaw_rad):+.0f} deg asked for (or its reverse), on "
-                f"a visible overlap of only {visible:.2f} "
-                f"(need {config.min_visible_fitness:.2f} for that)"
+                + (
+                    f"a visible overlap of only {visible:.2f} "
+                    f"(need {config.min_visible_fitness:.2f} for that)"
+                    if visible < config.min_visible_fitness
+                    else f"a visible overlap of {visible:.2f} found by climbing it, which "
+                    f"must agree with the turn asked for"
+                )
             )
     raise _rejection(fitness, rmse, visible, config)
 
