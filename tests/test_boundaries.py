@@ -300,9 +300,16 @@ def test_with_frames_a_fit_exactly_at_the_visible_overlap_and_rmse_bounds_is_acc
     )
     register_chair(new, reference, at_the_peak_floor, frames)
     # Past the bound, without the climb (which moves the fit to a higher overlap).
-    no_climb = replace(at_the_boundary, climb_steps_m=(), climb_steps_deg=())
+    past = replace(at_the_boundary, min_visible_fitness=above)
+    no_climb = replace(past, climb_steps_m=(), climb_steps_deg=())
     with pytest.raises(RegistrationError, match="visible overlap"):
-        register_chair(new, reference, replace(no_climb, min_visible_fitness=above), frames)
+        register_chair(new, reference, no_climb, frames)
+    # With it, the fit climbs past the bound and is accepted, unless it then turns the
+    # chair away from the turn asked for (the chair did not move: 90 deg is off).
+    climbed = register_chair(new, reference, replace(past, max_rmse_m=0.01), frames)
+    assert climbed.visible_fitness > visible
+    with pytest.raises(RegistrationError, match="found by climbing it"):
+        register_chair(new, reference, replace(past, max_rmse_m=0.01), frames, math.pi / 2)
     with pytest.raises(RegistrationError, match="RMSE"):
         register_chair(
             new,

@@ -21,13 +21,14 @@ bound, or a lower floor where the fit is a peak of the visible overlap (every fi
 centimetres or degrees from it scores lower; how high a right fit scores depends on the
 chair, a wrong one has a better neighbour). Where neither holds, the fit is climbed to
 the visible overlap's local maximum (small moves and turns while the overlap rises) and
-judged by the fixed bound again, agreeing with the turn asked for as a peak must: ICP on a turned chair is pulled a few centimetres along
-it by the sides the reference never saw, and the overlap falls steeply with that error.
-Over the 19 generated chairs of the mission bench whose turn ICP could not measure, ICP's
-fits scored 0.68-0.88 (the right ones 0.5-4 cm off); climbed, the right ones scored 0.91-0.99
-within 1.8 cm and 1.4 degrees of the helper's turn, while the wrong ones (a turn 180
-degrees off, a sofa slid 10 cm along itself) stayed at 0.68-0.86, below the bound.
-Without frames, the fitness bound decides as before.
+judged by the fixed bound again, agreeing with the turn asked for as a peak must. ICP on
+a turned chair is pulled a few centimetres along it by the sides the reference never
+saw, and the overlap falls steeply with that error: over the 19 generated chairs of the
+mission bench whose turn ICP could not measure, ICP's fits scored 0.68-0.88 (the right
+ones 0.5-4 cm off); climbed, the right ones scored 0.91-0.99 within 1.8 cm and 1.4
+degrees of the helper's turn, while the wrong ones (a turn 180 degrees off, a sofa slid
+10 cm along itself) stayed at 0.68-0.86, below the bound. Without frames, the fitness
+bound decides as before.
 """
 
 from __future__ import annotations

@@ -28,7 +28,8 @@ class RegistrationConfig:
             pixels only: 0.90-0.97 on generated chairs turned 90 and 180 degrees (rendered
             and simulated views); a fit 3 cm off along the chair scored 0.77-0.84 (and a
             fit 3.2 cm off 0.86, accepted when this bound was 0.85), a yaw 10 degrees off
-            0.64-0.77, 30 degrees or more below 0.6. Below it, only a peak is accepted.
+            0.64-0.77, 30 degrees or more below 0.6. Below it, only a peak is accepted,
+            or a fit that climbs to it (``climb_steps_m``).
         min_peak_visible_fitness: a fit below ``min_visible_fitness`` is accepted down to
             this when it is a peak of the visible overlap: no fit moved by
             ``peak_step_m`` along x or y or turned by ``peak_step_deg`` scores higher.
@@ -40,16 +41,18 @@ class RegistrationConfig:
         peak_step_m, peak_step_deg: the neighbours of the peak test: an error worth
             rejecting (3 cm moves the bear's seat point off a margin of a few cm).
         request_tolerance_deg: with the turn the helper was asked for, a fit accepted
-            only as a peak must turn the chair within this of it, or of its reverse (a
-            helper who turned the wrong way). From the few tracking views, a chair
-            turned half round can match its unturned self better than the right fit
-            (the views see sides the reference never saw; both fill the same box), and
-            only a peak's overlap is that weak. One instruction step (30 deg): the
+            only as a peak, or only after the climb, must turn the chair within this of
+            it, or of its reverse (a helper who turned the wrong way). From the few
+            tracking views, a chair turned half round can match its unturned self better
+            than the right fit (the views see sides the reference never saw; both fill
+            the same box), and only a peak's overlap is that weak, or a climbed one's (a
+            sofa's turn read 180 degrees off climbed to 0.884). One instruction step (30 deg): the
             helper turns by the words, not by the exact angle they round.
         global_voxel_m: downsampling of the FPFH + RANSAC global registration.
         climb_steps_m, climb_steps_deg: the moves (along x and y) and turns (about the
             carried reference's centroid) of the climb on the visible overlap, coarse to
-            fine, each kept while it raises the overlap. The first is about the error
+            fine, each kept while it raises the overlap; one turn per move, so equally
+            long. The first is about the error
             ICP leaves on a turned chair (0.5-4 cm); the last is a third of the fine
             voxel. Empty: no climb.
         climb_max_evaluations: bounds the climb's time (each evaluation projects the
