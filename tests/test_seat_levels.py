@@ -104,3 +104,16 @@ def test_rails_too_high_over_a_seat_within_reach_are_named_not_the_seat():
     assert not verdict.reachable
     assert verdict.reason.startswith("chair too high in the NAO's way: the bear is carried over")
     assert f"(the seat under the sitting point is {seat_m:.3f} m)" in verdict.reason
+    # The rails' inner faces 0.105 m either side of p: 0.030 m short of the hands' 0.240 m.
+    assert verdict.reason.endswith(
+        "the armrests or rails beside the sitting point stand 0.210 m apart, and the NAO's "
+        "hands need 0.240 m between them to lower the bear there (0.030 m short)"
+    )
+
+
+def test_rails_that_leave_the_hands_room_are_not_called_short():
+    from bearchair.skills.planning.chair_along_ray import rails_gap_reason
+
+    assert rails_gap_reason(0.25) == ""
+    assert rails_gap_reason(math.inf) == ""  # one side, or none, has a rail
+    assert rails_gap_reason(0.2395).endswith("(0.001 m short)")

@@ -104,20 +104,8 @@ def centred_between_rails(
     the middle of the gap, kept within the moves that clear both sides. ``points``:
     :func:`surface_points` when the caller has them.
     """
-    p = np.asarray(sitting_pose.position, dtype=float)
-    u = sitting_pose.direction()
-    left_axis = np.array([-u[1], u[0]])
-    points = surface_points(chair_mesh) if points is None else points
-    rel = points[:, :2] - p[:2]
-    along, across = rel @ u, rel @ left_axis
+    a, b = rails_beside(chair_mesh, sitting_pose, seat_top_m, points)
     reach = BAND_HALF_WIDTH_M + RAIL_CLEARANCE_M
-    ahead = along >= -(BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M)
-    standing = ahead & (np.abs(across) <= reach + MAX_CENTRING_M)
-    standing &= stands_above_seat(across, points[:, 2], seat_top_m)
-    left = across[standing & (across > 0.0)]
-    right = across[standing & (across <= 0.0)]
-    a = float(left.min()) if len(left) else math.inf
-    b = float(right.max()) if len(right) else -math.inf
     if a > reach and b < -reach:
         return sitting_pose
     lowest, highest = b + reach, a - reach
@@ -127,9 +115,52 @@ def centred_between_rails(
     move = float(np.clip(middle, lowest, highest))
     if abs(move) > MAX_CENTRING_M:
         return sitting_pose
-    moved = p.copy()
-    moved[:2] += move * left_axis
+    u = sitting_pose.direction()
+    moved = np.asarray(sitting_pose.position, dtype=float).copy()
+    moved[:2] += move * np.array([-u[1], u[0]])
     return SittingPose(moved, sitting_pose.yaw)
+
+
+def rails_beside(
+    chair_mesh: trimesh.Trimesh,
+    sitting_pose: SittingPose,
+    seat_top_m: float,
+    points: np.ndarray | None = None,
+) -> tuple[float, float]:
+    """(a, b): across the sitting ray (metres, left of it positive), the nearest points
+    left and right of p that stand on a ``seat_top_m`` high seat in the way of the bear or
+    the hands (:func:`.wholebody.chair_profile.stands_above_seat`), ahead of the bear's
+    back and within ``BAND_HALF_WIDTH_M + RAIL_CLEARANCE_M + MAX_CENTRING_M`` of the ray;
+    +inf (left) or -inf (right) where a side has none. ``points``: :func:`surface_points`
+    when the caller has them."""
+    p = np.asarray(sitting_pose.position, dtype=float)
+    u = sitting_pose.direction()
+    points = surface_points(chair_mesh) if points is None else points
+    rel = points[:, :2] - p[:2]
+    along, across = rel @ u, rel @ np.array([-u[1], u[0]])
+    ahead = along >= -(BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M)
+    standing = ahead & (np.abs(across) <= BAND_HALF_WIDTH_M + RAIL_CLEARANCE_M + MAX_CENTRING_M)
+    standing &= stands_above_seat(across, points[:, 2], seat_top_m)
+    left = across[standing & (across > 0.0)]
+    right = across[standing & (across <= 0.0)]
+    return (
+        float(left.min()) if len(left) else math.inf,
+        float(right.max()) if len(right) else -math.inf,
+    )
+
+
+def rails_gap_reason(gap_m: float) -> str:
+    """How far armrests or rails ``gap_m`` apart (metres, :func:`rails_beside`'s a - b)
+    fall short of the room the NAO's hands need to lower the bear between them; empty
+    when they leave it (or there are not two)."""
+    needed = 2.0 * (BAND_HALF_WIDTH_M + RAIL_CLEARANCE_M)
+    if not math.isfinite(gap_m) or gap_m >= needed:
+        return ""
+    return (
+        f"the armrests or rails beside the sitting point stand {gap_m:.3f} m apart, and the "
+        f"NAO's hands need {needed:.3f} m between them to lower the bear there "
+        f"({needed - gap_m:.3f} m short)"
+    )
 
 
 def closed_above(chair: ChairAlongRay, ray: SeatRay) -> bool:
@@ -172,21 +203,25 @@ def out_of_reach_reason(
     stances_m: np.ndarray,
     model: ReachModel,
     seat_under_p_m: float = math.nan,
+    rails_gap_m: float = math.nan,
 ) -> str:
     """Why the reach model places the bear nowhere on this seat from any stance.
 
     ``ray`` holds the heights the bear is carried over (the seat, or the chair's top in
     the NAO's way where higher); ``seat_under_p_m``, the seat itself under p (metres),
-    names which of the two is too high.
+    names which of the two is too high; ``rails_gap_m``, how far apart the armrests or
+    rails beside p stand (metres, :func:`rails_beside`), says by how much they leave the
+    hands too little room to lower the bear between them instead.
     """
     height = float(ray.seat_heights_m[0])
     beyond = seat_height_reason(height, model)
     if beyond and height > seat_under_p_m and not seat_height_reason(seat_under_p_m, model):
+        between = rails_gap_reason(rails_gap_m)
         return (
             f"chair too high in the NAO's way: the bear is carried over armrests or rails as "
             f"onto a {height:.3f} m seat (the seat under the sitting point is "
             f"{seat_under_p_m:.3f} m), and the NAO places a bear at most "
-            f"{model.max_seat_height_m():.3f} m high"
+            f"{model.max_seat_height_m():.3f} m high" + (f"; {between}" if between else "")
         )
     if beyond:
         return beyond
