@@ -107,14 +107,15 @@ def test_no_placement_where_the_bear_stays_fails_before_the_release(chair, monke
 def test_a_seat_the_scan_lost_under_the_bear_is_taken_from_the_seat_map():
     import trimesh
 
-    # A seat frame around a 0.3 m hole (what a scan that lost the seat's middle shows).
+    # A seat with a 0.10 x 0.12 m hole in its middle (what a scan that thinned out the
+    # seat there shows), the bear's 0.085 x 0.10 m footprint over it.
     parts = [
         trimesh.creation.box((w, d, 0.02), trimesh.transformations.translation_matrix(c))
         for w, d, c in [
-            (0.4, 0.05, (0.0, 0.175, 0.23)),
-            (0.4, 0.05, (0.0, -0.175, 0.23)),
-            (0.05, 0.3, (0.175, 0.0, 0.23)),
-            (0.05, 0.3, (-0.175, 0.0, 0.23)),
+            (0.4, 0.14, (0.0, 0.13, 0.23)),
+            (0.4, 0.14, (0.0, -0.13, 0.23)),
+            (0.15, 0.12, (0.125, 0.0, 0.23)),
+            (0.15, 0.12, (-0.125, 0.0, 0.23)),
         ]
     ]
     holed = trimesh.util.concatenate(parts)
@@ -124,10 +125,18 @@ def test_a_seat_the_scan_lost_under_the_bear_is_taken_from_the_seat_map():
     mapped = imagine_release(holed, bear, 0.0, NAO_POSE, seat_top_z=SEAT_HEIGHT_M)
     assert mapped.stays and mapped.seat_patched
     # Where the scan has the seat, nothing is added.
-    solid = imagine_release(
-        box_chair_mesh(seat_height_m=SEAT_HEIGHT_M), bear, 0.0, NAO_POSE, seat_top_z=SEAT_HEIGHT_M
-    )
+    solid_chair = box_chair_mesh(seat_height_m=SEAT_HEIGHT_M)
+    solid = imagine_release(solid_chair, bear, 0.0, NAO_POSE, seat_top_z=SEAT_HEIGHT_M)
     assert solid.stays and not solid.seat_patched
+
+
+def test_a_footprint_past_the_seats_edge_is_not_patched():
+    # The box chair's seat ends at x = 0.14 m; the footprint's front reaches 0.1625 m.
+    # Nothing is seen beyond its front corners: that is the seat's edge, not a hole.
+    chair = box_chair_mesh(seat_height_m=SEAT_HEIGHT_M)
+    over_edge = _bear_at(0.12, SEAT_HEIGHT_M + 0.01)
+    edge = imagine_release(chair, over_edge, 0.0, NAO_POSE, seat_top_z=SEAT_HEIGHT_M)
+    assert not edge.seat_patched
 
 
 def test_the_runtime_reset_closes_every_release_world():

@@ -60,6 +60,11 @@ SEAT_PATCH_MARGIN_M = 0.02
 SEAT_PATCH_SEARCH_M = 0.03
 """A scanned surface within this of the seat map's top under the footprint counts as the
 seat (metres)."""
+SEAT_EDGE_PROBES_M = (0.01, 0.02, 0.03)
+"""Where the scan is looked at beyond a footprint corner it has no seat under (metres,
+outward along the footprint's diagonal): one TSDF voxel (0.008 m) at a time, as far as
+the patch reaches past the footprint (``SEAT_PATCH_MARGIN_M``) and a voxel more. Seat seen
+there: the corner is over a hole; none: over the seat's edge."""
 SCAN_HEIGHT_ERROR_M = 0.004
 """How far the scanned seat's top may lie off the true one (2-5 mm above it in the
 campaign trials): a release this much higher is imagined too."""
@@ -87,7 +92,7 @@ class ReleasePrediction(NamedTuple):
             decided.
         T_world_bear_release: where the plan lets the bear go (world frame).
         seconds: wall time of the imagination.
-        seat_patched: the scan had no surface under part of the bear's footprint, and the
+        seat_patched: the scan had a hole in the seat under the bear's footprint, and the
             seat map's seat was added there (see :func:`imagine_release`).
         cpu_seconds: this thread's CPU time in it (the wall time on a loaded machine is
             longer).
@@ -185,9 +190,10 @@ def imagine_release(
     A scan can lose part of a seat under the sitting point (a seat the views saw only in
     part, a thin or slatted one the TSDF thins out) where the planner's seat map, taken from the
     scan in a band around p, still has it: the bear would fall through the hole in the
-    imagination but not on the chair. Given ``seat_top_z``, where the scan has no surface
-    near that height under the bear's torso footprint, the seat map's seat is added
-    there as a thin slab (the footprint and ``SEAT_PATCH_MARGIN_M`` around it).
+    imagination but not on the chair. Given ``seat_top_z``, where the scan has a hole near
+    that height under the bear's torso footprint (not where the footprint reaches past the
+    seat's edge: :meth:`_ReleaseWorld.patch_seat`), the seat map's seat is added there as a
+    thin slab (the footprint and ``SEAT_PATCH_MARGIN_M`` around it).
 
     Args:
         chair_mesh: the reconstructed chair, world frame (floor at z = 0).
@@ -248,17 +254,31 @@ class _ReleaseWorld:
         self.closed = False
 
     def patch_seat(self, T_world_bear: np.ndarray, seat_top_z: float) -> bool:
-        """Adds the seat map's seat under the bear's footprint where the scan has no
-        surface near ``seat_top_z``; returns whether it did."""
+        """Adds the seat map's seat under the bear's footprint where the scan has a hole in
+        the seat there; returns whether it did.
+
+        The scan is looked at near ``seat_top_z`` under the footprint's middle and corners.
+        A missing corner is a hole when the seat is seen beyond it (``SEAT_EDGE_PROBES_M``
+        outward along the footprint's diagonal), the middle when a corner is seen: a thin
+        seat the TSDF thinned out goes on around its holes, while a footprint reaching past
+        the seat's edge hangs over nothing, and a patch there would hold up a bear that
+        tips over the edge."""
         half = np.array([BEAR_TORSO_DEPTH_M / 2.0, BEAR_TORSO_WIDTH_M / 2.0])
-        corners = [np.zeros(2)] + [half * (sx, sy) for sx in (-1, 1) for sy in (-1, 1)]
-        rays_from, rays_to = [], []
-        for corner in corners:
-            x, y = (T_world_bear @ np.array([corner[0], corner[1], 0.0, 1.0]))[:2]
-            rays_from.append([x, y, seat_top_z + SEAT_PATCH_SEARCH_M])
-            rays_to.append([x, y, seat_top_z - SEAT_PATCH_SEARCH_M])
-        hits = self.client.rayTestBatch(rays_from, rays_to)
-        if all(hit[0] == self.chair for hit in hits):
+        corners = [half * (sx, sy) for sx in (-1, 1) for sy in (-1, 1)]
+        middle_seen, *corners_seen = self._seat_seen(
+            T_world_bear, [np.zeros(2), *corners], seat_top_z
+        )
+        if middle_seen and all(corners_seen):
+            return False
+        holes = not middle_seen and any(corners_seen)
+        for corner, seen in zip(corners, corners_seen, strict=True):
+            if holes:
+                break
+            if not seen:
+                outward = corner / np.linalg.norm(corner)
+                beyond = [corner + step * outward for step in SEAT_EDGE_PROBES_M]
+                holes = any(self._seat_seen(T_world_bear, beyond, seat_top_z))
+        if not holes:
             return False
         extents = half + SEAT_PATCH_MARGIN_M
         shape = self.client.createCollisionShape(
@@ -274,6 +294,18 @@ class _ReleaseWorld:
         )
         self.client.changeDynamics(self.patch, -1, lateralFriction=CHAIR_FRICTION)
         return True
+
+    def _seat_seen(
+        self, T_world_bear: np.ndarray, points_bear: list[np.ndarray], seat_top_z: float
+    ) -> list[bool]:
+        """Whether the scan has a surface within ``SEAT_PATCH_SEARCH_M`` of ``seat_top_z``
+        under each (x, y) point of the bear frame (metres)."""
+        rays_from, rays_to = [], []
+        for point in points_bear:
+            x, y = (T_world_bear @ np.array([point[0], point[1], 0.0, 1.0]))[:2]
+            rays_from.append([x, y, seat_top_z + SEAT_PATCH_SEARCH_M])
+            rays_to.append([x, y, seat_top_z - SEAT_PATCH_SEARCH_M])
+        return [hit[0] == self.chair for hit in self.client.rayTestBatch(rays_from, rays_to)]
 
     def remove_patch(self) -> None:
         if self.patch is not None:
