@@ -175,3 +175,23 @@ def test_prefer_moves_p_to_the_first_other_placement_predicted_to_stay(chair, mo
     # As planned (falls), deeper (stays on a patched seat: not trusted), nearer (stays).
     assert plan.release is stays
     assert tried == pytest.approx([0.0, -0.02, 0.02])
+
+    # A planned release whose bears all tipped over on the scanned seat (not through it
+    # onto the floor) is outweighed by a "stays" on a patched seat: deeper is taken.
+    tipped = falls._replace(
+        releases=tuple(
+            r._replace(judgement=r.judgement._replace(on_seat=True)) for r in falls.releases
+        )
+    )
+    assert tipped.tipped_on_seat and not falls.tipped_on_seat and not stays.tipped_on_seat
+    tried.clear()
+
+    def tipped_as_planned(chair_mesh, sitting_pose, humanoid_pose, plan):
+        along_m = float(sitting_pose.position[0] - SITTING_POSE.position[0])
+        tried.append(along_m)
+        return patched if along_m < -1e-9 else tipped
+
+    monkeypatch.setattr(release_choice, "predict_release", tipped_as_planned)
+    plan = release_choice.plan_seating_released(chair, SITTING_POSE, NAO_POSE)
+    assert plan.release is patched
+    assert tried == pytest.approx([0.0, -0.02])

@@ -110,6 +110,14 @@ class ReleasePrediction(NamedTuple):
         return sum(r.judgement.seated for r in self.releases)
 
     @property
+    def tipped_on_seat(self) -> bool:
+        """The bear is predicted to fall, and every imagined bear that fell came to rest on
+        the scanned chair (tilted or turned too far) rather than through it onto the
+        floor: a fall the scan's seat itself causes, not one through a hole in the scan."""
+        fallen = [r.judgement for r in self.releases if not r.judgement.seated]
+        return not self.stays and bool(fallen) and all(j.on_seat for j in fallen)
+
+    @property
     def reason(self) -> str:
         """Why the bear falls in the imagined releases where it does (most frequent first)."""
         reasons = [r.judgement.reason for r in self.releases if not r.judgement.seated]

@@ -10,13 +10,19 @@ saying why. The NAO has already walked, so the bear's yaw is the NAO's heading a
 p moves.
 
 ``BEARCHAIR_RELEASE_CHECK`` (environment): ``prefer`` (the default: move p to the first
-other placement predicted to stay on seat the scan shows, not one patched from the seat
-map; where none is, release as planned: a prediction of "falls" alone never stops the
-release), ``predict`` (imagine and record the prediction, release as planned), ``choose``
+other placement predicted to stay; where none is, release as planned: a prediction of
+"falls" alone never stops the release), ``predict`` (imagine and record the prediction, release as planned), ``choose``
 (as above: move p or fail before the release), ``off``. ``prefer`` is the default: a
 prediction of "falls" was wrong more often than right, so ``choose`` stopped releases
 the judge would have seated, while moving p where another placement is predicted to
 stay seated bears ``predict`` let fall (measurements: docs/decisions.md).
+
+The two weak predictions are weighed against each other: a "stays" on a seat patched from
+the seat map (:attr:`ReleasePrediction.seat_patched`) and a "falls" where imagined bears
+dropped through the scan onto the floor (a hole the scan has and the chair may not). So
+``prefer`` moves p to a placement predicted to stay on a patched seat only when the planned
+release's bears all tipped over on the scanned seat itself
+(:attr:`ReleasePrediction.tipped_on_seat`).
 """
 
 from __future__ import annotations
@@ -128,9 +134,9 @@ def plan_seating_released(
             continue
         tried += 1
         other_prediction = predict_release(chair_mesh, moved, humanoid_pose, other)
-        # ``prefer`` trusts no seat patched from the seat map over the planned release's
-        # own prediction: a patched "stays" is the weak one (decisions.md).
-        if other_prediction.stays and (mode == "choose" or not other_prediction.seat_patched):
+        if other_prediction.stays and (
+            mode == "choose" or not other_prediction.seat_patched or prediction.tipped_on_seat
+        ):
             return other._replace(release=other_prediction)
     if mode == "prefer":
         return plan._replace(release=prediction)
