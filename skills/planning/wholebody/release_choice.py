@@ -10,9 +10,10 @@ saying why. The NAO has already walked, so the bear's yaw is the NAO's heading a
 p moves.
 
 ``BEARCHAIR_RELEASE_CHECK`` (environment): ``prefer`` (the default: move p to the first
-other placement predicted to stay; where none is, release as planned: a prediction of
-"falls" alone never stops the release), ``predict`` (imagine and record the prediction, release as planned), ``choose``
-(as above: move p or fail before the release), ``off``. ``prefer`` is the default: a
+other placement predicted to stay, as weighed below; where none is, release as planned: a
+prediction of "falls" alone never stops the release), ``predict`` (imagine and record the
+prediction, release as planned), ``choose`` (as above: move p or fail before the
+release), ``off``. ``prefer`` is the default: a
 prediction of "falls" was wrong more often than right, so ``choose`` stopped releases
 the judge would have seated, while moving p where another placement is predicted to
 stay seated bears ``predict`` let fall (measurements: docs/decisions.md).
