@@ -13,10 +13,10 @@ p moves.
 other placement predicted to stay, as weighed below; where none is, release as planned: a
 prediction of "falls" alone never stops the release), ``predict`` (imagine and record the
 prediction, release as planned), ``choose`` (as above: move p or fail before the
-release), ``off``. ``prefer`` is the default: a
-prediction of "falls" was wrong more often than right, so ``choose`` stopped releases
-the judge would have seated, while moving p where another placement is predicted to
-stay seated bears ``predict`` let fall (measurements: docs/decisions.md).
+release), ``off``. ``prefer`` is the default: a prediction of "falls" was wrong more
+often than right, so ``choose`` stopped releases the judge would have seated, while
+moving p where another placement is predicted to stay seated bears ``predict`` let fall
+(measurements: docs/decisions.md).
 
 The two weak predictions are weighed against each other: a "stays" on a seat patched from
 the seat map (:attr:`ReleasePrediction.seat_patched`) and a "falls" where imagined bears
