@@ -265,11 +265,10 @@ def _choose_stance_on_ray(
     pairs, stances = _stance_pairs(planner_ray, front, walk_in, model)
     if not pairs:
         left, right = rails_beside(chair_mesh, sitting_pose, seat_under_p0, points)
-        reason = out_of_reach_reason(
-            planner_ray, front, stances, model, seat_under_p0, rails_gap_m=left - right
-        )
         return none._replace(
-            reason=reason,
+            reason=out_of_reach_reason(
+                planner_ray, front, stances, model, seat_under_p0, left - right
+            ),
             depends_on_scene=scene and walk_in > chair_clear + 1e-9,
         )
     search = _RaySearch(
