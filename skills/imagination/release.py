@@ -278,14 +278,11 @@ class _ReleaseWorld:
         )
         if middle_seen and all(corners_seen):
             return False
-        holes = not middle_seen and any(corners_seen)
-        for corner, seen in zip(corners, corners_seen, strict=True):
-            if holes:
-                break
-            if not seen:
-                outward = corner / np.linalg.norm(corner)
-                beyond = [corner + step * outward for step in SEAT_EDGE_PROBES_M]
-                holes = any(self._seat_seen(T_world_bear, beyond, seat_top_z))
+        holes = (not middle_seen and any(corners_seen)) or any(
+            any(self._seat_seen(T_world_bear, _beyond(corner), seat_top_z))
+            for corner, seen in zip(corners, corners_seen, strict=True)
+            if not seen
+        )
         if not holes:
             return False
         extents = half + SEAT_PATCH_MARGIN_M
@@ -350,6 +347,13 @@ class _ReleaseWorld:
         self.closed = True
         with contextlib.suppress(pybullet.error):
             self.client.disconnect()
+
+
+def _beyond(corner: np.ndarray) -> list[np.ndarray]:
+    """The points ``SEAT_EDGE_PROBES_M`` past a footprint corner (bear frame, metres),
+    outward along the footprint's diagonal."""
+    outward = corner / np.linalg.norm(corner)
+    return [corner + step * outward for step in SEAT_EDGE_PROBES_M]
 
 
 def _world(chair_mesh: trimesh.Trimesh) -> _ReleaseWorld:

@@ -46,15 +46,14 @@ class RegistrationConfig:
             tracking views, a chair turned half round can match its unturned self better
             than the right fit (the views see sides the reference never saw; both fill
             the same box), and only a peak's overlap is that weak, or a climbed one's (a
-            sofa's turn read 180 degrees off climbed to 0.884). One instruction step (30 deg): the
-            helper turns by the words, not by the exact angle they round.
+            sofa's turn read 180 degrees off climbed to 0.884). One instruction step
+            (30 deg): the helper turns by the words, not by the exact angle they round.
         global_voxel_m: downsampling of the FPFH + RANSAC global registration.
         climb_steps_m, climb_steps_deg: the moves (along x and y) and turns (about the
             carried reference's centroid) of the climb on the visible overlap, coarse to
             fine, each kept while it raises the overlap; one turn per move, so equally
-            long. The first is about the error
-            ICP leaves on a turned chair (0.5-4 cm); the last is a third of the fine
-            voxel. Empty: no climb.
+            long. The first is about the error ICP leaves on a turned chair (0.5-4 cm);
+            the last is a third of the fine voxel. Empty: no climb.
         climb_max_evaluations: bounds the climb's time (each evaluation projects the
             reference into every frame).
     """
