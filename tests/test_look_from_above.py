@@ -28,6 +28,7 @@ from bearchair.skills.perception.look_from_above import (
     solve_view,
 )
 from bearchair.skills.perception.views import HOME_CONFIGURATION, VIEW_CLEARANCE_M
+from bearchair.testing.chairgen import generate_chair
 from bearchair.testing.scripted import default_results
 
 TARGET = np.array([0.6, 0.0, 0.25])
@@ -84,25 +85,31 @@ def test_the_look_is_visited_clear_of_the_chair_and_fused_with_the_scan():
 
 
 @pytest.mark.slow
-def test_a_seat_the_nine_views_hid_is_found_after_one_look(shared_chairs, shared_manifest):
-    """A desk chair with a 0.53 m back and 0.34 m armrests, facing away from the arm
-    (``bearchair trials`` seed 0, its trial 5): on the nine views the imagination finds
-    no sitting; one look from above and it does, within the paper's 30 deg of the front."""
-    entry = next(m for m in shared_manifest if m["file"] == "chair-kenney-08.obj")
-    seed = 1807646323
+def test_a_seat_the_nine_views_hid_is_found_after_one_look(tmp_path):
+    """A generated armchair whose armrests and back hide its seat from the nine views
+    (chair 1 of the generalisation bench, placed as in its mission): on the nine views
+    the imagination finds no sitting; with the looks from above the mission takes (at
+    most three, each from another eye) it does, within the paper's 30 deg of the front."""
+    chair = generate_chair(1, "armchair")
+    chair.mesh.export(tmp_path / "chair.obj")
+    seed = 1647419382
     config = SimConfig(
-        chair_path=shared_chairs / entry["file"],
+        chair_path=tmp_path / "chair.obj",
         seed=seed,
-        placement="inaccessible",
-        front_yaw_deg=entry["front_yaw_deg"],
+        placement="accessible",
+        front_yaw_deg=0.0,
     )
     with SimWorld(config) as world:
         scan = scan_chair(world.robot.arm, seed=seed)
         assert not imagine_sitting(scan.chair_mesh, seed=seed, workers=1).found
-        again = look_from_above(world.robot.arm, scan, seed=seed)
-        found = imagine_sitting(again.chair_mesh, seed=seed, workers=1)
+        for _ in range(3):
+            scan = look_from_above(world.robot.arm, scan, seed=seed)
+            found = imagine_sitting(scan.chair_mesh, seed=seed, workers=1)
+            if found.found:
+                break
         front = world.front_yaw_rad + world.placement_yaw_rad
     assert found.found and found.sitting_pose is not None
+    assert scan.views > 10  # the first look alone did not show enough
     error = (found.sitting_pose.yaw - front + math.pi) % (2 * math.pi) - math.pi
     assert abs(math.degrees(error)) < 30.0
 
