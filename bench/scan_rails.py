@@ -12,8 +12,8 @@ armrests or side walls (seeds 0 .. per-family - 1), placed as a mission places t
 voxels, :class:`~bearchair.skills.perception.reconstruction_config.ReconstructionConfig`)
 and the nearest rails left and right of the true sitting point (the seat's middle,
 facing the chair's front) are found on the true mesh, on the scan, and on the scan's
-surface that some view saw (within ``--seen-tolerance`` of a frame's depth: what the
-TSDF inferred behind an armrest's top is left out). Prints per chair
+surface a frame measured (the reconstruction's mark, :mod:`bearchair.core.seen_surface`:
+what the TSDF grew behind an armrest's top is left out), as the planners judge them. Prints per chair
 the true and scanned rails (metres across the sitting ray, left positive); per
 truncation how far the scanned rails stand inward of the true ones (a negative value:
 outward, the scan thinned the rail), how much narrower the gap between them came out,
@@ -24,7 +24,6 @@ listed as such and left out of the figures.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import sys
 import tempfile
@@ -38,9 +37,7 @@ from bearchair.hardware.sim.chair import centred_chair_mesh
 from bearchair.hardware.sim.world import SimConfig, SimWorld
 from bearchair.skills.perception import PerceptionError, scan_chair
 from bearchair.skills.perception.reconstruction_config import ReconstructionConfig
-from bearchair.skills.perception.registration_config import RegistrationConfig
-from bearchair.skills.perception.visible_overlap import visibility_masks
-from bearchair.skills.planning.chair_along_ray import rails_beside, surface_points
+from bearchair.skills.planning.chair_along_ray import rails_beside, surface_samples
 from bearchair.testing.chairgen import FAMILIES, GeneratedChair, generate_chair
 
 RAIL_FAMILIES = ("armchair", "swivel_tub", "basket", "x_frame", "sofa")
@@ -70,15 +67,7 @@ def main() -> int:
     parser.add_argument("--families", default=",".join(RAIL_FAMILIES))
     parser.add_argument("--truncations", default="4,3,2", help="TSDF truncations, voxels")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument(
-        "--seen-tolerance",
-        type=float,
-        default=0.006,
-        help="metres: a surface point within this of a frame's depth was seen (half the "
-        "8 mm voxel, where the extracted surface lies, plus the Carmine's noise at 0.9 m)",
-    )
     args = parser.parse_args()
-    seen_config = dataclasses.replace(RegistrationConfig(), visible_tolerance_m=args.seen_tolerance)
     families = [f for f in args.families.split(",") if f in FAMILIES]
     truncations = [float(t) for t in args.truncations.split(",") if t]
     inward: dict[float, list[float]] = {t: [] for t in truncations}
@@ -112,10 +101,10 @@ def main() -> int:
                         line.append(f"trunc {truncation:g}: scan failed: {error}")
                         continue
                     seconds[truncation].append(time.perf_counter() - tick)
-                points = surface_points(scan.chair_mesh)
-                seen, _ = visibility_masks(points, list(scan.frames), seen_config)
-                for key, kept in ((truncation, points), (-truncation, points[seen])):
-                    a, b = rails_beside(scan.chair_mesh, pose, chair.seat_height_m, kept)
+                points, seen = surface_samples(scan.chair_mesh)
+                everywhere = np.ones(len(points), bool)
+                for key, kept in ((truncation, everywhere), (-truncation, seen)):
+                    a, b = rails_beside(scan.chair_mesh, pose, chair.seat_height_m, points, kept)
                     label = "seen" if key < 0 else f"trunc {truncation:g}"
                     line.append(f"{label}: {a:+.4f} {b:+.4f}")
                     if math.isfinite(a):

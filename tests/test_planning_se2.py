@@ -509,9 +509,17 @@ def test_p_off_the_middle_between_armrests_is_centred_for_the_hands() -> None:
     assert reachable.reachable, reachable.reason
     assert reachable.centred_m == pytest.approx(0.025, abs=0.005)
 
-    # Armrests 0.23 m apart leave the band no room wherever p is; no armrests, nothing
-    # to move for.
-    narrow, narrow_middle = _placed_chair(0.6, 0.1, 30.0, seat_width_m=0.29, armrest_height_m=0.39)
+    # Armrests 0.23 m apart hold the band (0.22 m) but not its clearance on both sides:
+    # p goes to their middle, the most room either side. Armrests 0.21 m apart leave the
+    # band no room wherever p is; no armrests, nothing to move for.
+    snug, snug_middle = _placed_chair(0.6, 0.1, 30.0, seat_width_m=0.29, armrest_height_m=0.39)
+    snug_off = SittingPose(snug_middle.position + 0.01 * left, middle.yaw)
+    top = planner_seat_top(snug, snug_off, seat_ray(snug, snug_off))
+    snug_centred = centred_between_rails(snug, snug_off, top)
+    assert np.dot(snug_centred.position - snug_middle.position, left) == pytest.approx(
+        0.0, abs=0.002
+    )
+    narrow, narrow_middle = _placed_chair(0.6, 0.1, 30.0, seat_width_m=0.27, armrest_height_m=0.39)
     narrow_off = SittingPose(narrow_middle.position + 0.025 * left, middle.yaw)
     top = planner_seat_top(narrow, narrow_off, seat_ray(narrow, narrow_off))
     assert centred_between_rails(narrow, narrow_off, top) is narrow_off

@@ -39,12 +39,14 @@ from scipy.spatial import (
 )
 
 from bearchair.core.nao_carrying import BEAR_COM_AHEAD_M, BEAR_COM_HEIGHT_M, BEAR_TORSO_DEPTH_M
+from bearchair.core.seen_surface import SEEN_ATTRIBUTE, SEEN_TOLERANCE_M
 from bearchair.hardware.interfaces import RGBDFrame
 from bearchair.skills.perception.determinism import one_open3d_thread
 from bearchair.skills.perception.errors import PerceptionError
 from bearchair.skills.perception.pinhole import clean_depth, depth_to_world, validate_frame
 from bearchair.skills.perception.reconstruction_config import ReconstructionConfig
 from bearchair.skills.perception.views import MAX_CHAIR_REACH_M
+from bearchair.skills.perception.visible_overlap import visibility_masks
 from bearchair.skills.results import ChairScan
 
 
@@ -268,7 +270,9 @@ def reconstruct_chair(frames: Sequence[RGBDFrame], config: ReconstructionConfig)
 
     Returns:
         The chair's mesh and points in the world frame (z up, floor removed, the legs'
-        lowest points on the floor plane), the number of views and the time per step.
+        lowest points on the floor plane; the vertices a frame measured marked in the
+        mesh, :mod:`bearchair.core.seen_surface`), the number of views and the time per
+        step.
 
     Raises:
         PerceptionError: a frame is bad (all zeros, NaN, too few points, bad pose), or
@@ -311,6 +315,8 @@ def reconstruct_chair(frames: Sequence[RGBDFrame], config: ReconstructionConfig)
     if config.with_mesh:
         tick = time.perf_counter()
         chair_mesh = _chair_mesh(grid, chair_cells, origin, cell_m, plane, config)
+        seen, _ = visibility_masks(chair_mesh.vertices, frames, SEEN_TOLERANCE_M)
+        chair_mesh.vertex_attributes[SEEN_ATTRIBUTE] = seen.astype(np.float64)
         seconds["mesh"] = time.perf_counter() - tick
     seconds["total"] = time.perf_counter() - started
     return ChairScan(chair_mesh, chair_points, len(frames), seconds)

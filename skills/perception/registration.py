@@ -330,7 +330,7 @@ def _refined_on_visible(
     reference = np.asarray(fine.target.points)
     T_new_old = np.linalg.inv(T_old_new)
     carried = transform_points(T_new_old, reference)
-    mask, _ = visibility_masks(carried, frames, config)
+    mask, _ = visibility_masks(carried, frames, config.visible_tolerance_m)
     if mask.sum() >= 100:
         target = _cloud(new_points, config.fine_voxel_m)
         source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(reference[mask]))

@@ -7,6 +7,7 @@ climb of a fit to its local maximum. Used by
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -28,7 +29,8 @@ def visible_fitness(
     Returns:
         seen / (seen + contradicted), or 0 when no frame could see any point.
     """
-    seen, contradicted = visibility_masks(points_world, frames, config or RegistrationConfig())
+    config = config or RegistrationConfig()
+    seen, contradicted = visibility_masks(points_world, frames, config.visible_tolerance_m)
     judged = int(seen.sum() + contradicted.sum())
     return float(seen.sum()) / judged if judged else 0.0
 
@@ -57,9 +59,10 @@ def is_visible_peak(
 
 
 def visibility_masks(
-    points_world: np.ndarray, frames: list[RGBDFrame], config: RegistrationConfig
+    points_world: np.ndarray, frames: Sequence[RGBDFrame], tolerance_m: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(seen, contradicted) masks of ``points_world`` (see :func:`visible_fitness`)."""
+    """(seen, contradicted) masks of ``points_world`` (see :func:`visible_fitness`; a point
+    within ``tolerance_m`` of a frame's depth is seen)."""
     points = np.asarray(points_world, dtype=np.float64)
     seen = np.zeros(len(points), bool)
     through = np.zeros(len(points), bool)
@@ -78,8 +81,8 @@ def visibility_masks(
         depth[inside] = np.asarray(frame.depth_m)[v[inside], u[inside]]
         valid = inside & np.isfinite(depth) & (depth > 0)
         residual = z - depth
-        seen |= valid & (np.abs(residual) <= config.visible_tolerance_m)
-        through |= valid & (residual < -config.visible_tolerance_m)
+        seen |= valid & (np.abs(residual) <= tolerance_m)
+        through |= valid & (residual < -tolerance_m)
     return seen, through & ~seen
 
 

@@ -16,6 +16,7 @@ import numpy as np
 import trimesh
 
 from bearchair.core.geometry import SittingPose
+from bearchair.core.seen_surface import seen_faces, seen_vertices
 from bearchair.skills.planning.seat import SeatRay
 from bearchair.skills.planning.wholebody.chair_profile import (
     BAND_HALF_WIDTH_M,
@@ -49,14 +50,24 @@ class ChairAlongRay(NamedTuple):
     above_seat_m: float
 
 
-def surface_points(chair_mesh: trimesh.Trimesh) -> np.ndarray:
-    """(N, 3) points of the chair's surface the search looks at: 20000 samples (seed 0)
-    and the vertices, world frame, metres."""
+def surface_samples(chair_mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
+    """(points, seen): (N, 3) points of the chair's surface the search looks at (20000
+    samples, seed 0, and the vertices; world frame, metres) and (N,) whether a frame
+    measured each (:mod:`bearchair.core.seen_surface`; all of a mesh without the mark)."""
     # Without sample_color, trimesh returns exactly (points, face indices).
-    points, _ = cast(
+    points, face_index = cast(
         tuple[np.ndarray, np.ndarray], trimesh.sample.sample_surface(chair_mesh, 20000, seed=0)
     )
-    return np.vstack([points, chair_mesh.vertices])
+    points = np.vstack([points, chair_mesh.vertices])
+    faces, vertices = seen_faces(chair_mesh), seen_vertices(chair_mesh)
+    if faces is None or vertices is None:
+        return points, np.ones(len(points), bool)
+    return points, np.concatenate([faces[face_index], vertices])
+
+
+def surface_points(chair_mesh: trimesh.Trimesh) -> np.ndarray:
+    """The points of :func:`surface_samples`."""
+    return surface_samples(chair_mesh)[0]
 
 
 def chair_along_ray(
@@ -64,19 +75,21 @@ def chair_along_ray(
     sitting_pose: SittingPose,
     seat_top_m: float,
     points: np.ndarray | None = None,
+    seen: np.ndarray | None = None,
 ) -> ChairAlongRay:
     """Where the chair lies along the sitting ray within ``BAND_HALF_WIDTH_M`` of it,
     below and above the seat top (:mod:`.wholebody.chair_profile`'s two blocks);
-    ``points``: :func:`surface_points` when the caller has them."""
+    ``points``, ``seen``: :func:`surface_samples` when the caller has them."""
     p = np.asarray(sitting_pose.position, dtype=float)
     u = sitting_pose.direction()
-    points = surface_points(chair_mesh) if points is None else points
+    if points is None:
+        points, seen = surface_samples(chair_mesh)
     rel = points[:, :2] - p[:2]
     along = rel @ u
     across = rel @ np.array([-u[1], u[0]])
     in_band = np.abs(across) <= BAND_HALF_WIDTH_M
     below = in_band & (points[:, 2] <= seat_top_m + 0.01)
-    above = in_band & stands_above_seat(across, points[:, 2], seat_top_m)
+    above = in_band & stands_above_seat(across, points[:, 2], seat_top_m, seen)
     return ChairAlongRay(
         float(along[below].max()) if below.any() else 0.0,
         float(along[above].max()) if above.any() else -math.inf,
@@ -88,11 +101,13 @@ def centred_between_rails(
     sitting_pose: SittingPose,
     seat_top_m: float,
     points: np.ndarray | None = None,
+    seen: np.ndarray | None = None,
 ) -> SittingPose:
     """p moved across the ray so that what stands on the seat beside it (armrests) leaves
-    the NAO's band, ``RAIL_CLEARANCE_M`` outside it on each side it stands; p unchanged
-    when nothing stands within that of the band ahead of the bear's back, or no move of
-    at most ``MAX_CENTRING_M`` clears both sides.
+    the NAO's band, ``RAIL_CLEARANCE_M`` outside it on each side it stands (to the gap's
+    middle where the gap holds the band but not both clearances); p unchanged when
+    nothing stands within that of the band ahead of the bear's back, the gap is
+    narrower than the band, or the move would be longer than ``MAX_CENTRING_M``.
 
     With a and b the nearest such points left and right of the ray (across it, metres;
     a missing side counts as far away), band w and clearance c, the move is
@@ -101,18 +116,24 @@ def centred_between_rails(
 
         δ = \\operatorname{clip}\\Big(\\tfrac{a + b}{2},\\; b + w + c,\\; a - w - c\\Big),
 
-    the middle of the gap, kept within the moves that clear both sides. ``points``:
-    :func:`surface_points` when the caller has them.
+    the middle of the gap, kept within the moves that clear both sides (δ = (a + b) / 2
+    when 2w ≤ a − b < 2(w + c)). ``points``, ``seen``: :func:`surface_samples` when
+    the caller has them.
     """
-    a, b = rails_beside(chair_mesh, sitting_pose, seat_top_m, points)
+    a, b = rails_beside(chair_mesh, sitting_pose, seat_top_m, points, seen)
     reach = BAND_HALF_WIDTH_M + RAIL_CLEARANCE_M
     if a > reach and b < -reach:
         return sitting_pose
     lowest, highest = b + reach, a - reach
-    if lowest > highest:
+    if lowest <= highest:
+        middle = (
+            (a + b) / 2.0 if math.isfinite(a + b) else (lowest if math.isfinite(b) else highest)
+        )
+        move = float(np.clip(middle, lowest, highest))
+    elif a - b >= 2.0 * BAND_HALF_WIDTH_M:
+        move = (a + b) / 2.0  # room for the band, not its clearance: the most either side
+    else:
         return sitting_pose  # the gap is narrower than the band: no move helps
-    middle = (a + b) / 2.0 if math.isfinite(a + b) else (lowest if math.isfinite(b) else highest)
-    move = float(np.clip(middle, lowest, highest))
     if abs(move) > MAX_CENTRING_M:
         return sitting_pose
     u = sitting_pose.direction()
@@ -126,21 +147,24 @@ def rails_beside(
     sitting_pose: SittingPose,
     seat_top_m: float,
     points: np.ndarray | None = None,
+    seen: np.ndarray | None = None,
 ) -> tuple[float, float]:
     """(a, b): across the sitting ray (metres, left of it positive), the nearest points
     left and right of p that stand on a ``seat_top_m`` high seat in the way of the bear or
     the hands (:func:`.wholebody.chair_profile.stands_above_seat`), ahead of the bear's
     back and within ``BAND_HALF_WIDTH_M + RAIL_CLEARANCE_M + MAX_CENTRING_M`` of the ray;
-    +inf (left) or -inf (right) where a side has none. ``points``: :func:`surface_points`
+    +inf (left) or -inf (right) where a side has none; beside the bear's lane only
+    what a frame measured counts (``seen``). ``points``, ``seen``: :func:`surface_samples`
     when the caller has them."""
     p = np.asarray(sitting_pose.position, dtype=float)
     u = sitting_pose.direction()
-    points = surface_points(chair_mesh) if points is None else points
+    if points is None:
+        points, seen = surface_samples(chair_mesh)
     rel = points[:, :2] - p[:2]
     along, across = rel @ u, rel @ np.array([-u[1], u[0]])
     ahead = along >= -(BEAR_DEPTH_M / 2.0 + BEAR_CHAIR_MARGIN_M)
     standing = ahead & (np.abs(across) <= BAND_HALF_WIDTH_M + RAIL_CLEARANCE_M + MAX_CENTRING_M)
-    standing &= stands_above_seat(across, points[:, 2], seat_top_m)
+    standing &= stands_above_seat(across, points[:, 2], seat_top_m, seen)
     left = across[standing & (across > 0.0)]
     right = across[standing & (across <= 0.0)]
     return (

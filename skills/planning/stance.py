@@ -54,7 +54,7 @@ from bearchair.skills.planning.chair_along_ray import (
     closed_above,
     out_of_reach_reason,
     rails_beside,
-    surface_points,
+    surface_samples,
 )
 from bearchair.skills.planning.collision import NaoCollisionChecker, chair_solid_boxes
 from bearchair.skills.planning.preplan import SeatingCheck, SeatingValidator, wholebody_validator
@@ -194,11 +194,11 @@ def choose_stance(
         The first pair found, or the imagined ray's failure with its reason.
     """
     model = model or reach_model()
-    points = surface_points(chair_mesh)
+    surface = surface_samples(chair_mesh)
 
     def on_ray(pose: SittingPose, max_preplans: int) -> StanceChoice:
         return _choose_stance_on_ray(
-            chair_mesh, pose, checker, validator, scene, model, max_preplans, points
+            chair_mesh, pose, checker, validator, scene, model, max_preplans, surface
         )
 
     first = on_ray(sitting_pose, MAX_PREPLANS)
@@ -228,7 +228,7 @@ def _choose_stance_on_ray(
     scene: bool,
     model: ReachModel,
     max_preplans: int,
-    points: np.ndarray,
+    surface: tuple[np.ndarray, np.ndarray],
 ) -> StanceChoice:
     """Searches stance and sitting point together on one ray (see the module doc).
 
@@ -236,16 +236,16 @@ def _choose_stance_on_ray(
     then stances nearer the chair, down to the front of the feet at the chair's front,
     which it reaches by stepping straight in from the first clear one. The arguments
     are :func:`choose_stance`'s; ``max_preplans`` is how many pairs the pre-plan may be
-    asked about, ``points`` the chair's :func:`surface_points`.
+    asked about, ``surface`` the chair's :func:`surface_samples`.
     """
     ray = seat_ray(chair_mesh, sitting_pose)
     if len(ray.slides_m) == 0:
         return StanceChoice(None, sitting_pose, "no seat under the sitting position")
     seat_top = planner_seat_top(chair_mesh, sitting_pose, ray)
     sitting_pose, ray, seat_top, centred_m = _centred_ray(
-        chair_mesh, sitting_pose, ray, seat_top, points
+        chair_mesh, sitting_pose, ray, seat_top, surface
     )
-    chair = chair_along_ray(chair_mesh, sitting_pose, seat_top, points)
+    chair = chair_along_ray(chair_mesh, sitting_pose, seat_top, *surface)
     seat_under_p0 = float(ray.seat_heights_m[0])
     front = chair.front_m
     none = StanceChoice(None, sitting_pose, "", seat_height_m=seat_under_p0, centred_m=centred_m)
@@ -264,7 +264,7 @@ def _choose_stance_on_ray(
         )
     pairs, stances = _stance_pairs(planner_ray, front, walk_in, model)
     if not pairs:
-        left, right = rails_beside(chair_mesh, sitting_pose, seat_under_p0, points)
+        left, right = rails_beside(chair_mesh, sitting_pose, seat_under_p0, *surface)
         return none._replace(
             reason=out_of_reach_reason(
                 planner_ray, front, stances, model, seat_under_p0, left - right
@@ -303,12 +303,12 @@ def _centred_ray(
     sitting_pose: SittingPose,
     ray: SeatRay,
     seat_top_m: float,
-    points: np.ndarray,
+    surface: tuple[np.ndarray, np.ndarray],
 ) -> tuple[SittingPose, SeatRay, float, float]:
     """(sitting pose, its seat ray, the planner's seat top in metres, how far p moved in
     metres) with p centred between armrests (:func:`centred_between_rails`) when there is
     a seat under the centred p; else the given ones and 0."""
-    centred = centred_between_rails(chair_mesh, sitting_pose, seat_top_m, points)
+    centred = centred_between_rails(chair_mesh, sitting_pose, seat_top_m, *surface)
     if centred is sitting_pose:
         return sitting_pose, ray, seat_top_m, 0.0
     centred_ray = seat_ray(chair_mesh, centred)

@@ -33,6 +33,7 @@ import trimesh
 from bearchair.core.errors import SkillError
 from bearchair.core.geometry import transform_points
 from bearchair.core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, BEAR_SEAT_CLEARANCE_M
+from bearchair.core.seen_surface import seen_faces, seen_vertices
 
 BAND_HALF_WIDTH_M = 0.11
 """Half-width of the lateral band the planar motion sweeps (the hands' centres at
@@ -53,13 +54,20 @@ it (metres): the scan's noise on the rail's top, a few millimetres, must not mak
 stand in the hands' way."""
 
 
-def stands_above_seat(lateral_m: np.ndarray, z_m: np.ndarray, seat_top_m: float) -> np.ndarray:
+def stands_above_seat(
+    lateral_m: np.ndarray, z_m: np.ndarray, seat_top_m: float, seen: np.ndarray | None = None
+) -> np.ndarray:
     """Which points (lateral offset from the sagittal plane, height; metres) stand above the
     seat in the way of the bear or the hands: above the seat top in the bear's lane, above
-    the hands' lowest point beside it."""
+    the hands' lowest point beside it. ``seen``: which of them a frame measured
+    (:mod:`bearchair.core.seen_surface`); beside the lane only those count, for a scan grows
+    an armrest's inner face inward where no view looked (None: all of them)."""
     lateral = np.abs(lateral_m)
     in_lane = lateral <= BEAR_LANE_HALF_WIDTH_M
-    return (z_m > seat_top_m + 0.015) & (in_lane | (z_m > seat_top_m + HANDS_ABOVE_SEAT_M))
+    beside = z_m > seat_top_m + HANDS_ABOVE_SEAT_M
+    if seen is not None:
+        beside &= seen
+    return (z_m > seat_top_m + 0.015) & (in_lane | beside)
 
 
 HORIZONTAL_NORMAL_Z = 0.95
@@ -123,6 +131,12 @@ def fit_chair_profile(
         tuple[np.ndarray, np.ndarray],
         trimesh.sample.sample_surface(chair_mesh, samples, seed=seed),
     )
+    faces_seen, vertices_seen = seen_faces(chair_mesh), seen_vertices(chair_mesh)
+    seen = (
+        np.ones(len(points) + len(chair_mesh.vertices), bool)
+        if faces_seen is None or vertices_seen is None
+        else np.concatenate([faces_seen[face_index], vertices_seen])
+    )
     points = np.vstack([points, chair_mesh.vertices])
     normals = np.vstack(
         [chair_mesh.face_normals[face_index], np.zeros((len(chair_mesh.vertices), 3))]
@@ -135,14 +149,14 @@ def fit_chair_profile(
     g_x, g_y, g_z = (float(v) for v in sitting_point_nao)
     points[:, 1] -= g_y
     in_band = np.abs(points[:, 1]) <= band_half_width_m
-    points, normals = points[in_band], normals[in_band]
+    points, normals, seen = points[in_band], normals[in_band], seen[in_band]
     if len(points) == 0:
         raise ChairProfileError("no part of the chair lies in front of the NAO")
 
-    seat_top_z = _seat_top_z(points, normals, g_x, g_z)
+    seat_top_z = _seat_top_z(points, normals, seen, g_x, g_z)
     below = points[:, 2] <= seat_top_z + 0.01
     seat_front_x = float(np.min(points[below, 0]))
-    above = stands_above_seat(points[:, 1], points[:, 2], seat_top_z)
+    above = stands_above_seat(points[:, 1], points[:, 2], seat_top_z, seen)
     if np.any(above):
         back_front_x = float(np.min(points[above, 0]))
         back_top_z = float(np.max(points[above, 2]))
@@ -151,9 +165,12 @@ def fit_chair_profile(
     return ChairProfile(seat_front_x, seat_top_z, back_front_x, back_top_z)
 
 
-def _seat_top_z(points: np.ndarray, normals: np.ndarray, g_x: float, g_z: float) -> float:
+def _seat_top_z(
+    points: np.ndarray, normals: np.ndarray, seen: np.ndarray, g_x: float, g_z: float
+) -> float:
     """The seat top (metres) under g = (``g_x``, ``g_z``) from the band's (N, 3) surface
-    points and their normals (NAO frame, y from g).
+    points, their normals (NAO frame, y from g) and which of them a frame measured (the
+    rails beside the lane are judged on those: :func:`stands_above_seat`).
 
     Raises:
         ChairProfileError: no chair surface lies under g.
@@ -177,7 +194,7 @@ def _seat_top_z(points: np.ndarray, normals: np.ndarray, g_x: float, g_z: float)
     # A rail's top from all its samples, not only its horizontal top: a rail at the band's
     # edge would otherwise be a rail (its top in the band) or, a millimetre further out,
     # something standing above the seat (only its inner side in the band).
-    rails = under & ~in_lane
+    rails = under & ~in_lane & seen
     if rails.any():
         rail_top = float(np.max(points[rails, 2]))
         seat_top_z = max(seat_top_z, rail_top - HANDS_ABOVE_SEAT_M + RAIL_CLEARANCE_M)
