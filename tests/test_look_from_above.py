@@ -85,7 +85,7 @@ def test_the_look_is_visited_clear_of_the_chair_and_fused_with_the_scan():
 
 
 @pytest.mark.slow
-def test_a_seat_the_nine_views_hid_is_found_after_one_look(tmp_path):
+def test_a_seat_the_nine_views_hid_is_found_by_the_looks_from_above(tmp_path):
     """A generated armchair whose armrests and back hide its seat from the nine views
     (chair 1 of the generalisation bench, placed as in its mission): on the nine views
     the imagination finds no sitting; with the looks from above the mission takes (at
@@ -109,7 +109,6 @@ def test_a_seat_the_nine_views_hid_is_found_after_one_look(tmp_path):
                 break
         front = world.front_yaw_rad + world.placement_yaw_rad
     assert found.found and found.sitting_pose is not None
-    assert scan.views > 10  # the first look alone did not show enough
     error = (found.sitting_pose.yaw - front + math.pi) % (2 * math.pi) - math.pi
     assert abs(math.degrees(error)) < 30.0
 
