@@ -62,7 +62,7 @@ def _percentiles(values: list[float]) -> str:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--per-family", type=int, default=8)
     parser.add_argument("--families", default=",".join(RAIL_FAMILIES))
     parser.add_argument("--truncations", default="4,3,2", help="TSDF truncations, voxels")

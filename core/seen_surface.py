@@ -5,9 +5,10 @@ and to one side writes "behind the surface" along its rays into the voxels besid
 armrest's inner face, and a second such view makes them surface. The reconstruction
 marks each vertex of the chair mesh that some frame measured (within
 :data:`SEEN_TOLERANCE_M` of the frame's depth) in the mesh's vertex attribute
-:data:`SEEN_ATTRIBUTE`; the planners that judge what stands beside the hands sample only
-the faces seen (:func:`seen_faces`). A mesh without the attribute (a true mesh, a
-user's file) is seen everywhere.
+:data:`SEEN_ATTRIBUTE`; the planners count what stands beside the bear's lane, in the
+hands' way, only where it was seen (:func:`seen_faces`,
+:func:`bearchair.skills.planning.wholebody.chair_profile.stands_above_seat`). A mesh
+without the attribute (a true mesh, a user's file) is seen everywhere.
 """
 
 from __future__ import annotations
@@ -26,13 +27,14 @@ Carmine's depth noise at 0.9 m (about 1 mm)."""
 
 
 def seen_faces(mesh: trimesh.Trimesh) -> np.ndarray | None:
-    """(F,) bool: the faces at least two of whose vertices a frame measured; None when
-    the mesh carries no :data:`SEEN_ATTRIBUTE` (all of it counts as seen)."""
+    """(F,) bool: the faces all three of whose vertices a frame measured (a face along
+    the edge of what was seen leans into what was not); None when the mesh carries no
+    :data:`SEEN_ATTRIBUTE` (all of it counts as seen)."""
     seen = mesh.vertex_attributes.get(SEEN_ATTRIBUTE)
     if seen is None or len(seen) != len(mesh.vertices):
         return None
     measured = np.asarray(seen, dtype=float) > 0.5
-    return measured[np.asarray(mesh.faces)].all(axis=1)
+    return np.asarray(measured[np.asarray(mesh.faces)].all(axis=1), dtype=bool)
 
 
 def seen_vertices(mesh: trimesh.Trimesh) -> np.ndarray | None:

@@ -36,6 +36,7 @@ def _armrests(grown_m: float) -> tuple[trimesh.Trimesh, int]:
     slab = trimesh.creation.box((0.25, grown_m, 0.12))
     slab.apply_translation((0.0, 0.12 - grown_m / 2.0, SEAT_TOP_M + 0.07))
     mesh = trimesh.util.concatenate([*parts, slab])
+    assert isinstance(mesh, trimesh.Trimesh)
     return mesh, len(slab.vertices)
 
 

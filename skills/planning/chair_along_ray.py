@@ -65,11 +65,6 @@ def surface_samples(chair_mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray
     return points, np.concatenate([faces[face_index], vertices])
 
 
-def surface_points(chair_mesh: trimesh.Trimesh) -> np.ndarray:
-    """The points of :func:`surface_samples`."""
-    return surface_samples(chair_mesh)[0]
-
-
 def chair_along_ray(
     chair_mesh: trimesh.Trimesh,
     sitting_pose: SittingPose,
