@@ -16,7 +16,7 @@ import numpy as np
 import trimesh
 
 from bearchair.core.geometry import SittingPose
-from bearchair.core.seen_surface import seen_faces, seen_vertices
+from bearchair.core.seen_surface import seen_samples
 from bearchair.skills.planning.seat import SeatRay
 from bearchair.skills.planning.wholebody.chair_profile import (
     BAND_HALF_WIDTH_M,
@@ -58,11 +58,7 @@ def surface_samples(chair_mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray
     points, face_index = cast(
         tuple[np.ndarray, np.ndarray], trimesh.sample.sample_surface(chair_mesh, 20000, seed=0)
     )
-    points = np.vstack([points, chair_mesh.vertices])
-    faces, vertices = seen_faces(chair_mesh), seen_vertices(chair_mesh)
-    if faces is None or vertices is None:
-        return points, np.ones(len(points), bool)
-    return points, np.concatenate([faces[face_index], vertices])
+    return np.vstack([points, chair_mesh.vertices]), seen_samples(chair_mesh, face_index)
 
 
 def chair_along_ray(

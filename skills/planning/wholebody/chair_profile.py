@@ -33,7 +33,7 @@ import trimesh
 from bearchair.core.errors import SkillError
 from bearchair.core.geometry import transform_points
 from bearchair.core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, BEAR_SEAT_CLEARANCE_M
-from bearchair.core.seen_surface import seen_faces, seen_vertices
+from bearchair.core.seen_surface import seen_samples
 
 BAND_HALF_WIDTH_M = 0.11
 """Half-width of the lateral band the planar motion sweeps (the hands' centres at
@@ -131,12 +131,7 @@ def fit_chair_profile(
         tuple[np.ndarray, np.ndarray],
         trimesh.sample.sample_surface(chair_mesh, samples, seed=seed),
     )
-    faces_seen, vertices_seen = seen_faces(chair_mesh), seen_vertices(chair_mesh)
-    seen = (
-        np.ones(len(points) + len(chair_mesh.vertices), bool)
-        if faces_seen is None or vertices_seen is None
-        else np.concatenate([faces_seen[face_index], vertices_seen])
-    )
+    seen = seen_samples(chair_mesh, face_index)
     points = np.vstack([points, chair_mesh.vertices])
     normals = np.vstack(
         [chair_mesh.face_normals[face_index], np.zeros((len(chair_mesh.vertices), 3))]
