@@ -32,25 +32,13 @@ from pathlib import Path
 
 import numpy as np
 
-from bearchair.core.geometry import SittingPose, transform_points, yaw_of
-from bearchair.hardware.sim.chair import centred_chair_mesh
 from bearchair.hardware.sim.world import SimConfig, SimWorld
 from bearchair.skills.perception import PerceptionError, scan_chair
 from bearchair.skills.perception.reconstruction_config import ReconstructionConfig
 from bearchair.skills.planning.chair_along_ray import rails_beside, surface_samples
-from bearchair.testing.chairgen import FAMILIES, GeneratedChair, generate_chair
+from bearchair.testing.chairgen import FAMILIES, generate_chair
 
 RAIL_FAMILIES = ("armchair", "swivel_tub", "basket", "x_frame", "sofa")
-
-
-def true_sitting_pose(chair: GeneratedChair, T_world_chair: np.ndarray) -> SittingPose:
-    """The seat's middle at the seat's top, facing the chair's front (+x as generated),
-    in the world where the chair frame is ``T_world_chair`` (the simulated chair's frame
-    is the mesh's, re-centred: :func:`centred_chair_mesh`)."""
-    offset = centred_chair_mesh(chair.mesh).bounds[0] - chair.mesh.bounds[0]
-    middle = np.array([chair.seat_front_x_m - chair.seat_depth_m / 2.0, 0.0, chair.seat_height_m])
-    position = transform_points(T_world_chair, (middle + offset)[None, :])[0]
-    return SittingPose(position, yaw_of(T_world_chair))
 
 
 def _percentiles(values: list[float]) -> str:
@@ -85,7 +73,7 @@ def main() -> int:
             true_rails: tuple[float, float] | None = None
             for truncation in truncations:
                 with SimWorld(config) as world:
-                    pose = true_sitting_pose(chair, world.T_world_chair_true())
+                    pose = chair.true_sitting_pose(world.T_world_chair_true())
                     true_a, true_b = rails_beside(world.chair_mesh_true, pose, chair.seat_height_m)
                     if not (math.isfinite(true_a) and math.isfinite(true_b)):
                         break

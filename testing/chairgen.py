@@ -38,6 +38,7 @@ from typing import NamedTuple, cast
 import numpy as np
 import trimesh
 
+from bearchair.core.geometry import SittingPose, transform_points, yaw_of
 from bearchair.testing.chairgen_families import FAMILY_SEATS, ROUND_FAMILIES, family_parts
 
 FAMILIES: tuple[str, ...] = (
@@ -91,6 +92,19 @@ class GeneratedChair(NamedTuple):
     def name(self) -> str:
         """A file-friendly name: ``gen-<family>-<seed>``."""
         return f"gen-{self.family}-{self.seed:04d}"
+
+    def true_sitting_pose(self, T_world_chair: np.ndarray) -> SittingPose:
+        """The middle of the seat's top, facing the front (+x where the chair has none),
+        in the world where the chair frame is ``T_world_chair`` (4 x 4, metres).
+
+        The simulated world's chair frame is the mesh's with its x-y box centred and its
+        lowest point at z = 0, which the generated mesh already is.
+        """
+        middle_chair = np.array(
+            [self.seat_front_x_m - self.seat_depth_m / 2.0, 0.0, self.seat_height_m]
+        )
+        position_world = transform_points(T_world_chair, middle_chair[None, :])[0]
+        return SittingPose(position_world, yaw_of(T_world_chair) + (self.front_yaw_rad or 0.0))
 
 
 def _box(

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
+from bearchair.core.geometry import transform_points, yaw_transform
 from bearchair.skills.planning.seat import seat_support_heights
 from bearchair.testing.chairgen import (
     FAMILIES,
@@ -48,6 +51,18 @@ def test_stools_and_benches_have_no_front_and_chairs_face_plus_x():
     # The backrest stands behind the seat (at -x), above it.
     above = chair.mesh.vertices[chair.mesh.vertices[:, 2] > chair.seat_height_m + 0.05]
     assert above[:, 0].max() < chair.seat_front_x_m - chair.seat_depth_m / 2.0
+
+
+def test_the_true_sitting_pose_is_over_the_seat_s_middle_facing_the_front_in_the_world():
+    chair = generate_chair(2, "armchair")
+    T_world_chair = yaw_transform(math.pi / 2.0, np.array([1.0, -0.5, 0.0]))
+    pose = chair.true_sitting_pose(T_world_chair)
+    assert pose.yaw == pytest.approx(math.pi / 2.0)
+    # Back in the chair frame, the point lies on the seat's top, halfway along its depth.
+    p_chair = transform_points(np.linalg.inv(T_world_chair), pose.position[None, :])[0]
+    assert p_chair[0] == pytest.approx(chair.seat_front_x_m - chair.seat_depth_m / 2.0)
+    top = seat_support_heights(chair.mesh, p_chair[None, :2], chair.seat_height_m + 0.02)
+    assert top[0] == pytest.approx(p_chair[2], abs=1e-6)
 
 
 def test_a_footrest_sticks_out_in_front_of_the_seat():

@@ -83,19 +83,7 @@ def test_a_scanned_armchair_s_rails_stand_where_the_true_ones_do(tmp_path, seed:
         T_world_chair = world.T_world_chair_true()
         true_mesh = world.chair_mesh_true
         scan = scan_chair(world.robot.arm, seed=0)
-    # The seat's middle, facing the front (+x as generated); the simulated chair's frame
-    # is the mesh's with its box centred.
-    centre = chair.mesh.bounds[:, :2].mean(axis=0)
-    middle = np.array(
-        [
-            chair.seat_front_x_m - chair.seat_depth_m / 2.0 - centre[0],
-            -centre[1],
-            chair.seat_height_m,
-        ]
-    )
-    position = (T_world_chair @ np.append(middle, 1.0))[:3]
-    yaw = math.atan2(T_world_chair[1, 0], T_world_chair[0, 0])
-    pose = SittingPose(position, yaw)
+    pose = chair.true_sitting_pose(T_world_chair)
     true_left, true_right = rails_beside(true_mesh, pose, chair.seat_height_m)
     left, right = rails_beside(scan.chair_mesh, pose, chair.seat_height_m)
     assert abs(true_left - left) < 0.005 and abs(right - true_right) < 0.005
