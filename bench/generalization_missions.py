@@ -130,7 +130,14 @@ def print_missions(
     chairs: list[GeneratedChair],
 ) -> None:
     """Seating per family, per condition and per cause; the refusals with the reach check."""
-    from bearchair.evaluation.report import failure_cause, failure_kind, refusal
+    from bearchair.evaluation.report import (
+        TOUCH_DEPTHS_CM,
+        failure_cause,
+        failure_kind,
+        nao_into_chair,
+        refusal,
+        touch_lines,
+    )
 
     outside_reason = _inside_workspace(chairs)
     inside = {name: not reason for name, reason in outside_reason.items()}
@@ -164,6 +171,18 @@ def print_missions(
     print("\nfailures by cause (numbers replaced by #):")
     for cause, n in causes.most_common():
         print(f"  {n:3d} x {cause}")
+    touches = nao_into_chair(records)
+    if touches is not None:
+        print()
+        print("\n".join(touch_lines(touches)))
+        shallowest = TOUCH_DEPTHS_CM[0]
+        families = Counter(
+            by_chair[r.chair].family for r in records if (r.nao_into_chair_cm or 0.0) > shallowest
+        )
+        print(
+            f"  deeper than {shallowest:g} cm, by family: "
+            + ", ".join(f"{family} {n}" for family, n in families.most_common())
+        )
     outside = [c for c in chairs if not inside[c.name]]
     verdicts: Counter[str] = Counter()
     lines = []

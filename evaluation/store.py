@@ -59,6 +59,10 @@ COLUMNS: dict[str, str] = {
     "run_dir": "TEXT",
     "finished_at": "TEXT",
     "software": "TEXT",  # JSON: bearchair's version, git commit, key dependencies' versions
+    # Ground truth the simulated world alone knows: how deep the NAO went into the chair.
+    "nao_into_chair_cm": "REAL",
+    "nao_into_chair_link": "TEXT",
+    "nao_into_chair_stage": "TEXT",
 }
 KEY_COLUMNS = ("chair", "placement", "helper", "trial_index", "seed")
 
@@ -269,6 +273,7 @@ def record_from_summary(
     """A row from a finished mission's ``summary.json``
     (:mod:`bearchair.executive.records.run_summary`)."""
     judgement = summary.judgement
+    truth = summary.ground_truth
     instructions = len(summary.instructions)
     return TrialRecord(
         **_spec_columns(spec),
@@ -295,6 +300,9 @@ def record_from_summary(
         run_dir=run_dir,
         finished_at=_now(),
         software=summary.software or software_versions(),
+        nao_into_chair_cm=None if truth is None else truth.nao_into_chair_cm,
+        nao_into_chair_link=None if truth is None else truth.nao_into_chair_link,
+        nao_into_chair_stage=None if truth is None else truth.nao_into_chair_stage,
     )
 
 

@@ -54,6 +54,10 @@ class TrialRecord:
         run_dir: the trial's run record.
         finished_at: local time it was recorded, ISO 8601.
         software: the versions that ran it.
+        nao_into_chair_cm: ground truth: how deep the NAO went into the chair, centimetres
+            (None: not simulated, or no summary).
+        nao_into_chair_link: the NAO's link that went deepest ("" when none touched).
+        nao_into_chair_stage: the stage running when it did.
     """
 
     chair: str
@@ -84,6 +88,9 @@ class TrialRecord:
     run_dir: str | None = None
     finished_at: str | None = None
     software: dict[str, Any] | None = None
+    nao_into_chair_cm: float | None = None
+    nao_into_chair_link: str | None = None
+    nao_into_chair_stage: str | None = None
 
     @property
     def succeeded(self) -> bool:

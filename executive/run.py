@@ -400,7 +400,8 @@ def summary_before_start(
 def _ground_truth(world: Any, summary: RunSummary) -> GroundTruth:
     """What only the simulated world knows, at the end of the run: the chair's true
     sitting direction, how far the mission's sitting pose was from it (degrees), and how
-    deep the NAO went into the chair (centimetres; the simulated chair does not move)."""
+    deep the NAO went into the chair (centimetres; the simulated chair does not move),
+    with which link and in which stage (the world's clock is the robot's)."""
     true_yaw = world.sitting_yaw_true()
     touch = world.chair_touch.deepest
     error_deg = None
@@ -413,6 +414,7 @@ def _ground_truth(world: Any, summary: RunSummary) -> GroundTruth:
         sitting_yaw_error_deg=error_deg,
         nao_into_chair_cm=round(100.0 * touch.depth_m, 2),
         nao_into_chair_link=touch.nao_link,
+        nao_into_chair_stage=summary.stage_at(touch.time_s) if touch.nao_link else "",
     )
 
 
@@ -436,7 +438,9 @@ def format_summary(summary: RunSummary) -> str:
     if truth is not None and truth.nao_into_chair_cm:
         lines.append(
             f"ground truth: the NAO's {truth.nao_into_chair_link} went "
-            f"{truth.nao_into_chair_cm:.1f} cm into the chair (the simulated chair does not move)"
+            f"{truth.nao_into_chair_cm:.1f} cm into the chair"
+            + (f" during {truth.nao_into_chair_stage}" if truth.nao_into_chair_stage else "")
+            + " (the simulated chair does not move)"
         )
     outcome = summary.outcome.upper()
     if summary.succeeded:

@@ -419,6 +419,7 @@ def _stage_record(stage: StageTiming) -> StageRecord:
         seconds=round(stage.seconds, 3),
         robot_seconds=round(stage.robot_seconds, 3),
         message=stage.feedback,
+        robot_started_s=None if stage.robot_started_s is None else round(stage.robot_started_s, 3),
     )
 
 

@@ -117,6 +117,16 @@ def test_the_written_summary_reads_back_as_the_summary_that_was_written(recorded
     assert list(written)[:3] == ["schema", "chair", "placement"] and "info" not in written
 
 
+def test_every_stage_that_ran_is_written_with_its_start_on_the_robot_s_clock(recorded):
+    # The ground truth names the stage in which the NAO went into the chair from it.
+    summary, written = recorded
+    ran = [stage for stage in summary.stages if stage.status != "INVALID"]
+    assert ran and all(stage.robot_started_s is not None for stage in ran)
+    assert [stage["robot_started_s"] for stage in written["stages"]] == [
+        stage.robot_started_s for stage in summary.stages
+    ]
+
+
 def test_a_record_of_the_previous_version_reads_with_its_goal_in_units(recorded):
     summary = RunSummary.from_json(VERSION_1)
     assert summary.se2_goal == {"x_m": 1.25, "y_m": -0.5, "theta_deg": 90.0}

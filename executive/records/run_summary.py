@@ -101,6 +101,8 @@ class StageRecord(JsonRecord):
         seconds: its wall seconds.
         robot_seconds: its seconds on the robot's clock (None: an old record).
         message: its deepest leaf's last feedback.
+        robot_started_s: the robot's clock when it started (None: it never ran, or an old
+            record); in simulation the simulated time the world's own records use.
     """
 
     name: str
@@ -108,6 +110,7 @@ class StageRecord(JsonRecord):
     seconds: float = 0.0
     robot_seconds: float | None = None
     message: str = ""
+    robot_started_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -183,12 +186,15 @@ class GroundTruth(JsonRecord):
         sitting_yaw_error_deg: how far the mission's sitting direction was from it.
         nao_into_chair_cm: how deep the NAO went into the chair, centimetres.
         nao_into_chair_link: the NAO's link that went deepest ("" when none touched).
+        nao_into_chair_stage: the stage running when it did ("" when none touched, or
+            the run's record does not say).
     """
 
     sitting_yaw_deg: float | None = None
     sitting_yaw_error_deg: float | None = None
     nao_into_chair_cm: float = 0.0
     nao_into_chair_link: str = ""
+    nao_into_chair_stage: str = ""
 
 
 @dataclass(frozen=True)
@@ -275,6 +281,17 @@ class RunSummary(JsonRecord):
     def stage(self, name: str) -> StageRecord | None:
         """The stage called ``name`` (None: the tree had none)."""
         return next((stage for stage in self.stages if stage.name == name), None)
+
+    def stage_at(self, robot_time_s: float) -> str:
+        """The stage that was running at ``robot_time_s`` on the robot's clock: the last to
+        start at or before it ("" before the first, or in a record without start times).
+        The stages are the root's children, which run one after another."""
+        running, latest_start = "", -math.inf
+        for stage in self.stages:
+            start = stage.robot_started_s
+            if start is not None and latest_start <= start <= robot_time_s:
+                running, latest_start = stage.name, start
+        return running
 
     def to_json(self) -> dict[str, Any]:
         """``summary.json``: ``schema``, the run's info, then the outcome's keys."""
