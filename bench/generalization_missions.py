@@ -179,10 +179,11 @@ def print_missions(
         families = Counter(
             by_chair[r.chair].family for r in records if (r.nao_into_chair_cm or 0.0) > shallowest
         )
-        print(
-            f"  deeper than {shallowest:g} cm, by family: "
-            + ", ".join(f"{family} {n}" for family, n in families.most_common())
-        )
+        if families:
+            print(
+                f"  deeper than {shallowest:g} cm, by family: "
+                + ", ".join(f"{family} {n}" for family, n in families.most_common())
+            )
     outside = [c for c in chairs if not inside[c.name]]
     verdicts: Counter[str] = Counter()
     lines = []
