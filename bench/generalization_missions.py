@@ -130,14 +130,14 @@ def print_missions(
     chairs: list[GeneratedChair],
 ) -> None:
     """Seating per family, per condition and per cause; the refusals with the reach check."""
-    from bearchair.evaluation.report import (
+    from bearchair.evaluation.ground_truth_report import (
         TOUCH_DEPTHS_CM,
-        failure_cause,
-        failure_kind,
         nao_into_chair,
-        refusal,
+        palms_apart,
+        palms_lines,
         touch_lines,
     )
+    from bearchair.evaluation.report import failure_cause, failure_kind, refusal
 
     outside_reason = _inside_workspace(chairs)
     inside = {name: not reason for name, reason in outside_reason.items()}
@@ -184,6 +184,9 @@ def print_missions(
                 f"  deeper than {shallowest:g} cm, by family: "
                 + ", ".join(f"{family} {n}" for family, n in families.most_common())
             )
+    palms = palms_apart(records)
+    if palms is not None:
+        print("\n".join(palms_lines(palms)))
     outside = [c for c in chairs if not inside[c.name]]
     verdicts: Counter[str] = Counter()
     lines = []

@@ -20,6 +20,15 @@ from urllib.parse import quote
 
 from bearchair.behaviours.accessibility import REFUSED
 from bearchair.core.userfiles import printable
+from bearchair.evaluation.ground_truth_report import (
+    TOUCH_DEPTHS_CM,
+    NaoIntoChair,
+    PalmsApart,
+    nao_into_chair,
+    palms_apart,
+    palms_lines,
+    touch_lines,
+)
 from bearchair.evaluation.pictures import trial_picture_name
 from bearchair.evaluation.protocol import EXPERIMENT_LABELS, EXPERIMENTS, SkippedChair
 from bearchair.evaluation.trial_record import TrialRecord
@@ -36,32 +45,6 @@ class RateRow(NamedTuple):
     @property
     def rate(self) -> float | None:
         return self.count / self.n if self.n else None
-
-
-TOUCH_DEPTHS_CM = (1.0, 2.0, 5.0)
-"""Depths (centimetres) beyond which the report counts the NAO's touches of the chair."""
-
-
-class NaoIntoChair(NamedTuple):
-    """Ground truth over the simulated trials: how deep the NAO went into the chair.
-
-    In simulation the NAO is kinematic and the chair static, so the NAO passes through
-    where a real one would push the chair, jam a hand or drop the bear.
-
-    Attributes:
-        trials: trials with the measurement.
-        touched: trials in which the NAO touched the chair at all.
-        deeper_than: (depth in cm, trials deeper) for each of :data:`TOUCH_DEPTHS_CM`.
-        by_stage: (stage, trials) of the touches deeper than the first of those depths,
-            most first.
-        deepest: (chair, trial index, cm, link, stage) of the five deepest touches.
-    """
-
-    trials: int
-    touched: int
-    deeper_than: tuple[tuple[float, int], ...]
-    by_stage: tuple[tuple[str, int], ...]
-    deepest: tuple[tuple[str, int, float, str, str], ...]
 
 
 class TrialsTable(NamedTuple):
@@ -82,6 +65,7 @@ class TrialsTable(NamedTuple):
         refusals: (chair, the refusal's reason, trials) for chairs whose seat no stance
             reaches: refused right after imagination, a cause of their own.
         nao_into_chair: the NAO's touches of the chair (None: no trial measured them).
+        palms_apart: how far apart the palms held the bear (None: no trial measured it).
     """
 
     seating: list[RateRow]
@@ -95,6 +79,7 @@ class TrialsTable(NamedTuple):
     assisted_accessible_trials: int
     refusals: tuple[tuple[str, str, int], ...] = ()
     nao_into_chair: NaoIntoChair | None = None
+    palms_apart: PalmsApart | None = None
 
 
 def compute_table(records: list[TrialRecord]) -> TrialsTable:
@@ -148,29 +133,7 @@ def compute_table(records: list[TrialRecord]) -> TrialsTable:
         ),
         refusals=_refusals(failed),
         nao_into_chair=nao_into_chair(records),
-    )
-
-
-def nao_into_chair(records: list[TrialRecord]) -> NaoIntoChair | None:
-    """How deep the NAO went into the chair over ``records`` (None: none measured it)."""
-    depths = [(r, r.nao_into_chair_cm) for r in records if r.nao_into_chair_cm is not None]
-    if not depths:
-        return None
-    stages = Counter(
-        r.nao_into_chair_stage or "unknown" for r, cm in depths if cm > TOUCH_DEPTHS_CM[0]
-    )
-    touched = sorted(((r, cm) for r, cm in depths if cm > 0.0), key=lambda pair: -pair[1])
-    return NaoIntoChair(
-        trials=len(depths),
-        touched=len(touched),
-        deeper_than=tuple(
-            (limit, sum(cm > limit for _, cm in depths)) for limit in TOUCH_DEPTHS_CM
-        ),
-        by_stage=tuple(sorted(stages.items(), key=lambda item: (-item[1], item[0]))),
-        deepest=tuple(
-            (r.chair, r.trial_index, cm, r.nao_into_chair_link or "", r.nao_into_chair_stage or "")
-            for r, cm in touched[:5]
-        ),
+        palms_apart=palms_apart(records),
     )
 
 
@@ -258,6 +221,8 @@ def format_table(table: TrialsTable) -> str:
         ]
     if table.nao_into_chair is not None:
         lines += ["", *touch_lines(table.nao_into_chair)]
+    if table.palms_apart is not None:
+        lines += ["", *palms_lines(table.palms_apart)]
     lines += ["", "Causes of failure"]
     if not table.failure_causes:
         lines.append("  none")
@@ -268,30 +233,6 @@ def format_table(table: TrialsTable) -> str:
     if table.failure_causes:
         lines.append("  (every cause with its numbers: report.md)")
     return "\n".join(lines)
-
-
-def touch_lines(touches: NaoIntoChair) -> list[str]:
-    """The NAO's touches of the chair in a few lines of text (the terminal's and the
-    report's)."""
-    deeper = ", ".join(f"{n} deeper than {cm:g} cm" for cm, n in touches.deeper_than)
-    lines = [
-        "The NAO in the chair (the simulation's ground truth; a real chair would be pushed)",
-        f"  {touches.touched} of {touches.trials} trials touched it: {deeper}",
-    ]
-    if touches.by_stage:
-        lines.append(
-            f"  deeper than {TOUCH_DEPTHS_CM[0]:g} cm, by stage: "
-            + ", ".join(f"{stage} {n}" for stage, n in touches.by_stage)
-        )
-    if touches.deepest:
-        lines.append(
-            "  deepest: "
-            + "; ".join(
-                f"{printable(chair)} #{index} {cm:.1f} cm ({link}{', ' + stage if stage else ''})"
-                for chair, index, cm, link, stage in touches.deepest
-            )
-        )
-    return lines
 
 
 def markdown_report(
@@ -316,6 +257,9 @@ def markdown_report(
     out += _md_failures(table, seat_heights_m or {})
     if table.nao_into_chair is not None:
         out += _md_touches(table.nao_into_chair)
+    if table.palms_apart is not None:
+        out += ["", "## The NAO's palms holding the bear (ground truth)", ""]
+        out += [_md(line.strip()) + "  " for line in palms_lines(table.palms_apart)[1:]]
     if skipped:
         out += ["", "## Meshes not in the campaign", ""]
         out += [f"- {_md(s.name)}: {_md(s.reason)}" for s in skipped]

@@ -63,6 +63,10 @@ COLUMNS: dict[str, str] = {
     "nao_into_chair_cm": "REAL",
     "nao_into_chair_link": "TEXT",
     "nao_into_chair_stage": "TEXT",
+    # ... and how far apart the NAO's palms held the bear (the simulated one cannot slip out).
+    "palms_apart_handed_over_cm": "REAL",
+    "palms_apart_max_cm": "REAL",
+    "palms_apart_stage": "TEXT",
 }
 KEY_COLUMNS = ("chair", "placement", "helper", "trial_index", "seed")
 
@@ -303,6 +307,9 @@ def record_from_summary(
         nao_into_chair_cm=None if truth is None else truth.nao_into_chair_cm,
         nao_into_chair_link=None if truth is None else truth.nao_into_chair_link,
         nao_into_chair_stage=None if truth is None else truth.nao_into_chair_stage,
+        palms_apart_handed_over_cm=None if truth is None else truth.palms_apart_handed_over_cm,
+        palms_apart_max_cm=None if truth is None else truth.palms_apart_max_cm,
+        palms_apart_stage=None if truth is None else truth.palms_apart_stage,
     )
 
 

@@ -58,6 +58,10 @@ class TrialRecord:
             (None: not simulated, or no summary).
         nao_into_chair_link: the NAO's link that went deepest ("" when none touched).
         nao_into_chair_stage: the stage running when it did.
+        palms_apart_handed_over_cm: ground truth: how far apart the NAO's palms took the
+            bear, centimetres (None: not simulated, no summary, or an older record).
+        palms_apart_max_cm: the widest they held it.
+        palms_apart_stage: the stage running when they were first that wide.
     """
 
     chair: str
@@ -91,6 +95,9 @@ class TrialRecord:
     nao_into_chair_cm: float | None = None
     nao_into_chair_link: str | None = None
     nao_into_chair_stage: str | None = None
+    palms_apart_handed_over_cm: float | None = None
+    palms_apart_max_cm: float | None = None
+    palms_apart_stage: str | None = None
 
     @property
     def succeeded(self) -> bool:

@@ -401,9 +401,11 @@ def _ground_truth(world: Any, summary: RunSummary) -> GroundTruth:
     """What only the simulated world knows, at the end of the run: the chair's true
     sitting direction, how far the mission's sitting pose was from it (degrees), and how
     deep the NAO went into the chair (centimetres; the simulated chair does not move),
-    with which link and in which stage (the world's clock is the robot's)."""
+    with which link and in which stage (the world's clock is the robot's), and how far
+    apart its palms held the bear (centimetres; the simulated bear cannot slip out)."""
     true_yaw = world.sitting_yaw_true()
     touch = world.chair_touch.deepest
+    palms = world.palms_apart.widest
     error_deg = None
     pose = summary.sitting_pose
     if true_yaw is not None and pose is not None:
@@ -415,6 +417,9 @@ def _ground_truth(world: Any, summary: RunSummary) -> GroundTruth:
         nao_into_chair_cm=round(100.0 * touch.depth_m, 2),
         nao_into_chair_link=touch.nao_link,
         nao_into_chair_stage=summary.stage_at(touch.time_s) if touch.nao_link else "",
+        palms_apart_handed_over_cm=round(100.0 * palms.handed_over_m, 2),
+        palms_apart_max_cm=round(100.0 * palms.widest_m, 2),
+        palms_apart_stage=summary.stage_at(palms.time_s) if palms.widest_m else "",
     )
 
 
@@ -441,6 +446,14 @@ def format_summary(summary: RunSummary) -> str:
             f"{truth.nao_into_chair_cm:.1f} cm into the chair"
             + (f" during {truth.nao_into_chair_stage}" if truth.nao_into_chair_stage else "")
             + " (the simulated chair does not move)"
+        )
+    if truth is not None and truth.palms_apart_max_cm >= truth.palms_apart_handed_over_cm + 0.1:
+        lines.append(
+            f"ground truth: the NAO's palms held the bear {truth.palms_apart_max_cm:.1f} cm "
+            f"apart"
+            + (f" during {truth.palms_apart_stage}" if truth.palms_apart_stage else "")
+            + f" (handed over at {truth.palms_apart_handed_over_cm:.1f} cm; the simulated bear "
+            "cannot slip out)"
         )
     outcome = summary.outcome.upper()
     if summary.succeeded:

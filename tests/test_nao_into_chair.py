@@ -5,14 +5,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from bearchair.evaluation.ground_truth_report import TOUCH_DEPTHS_CM, nao_into_chair
 from bearchair.evaluation.protocol import TrialSpec
-from bearchair.evaluation.report import (
-    TOUCH_DEPTHS_CM,
-    compute_table,
-    format_table,
-    markdown_report,
-    nao_into_chair,
-)
+from bearchair.evaluation.report import compute_table, format_table, markdown_report
 from bearchair.evaluation.store import TrialStore, record_from_summary
 from bearchair.executive.records.run_summary import RunSummary
 

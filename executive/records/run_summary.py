@@ -188,6 +188,11 @@ class GroundTruth(JsonRecord):
         nao_into_chair_link: the NAO's link that went deepest ("" when none touched).
         nao_into_chair_stage: the stage running when it did ("" when none touched, or
             the run's record does not say).
+        palms_apart_handed_over_cm: how far apart the NAO's palms were when they took
+            the bear, centimetres (the carrying grip; 0: not measured).
+        palms_apart_max_cm: the widest they were while holding it (the simulated bear is
+            held by a constraint; a real one falls from palms wider than its torso).
+        palms_apart_stage: the stage running when they were first that wide.
     """
 
     sitting_yaw_deg: float | None = None
@@ -195,6 +200,9 @@ class GroundTruth(JsonRecord):
     nao_into_chair_cm: float = 0.0
     nao_into_chair_link: str = ""
     nao_into_chair_stage: str = ""
+    palms_apart_handed_over_cm: float = 0.0
+    palms_apart_max_cm: float = 0.0
+    palms_apart_stage: str = ""
 
 
 @dataclass(frozen=True)

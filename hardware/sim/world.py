@@ -44,6 +44,7 @@ from bearchair.hardware.sim.chair_set_down import (
 )
 from bearchair.hardware.sim.clock import SimClock
 from bearchair.hardware.sim.contacts import ChairTouchMonitor
+from bearchair.hardware.sim.grip import PalmsApartMonitor
 from bearchair.hardware.sim.helper import SimHelper, SimSpeaker
 from bearchair.hardware.sim.judge import SimJudge
 from bearchair.hardware.sim.nao import SimNao
@@ -187,8 +188,9 @@ class SimWorld:
     def _build_bear_helper_and_judge(
         self, config: SimConfig, helper_rng: np.random.Generator
     ) -> None:
-        """The chair-touch monitor, the bear in the NAO's hands, the helper who hears the
-        speaker, and the judge (after the NAO and the chair exist)."""
+        """The chair-touch monitor, the bear in the NAO's hands and how far apart they
+        hold it, the helper who hears the speaker, and the judge (after the NAO and the
+        chair exist)."""
         bullet = self._bullet
         self.chair_touch = ChairTouchMonitor(
             bullet,
@@ -199,6 +201,8 @@ class SimWorld:
         self.clock.add_process(self.chair_touch)
         self.bear = SimBear(bullet, self.clock, self._bear_in_hands())
         self.bear.hold(self.hands_frame, self.nao.body)
+        self.palms_apart = PalmsApartMonitor(self.nao, self.bear)
+        self.clock.add_process(self.palms_apart)
         self.nao.on_hands = self._on_hands
         self.helper = SimHelper(self.clock, self.chair, config.helper, helper_rng)
         self.speaker = SimSpeaker(self.helper, config.voice)
