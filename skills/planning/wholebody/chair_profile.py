@@ -36,8 +36,10 @@ from bearchair.core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, BEAR_SEAT_CLEAR
 from bearchair.core.seen_surface import seen_samples
 
 BAND_HALF_WIDTH_M = 0.11
-"""Half-width of the lateral band the planar motion sweeps (the hands' centres at
-|y| = 0.105 m; wider bands put many armrests in the way of the bear)."""
+"""Half-width of the lateral band the planar motion sweeps, metres. Narrower than the
+planar arms themselves (their palms' centres at |y| = 0.113 m, the hands 0.0175 m
+thick): a band of 0.13 m put many armrests in the way of the bear and refused or raised
+the carry on armchairs the NAO now seats, with its wrists in their armrests."""
 
 BEAR_LANE_HALF_WIDTH_M = 0.06
 """Half-width of the lane the bear itself sweeps (its torso is 0.10 m wide), metres."""
