@@ -42,7 +42,7 @@ PALMS_WIDER_CM = 1.0
 when they took it (centimetres): a real bear held between the palms is no longer squeezed."""
 
 
-class PalmsApart(NamedTuple):
+class HeldPalms(NamedTuple):
     """Ground truth over the simulated trials: how far apart the NAO's palms held the bear
     (the simulated bear is held by a constraint and cannot slip out; a real one can).
 
@@ -87,7 +87,7 @@ def nao_into_chair(records: list[TrialRecord]) -> NaoIntoChair | None:
     )
 
 
-def palms_apart(records: list[TrialRecord]) -> PalmsApart | None:
+def palms_apart(records: list[TrialRecord]) -> HeldPalms | None:
     """How far apart the NAO's palms held the bear over ``records`` (None: none measured it)."""
     measured = [
         (r, r.palms_apart_handed_over_cm or 0.0, r.palms_apart_max_cm or 0.0)
@@ -99,7 +99,7 @@ def palms_apart(records: list[TrialRecord]) -> PalmsApart | None:
     wider = [r for r, handed, widest in measured if widest > handed + PALMS_WIDER_CM]
     stages = Counter(r.palms_apart_stage or "unknown" for r in wider)
     widest = [w for _, _, w in measured]
-    return PalmsApart(
+    return HeldPalms(
         trials=len(measured),
         handed_over_cm=statistics.median(h for _, h, _ in measured),
         widest_median_cm=statistics.median(widest),
@@ -133,7 +133,7 @@ def touch_lines(touches: NaoIntoChair) -> list[str]:
     return lines
 
 
-def palms_lines(palms: PalmsApart) -> list[str]:
+def palms_lines(palms: HeldPalms) -> list[str]:
     """How far apart the palms held the bear, in a few lines of text (the terminal's and
     the report's)."""
     lines = [

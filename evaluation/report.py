@@ -22,8 +22,8 @@ from bearchair.behaviours.accessibility import REFUSED
 from bearchair.core.userfiles import printable
 from bearchair.evaluation.ground_truth_report import (
     TOUCH_DEPTHS_CM,
+    HeldPalms,
     NaoIntoChair,
-    PalmsApart,
     nao_into_chair,
     palms_apart,
     palms_lines,
@@ -79,7 +79,7 @@ class TrialsTable(NamedTuple):
     assisted_accessible_trials: int
     refusals: tuple[tuple[str, str, int], ...] = ()
     nao_into_chair: NaoIntoChair | None = None
-    palms_apart: PalmsApart | None = None
+    palms_apart: HeldPalms | None = None
 
 
 def compute_table(records: list[TrialRecord]) -> TrialsTable:

@@ -17,7 +17,8 @@ import numpy as np
 from bearchair.core.geometry import make_transform
 from bearchair.core.nao_carrying import PALM_IN_WRIST_M
 
-_T_WRIST_PALM = make_transform(np.eye(3), np.asarray(PALM_IN_WRIST_M))
+T_WRIST_PALM = make_transform(np.eye(3), np.asarray(PALM_IN_WRIST_M))
+"""The palm's frame in the ``l_wrist`` / ``r_wrist`` link frames."""
 
 
 class _Nao(Protocol):
@@ -67,7 +68,7 @@ class PalmsApartMonitor:
             return
         self._measured_at = count
         left, right = (
-            (self._nao.T_world_link(link) @ _T_WRIST_PALM)[:3, 3] for link in ("l_wrist", "r_wrist")
+            (self._nao.T_world_link(link) @ T_WRIST_PALM)[:3, 3] for link in ("l_wrist", "r_wrist")
         )
         distance_m = float(np.linalg.norm(left - right))
         if self.widest.handed_over_m == 0.0:

@@ -27,7 +27,7 @@ from bearchair.core.arena import DEFAULT_ARENA, HUMANOID_TAG, Arena, accessible_
 from bearchair.core.bullet_poses import matrix_to_pose, pose_to_matrix
 from bearchair.core.geometry import make_transform, rot_z, wrap_angle, yaw_of
 from bearchair.core.meshes import box_chair_mesh, load_mesh
-from bearchair.core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M, PALM_IN_WRIST_M
+from bearchair.core.nao_carrying import BEAR_SEAT_BELOW_HANDS_M
 from bearchair.core.se2 import SE2Pose
 from bearchair.hardware.interfaces import CameraIntrinsics, Robot, Speaker
 from bearchair.hardware.sim.bear import SimBear
@@ -44,7 +44,7 @@ from bearchair.hardware.sim.chair_set_down import (
 )
 from bearchair.hardware.sim.clock import SimClock
 from bearchair.hardware.sim.contacts import ChairTouchMonitor
-from bearchair.hardware.sim.grip import PalmsApartMonitor
+from bearchair.hardware.sim.grip import T_WRIST_PALM, PalmsApartMonitor
 from bearchair.hardware.sim.helper import SimHelper, SimSpeaker
 from bearchair.hardware.sim.judge import SimJudge
 from bearchair.hardware.sim.nao import SimNao
@@ -321,8 +321,8 @@ class SimWorld:
             return frame
 
     def _hands_frame_now(self) -> np.ndarray:
-        left = self.nao.T_world_link("l_wrist") @ _PALM
-        right = self.nao.T_world_link("r_wrist") @ _PALM
+        left = self.nao.T_world_link("l_wrist") @ T_WRIST_PALM
+        right = self.nao.T_world_link("r_wrist") @ T_WRIST_PALM
         q_left = np.array(matrix_to_pose(left)[1])
         q_right = np.array(matrix_to_pose(right)[1])
         if np.dot(q_left, q_right) < 0.0:
@@ -486,7 +486,3 @@ class SimWorld:
                 )
             )
         return bodies
-
-
-_PALM = make_transform(np.eye(3), np.asarray(PALM_IN_WRIST_M))
-"""The palm centre in the NAO's wrist link frames (:mod:`bearchair.core.nao_carrying`)."""
