@@ -5,8 +5,8 @@
 Pairs the trials by their key (chair, placement, helper, trial index, seed) and compares
 what the mission did and how the judge saw it: the outcome, the failed stage and its
 reason, rotations and instructions, accessibility, the judge's verdict and numbers, the
-sitting pose, the error and the attempts. Wall times, run folders and software
-versions are left out: they differ between any two runs. Prints
+sitting pose, the error and the attempts. Wall times, run folders, the chairs' paths and
+software versions are left out: they differ between any two runs. Prints
 each differing trial with its fields, then the count; exits 1 when any trial differs or
 is in one campaign only.
 """
@@ -26,11 +26,13 @@ NOT_COMPARED = {
     "wall_seconds",
     "mission_seconds",
     "run_dir",
+    "chair_path",
     "finished_at",
     "software",
 }
 """Fields of a trial's row that differ between any two runs of the same trial: wall
-times (``mission_seconds`` is the mission's own wall seconds), places and versions."""
+times (``mission_seconds`` is the mission's own wall seconds), places (the run's folder,
+and the chair's copy in it: the chair's name is in the key) and versions."""
 
 
 ADDED_LATER = {
