@@ -56,7 +56,7 @@ def test_the_monitor_keeps_the_hand_over_and_the_widest_while_held():
     assert monitor.widest.handed_over_m == pytest.approx(0.14)
 
 
-def test_the_simulated_nao_takes_the_bear_with_the_carrying_posture_s_palms(tmp_path):
+def test_the_simulated_nao_takes_the_bear_with_the_carrying_posture_s_palms():
     """The world's first measurement is the carrying grip, as the planner's kinematics
     put it (``core.nao_carrying``: the palms about 7 cm either side)."""
     transforms = link_transforms(CARRYING_POSTURE_RAD)
