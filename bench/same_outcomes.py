@@ -18,7 +18,7 @@ import dataclasses
 import sys
 from pathlib import Path
 
-from bearchair.evaluation.store import KEY_COLUMNS, TrialStore
+from bearchair.evaluation.store import GROUND_TRUTH_COLUMNS, KEY_COLUMNS, TrialStore
 from bearchair.evaluation.trial_record import TrialRecord
 
 NOT_COMPARED = {
@@ -33,18 +33,6 @@ NOT_COMPARED = {
 """Fields of a trial's row that differ between any two runs of the same trial: wall
 times (``mission_seconds`` is the mission's own wall seconds), places (the run's folder,
 and the chair's copy in it: the chair's name is in the key) and versions."""
-
-
-ADDED_LATER = {
-    "nao_into_chair_cm",
-    "nao_into_chair_link",
-    "nao_into_chair_stage",
-    "palms_apart_handed_over_cm",
-    "palms_apart_max_cm",
-    "palms_apart_stage",
-}
-"""Ground-truth fields that campaigns recorded before they existed leave empty: compared
-only where both trials have them."""
 
 
 def compared(record: TrialRecord) -> dict[str, object]:
@@ -84,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
             name: (old[name], new[name])
             for name in old
             if old[name] != new[name]
-            and not (name in ADDED_LATER and (old[name] is None or new[name] is None))
+            and not (name in GROUND_TRUTH_COLUMNS and (old[name] is None or new[name] is None))
         }
         if changes:
             differing += 1

@@ -59,15 +59,25 @@ COLUMNS: dict[str, str] = {
     "run_dir": "TEXT",
     "finished_at": "TEXT",
     "software": "TEXT",  # JSON: bearchair's version, git commit, key dependencies' versions
-    # Ground truth the simulated world alone knows: how deep the NAO went into the chair.
+    # Ground truth the simulated world alone knows (GROUND_TRUTH_COLUMNS): how deep the NAO
+    # went into the chair, and how far apart its palms held the bear.
     "nao_into_chair_cm": "REAL",
     "nao_into_chair_link": "TEXT",
     "nao_into_chair_stage": "TEXT",
-    # ... and how far apart the NAO's palms held the bear (the simulated one cannot slip out).
     "palms_apart_handed_over_cm": "REAL",
     "palms_apart_max_cm": "REAL",
     "palms_apart_stage": "TEXT",
 }
+GROUND_TRUTH_COLUMNS = (
+    "nao_into_chair_cm",
+    "nao_into_chair_link",
+    "nao_into_chair_stage",
+    "palms_apart_handed_over_cm",
+    "palms_apart_max_cm",
+    "palms_apart_stage",
+)
+"""The columns copied from the run's ``ground_truth`` (its fields of the same names); a
+campaign recorded before they existed leaves them empty."""
 KEY_COLUMNS = ("chair", "placement", "helper", "trial_index", "seed")
 
 
@@ -278,6 +288,9 @@ def record_from_summary(
     (:mod:`bearchair.executive.records.run_summary`)."""
     judgement = summary.judgement
     truth = summary.ground_truth
+    ground_truth: dict[str, Any] = {
+        name: None if truth is None else getattr(truth, name) for name in GROUND_TRUTH_COLUMNS
+    }
     instructions = len(summary.instructions)
     return TrialRecord(
         **_spec_columns(spec),
@@ -304,12 +317,7 @@ def record_from_summary(
         run_dir=run_dir,
         finished_at=_now(),
         software=summary.software or software_versions(),
-        nao_into_chair_cm=None if truth is None else truth.nao_into_chair_cm,
-        nao_into_chair_link=None if truth is None else truth.nao_into_chair_link,
-        nao_into_chair_stage=None if truth is None else truth.nao_into_chair_stage,
-        palms_apart_handed_over_cm=None if truth is None else truth.palms_apart_handed_over_cm,
-        palms_apart_max_cm=None if truth is None else truth.palms_apart_max_cm,
-        palms_apart_stage=None if truth is None else truth.palms_apart_stage,
+        **ground_truth,
     )
 
 

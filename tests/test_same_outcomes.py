@@ -8,7 +8,7 @@ import importlib.util
 from pathlib import Path
 
 from bearchair.evaluation.protocol import ChairEntry, expand_protocol
-from bearchair.evaluation.store import TrialStore, record_from_summary
+from bearchair.evaluation.store import GROUND_TRUTH_COLUMNS, TrialStore, record_from_summary
 from bearchair.executive.records.run_summary import RunSummary
 
 _SPEC = importlib.util.spec_from_file_location(
@@ -25,7 +25,7 @@ def _campaign(path: Path, outcome: str, touch_cm: float | None) -> Path:
     summary = RunSummary.from_json({"outcome": outcome, "stages": [], "ground_truth": truth})
     record = record_from_summary(spec, summary, 30.0, None)
     if touch_cm is None:  # a campaign recorded before the ground-truth columns
-        record = dataclasses.replace(record, **dict.fromkeys(same_outcomes.ADDED_LATER, None))
+        record = dataclasses.replace(record, **dict.fromkeys(GROUND_TRUTH_COLUMNS, None))
     with TrialStore(path) as store:
         store.add(record)
     return path
